@@ -1,0 +1,31 @@
+# The two things a newcomer does: `make paper` (the main job) and `make test`.
+VENV   ?= .venv
+PY     := $(VENV)/bin/python
+OUT    ?= report
+PAPER_FLAGS ?= --quick
+
+.PHONY: setup setup-test paper test netlists clean
+
+$(VENV)/.installed: pyproject.toml
+	scripts/install-system.sh
+	python3 -m venv $(VENV)
+	$(PY) -m pip install -q --upgrade pip
+	$(PY) -m pip install -q -e '.[test]'
+	touch $@
+
+setup: $(VENV)/.installed
+
+setup-test: setup
+	scripts/install-system.sh --test
+
+paper: setup
+	$(VENV)/bin/analogue paper $(PAPER_FLAGS) --out $(OUT)
+
+test: setup-test
+	$(PY) -m pytest -n 2 --dist loadgroup -q
+
+netlists: setup
+	$(VENV)/bin/analogue netlist
+
+clean:
+	rm -rf $(VENV) runs report test-artifacts

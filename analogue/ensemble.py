@@ -1,0 +1,89 @@
+"""Ensembles of velocity trajectories, whatever produced them (circuit or SDE integrator).
+
+Estimators take an :class:`Ensemble` and never care where it came from, so circuit data and
+Monte Carlo data go through exactly the same code.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["Ensemble"]
+
+
+@dataclass(frozen=True)
+class Ensemble:
+    """Trajectories on a common time grid, in model units.
+
+    Attributes
+    ----------
+    t : (n_t,) array
+        Times in model time units, starting at the initial time (usually 0).
+    v : (replicas, n_t) array
+        Velocities in model velocity units.
+    x : (replicas, n_t) array
+        Positions ``x(t) = integral_0^t v ds`` (x[:, 0] == 0); work ``W = F (x(t+tau) - x(t))``.
+    meta : dict
+        Provenance: model parameters, source ("circuit" / "sde"), seeds, mapping, ngspice
+        version, deck hash, ...  JSON-serialisable.
+    """
+
+    t: np.ndarray
+    v: np.ndarray
+    x: np.ndarray
+    meta: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        t = np.asarray(self.t, dtype=float)
+        v = np.atleast_2d(np.asarray(self.v, dtype=float))
+        x = np.atleast_2d(np.asarray(self.x, dtype=float))
+        if t.ndim != 1:
+            raise ValueError("Ensemble.t must be one-dimensional")
+        if v.shape[1] != t.size or x.shape != v.shape:
+            raise ValueError(f"Ensemble shapes disagree: t {t.shape}, v {v.shape}, x {x.shape}")
+        if t.size > 1 and not np.all(np.diff(t) > 0):
+            raise ValueError("Ensemble.t must be strictly increasing")
+        object.__setattr__(self, "t", t)
+        object.__setattr__(self, "v", v)
+        object.__setattr__(self, "x", x)
+
+    @property
+    def replicas(self) -> int:
+        return self.v.shape[0]
+
+    @property
+    def dt(self) -> float:
+        """Sample interval (the grid is uniform for every producer in this package)."""
+        return float(self.t[1] - self.t[0]) if self.t.size > 1 else float("nan")
+
+    def at(self, time: float) -> np.ndarray:
+        """Velocities of all replicas at the grid time nearest ``time``."""
+        i = int(np.argmin(np.abs(self.t - time)))
+        return self.v[:, i]
+
+    def window(self, t_start: float, t_stop: float | None = None) -> "Ensemble":
+        """Sub-ensemble on ``t_start <= t <= t_stop`` (positions re-zeroed at the start)."""
+        hi = self.t[-1] if t_stop is None else t_stop
+        sel = (self.t >= t_start - 1e-12) & (self.t <= hi + 1e-12)
+        x = self.x[:, sel]
+        return Ensemble(self.t[sel], self.v[:, sel], x - x[:, :1], dict(self.meta))
+
+    def concatenate(self, other: "Ensemble") -> "Ensemble":
+        """Pool replicas of two ensembles on the same time grid."""
+        if other.t.shape != self.t.shape or not np.allclose(other.t, self.t):
+            raise ValueError("cannot pool ensembles on different time grids")
+        meta = dict(self.meta)
+        meta.setdefault("pooled", []).append(other.meta)
+        return Ensemble(self.t, np.vstack([self.v, other.v]), np.vstack([self.x, other.x]), meta)
+
+    def save(self, path) -> None:
+        """Write to a compressed ``.npz`` (meta stored as JSON)."""
+        import json
+        np.savez_compressed(path, t=self.t, v=self.v, x=self.x, meta=json.dumps(self.meta))
+
+    @classmethod
+    def load(cls, path) -> "Ensemble":
+        import json
+        with np.load(path, allow_pickle=False) as f:
+            return cls(f["t"], f["v"], f["x"], json.loads(str(f["meta"])))

@@ -1,0 +1,1 @@
+"""Theory of the stick-slip model: weak-noise (the paper) and exact finite-noise numerics."""
