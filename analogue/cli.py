@@ -1,0 +1,205 @@
+"""Command-line interface: ``analogue netlist | run | report | paper | theory | figures``.
+
+Errors are one line on stderr and a non-zero exit code, never a traceback (set
+``ANALOGUE_DEBUG=1`` to see the traceback).
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+import sys
+from pathlib import Path
+
+import click
+
+from .model import Model
+
+EXIT_USAGE = 2
+EXIT_FAILURE = 1
+
+
+class _Group(click.Group):
+    """Turn expected failures into one clear line and a non-zero exit code."""
+
+    def invoke(self, ctx):
+        try:
+            return super().invoke(ctx)
+        except click.exceptions.Exit:
+            raise
+        except (click.ClickException, click.Abort):
+            raise
+        except (ValueError, KeyError, FileNotFoundError, RuntimeError, OSError) as exc:
+            if os.environ.get("ANALOGUE_DEBUG"):
+                raise
+            msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+            click.echo(f"analogue: error: {msg}", err=True)
+            ctx.exit(EXIT_USAGE if isinstance(exc, (ValueError, KeyError)) else EXIT_FAILURE)
+
+
+def _floats(text: str | None, name: str):
+    if text is None:
+        return None
+    try:
+        vals = [float(s) for s in text.split(",") if s.strip()]
+    except ValueError:
+        raise click.BadParameter(f"expected comma-separated numbers, got {text!r}", param_hint=name)
+    if not vals or not all(math.isfinite(v) for v in vals):
+        raise click.BadParameter("expected finite numbers", param_hint=name)
+    return vals
+
+
+@click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(package_name="analogue")
+def main():
+    """Stick-slip friction with noise: theory, ngspice circuit, and their comparison.
+
+    Typical use: `analogue paper --out report` runs every standard experiment in circuits/
+    on the circuit and writes report/index.html with the paper's figures, circuit data
+    overlaid, metrics.json and an error budget.
+    """
+
+
+# ------------------------------------------------------------------------------ netlist
+@main.command()
+@click.option("--check", is_flag=True, help="Only check that committed decks are up to date "
+              "(exit 1 if any is stale).")
+def netlist(check):
+    """Regenerate the SPICE decks in netlists/ from circuits/*.toml."""
+    from .circuit.experiments import regenerate_netlists
+    paths = regenerate_netlists(check=check)
+    if check:
+        if paths:
+            for p in paths:
+                click.echo(f"stale: {p}")
+            click.echo("analogue: error: netlists are stale; run `analogue netlist`", err=True)
+            sys.exit(EXIT_FAILURE)
+        click.echo("netlists up to date")
+    else:
+        for p in paths:
+            click.echo(f"wrote {p}")
+
+
+# ------------------------------------------------------------------ run / report / paper
+def _run_options(f):
+    f = click.option("--workers", type=click.IntRange(1, 256), default=None,
+                     help="Local worker processes (default: all cores).")(f)
+    f = click.option("--scheduler", default=None, metavar="ADDRESS",
+                     help="Dask scheduler address (tcp://host:port) to run the decks on.")(f)
+    f = click.option("--store", type=click.Path(file_okay=False, path_type=Path), default=None,
+                     help="Run-store directory (default $ANALOGUE_STORE or ~/.cache/analogue/runs).")(f)
+    f = click.option("--quick", is_flag=True, help="Small ensembles: minutes, larger error bars.")(f)
+    f = click.option("--progress/--no-progress", default=True, help="Show progress bars.")(f)
+    return f
+
+
+@main.command()
+@click.argument("experiment")
+@_run_options
+def run(experiment, workers, scheduler, store, quick, progress):
+    """Simulate EXPERIMENT (a name in circuits/ or a TOML path) on the circuit; resumable."""
+    from .report.pipeline import RunOptions, run_experiment
+    opts = RunOptions(workers=workers, scheduler=scheduler, store=store, quick=quick,
+                      progress=progress)
+    result = run_experiment(experiment, opts)
+    click.echo(result.summary())
+
+
+@main.command()
+@click.argument("experiment")
+@click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help="Report directory (default report/<experiment>).")
+@_run_options
+def report(experiment, out, workers, scheduler, store, quick, progress):
+    """Build the report of EXPERIMENT from stored runs (runs what is missing)."""
+    from .report.pipeline import RunOptions, build_experiment_report
+    opts = RunOptions(workers=workers, scheduler=scheduler, store=store, quick=quick,
+                      progress=progress)
+    out = out or Path("report") / experiment
+    index = build_experiment_report(experiment, out, opts)
+    click.echo(f"report: {index}")
+
+
+@main.command()
+@click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("report"),
+              show_default=True, help="Where the report goes.")
+@_run_options
+def paper(out, workers, scheduler, store, quick, progress):
+    """The main job: every standard experiment, the paper's Figs. 1-9 with circuit data,
+    metrics.json and the error budget, in one self-contained report."""
+    from .report.pipeline import RunOptions, build_paper_report
+    opts = RunOptions(workers=workers, scheduler=scheduler, store=store, quick=quick,
+                      progress=progress)
+    index = build_paper_report(out, opts)
+    click.echo(f"report: {index}")
+
+
+@main.command()
+@click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("figures"),
+              show_default=True)
+def figures(out):
+    """Draw the paper's theory figures (Figs. 1-9, weak-noise curves) as PNG files."""
+    from .plots.paper_theory import draw_all
+    for p in draw_all(out):
+        click.echo(f"wrote {p}")
+
+
+# ------------------------------------------------------------------------------- theory
+QUANTITIES = ("stationary", "deterministic", "action", "path", "boundaries", "propagator",
+              "rate-function", "fluctuation-relation", "scgf", "work-pdf")
+
+
+@main.command()
+@click.argument("quantity", type=click.Choice(QUANTITIES))
+@click.option("--experiment", default=None, help="Take model parameters from circuits/<name>.toml.")
+@click.option("--tau-m", type=float, default=None, help="tau_m = m/alpha (> 0).")
+@click.option("--delta", type=float, default=None, help="Delta = Delta_F/m (>= 0).")
+@click.option("--a", "a", type=float, default=None, help="a = F/m.")
+@click.option("--gamma", type=float, default=None, help="gamma = m^2/D (> 0).")
+@click.option("--mass", type=float, default=None, help="m (> 0, default 1).")
+@click.option("--epsilon", type=float, default=None, help="tanh width (>= 0, default 0 = sgn).")
+@click.option("--v", "v", default=None, help="Final velocities, comma-separated.")
+@click.option("--t", "t", default=None, help="Times, comma-separated.")
+@click.option("--v0", type=float, default=None, help="Initial velocity.")
+@click.option("--w", "w", default=None, help="Work rates, comma-separated.")
+@click.option("--k", "k", default=None, help="Tilts for the SCGF, comma-separated.")
+@click.option("--tau", type=float, default=None, help="Work time window.")
+@click.option("--kind", type=click.Choice(["exact", "weak-noise", "limit"]), default="exact",
+              show_default=True, help="Which theory for propagator / rate-function.")
+@click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
+def theory(quantity, experiment, tau_m, delta, a, gamma, mass, epsilon, v, t, v0, w, k, tau,
+           kind, as_json):
+    """Query theory values, e.g.
+
+    \b
+      analogue theory action --tau-m 1 --delta 0.7 --a 0.2 --gamma 10 --v0 2 --t 3 --v -0.5,0.5
+      analogue theory stationary --experiment stick --json
+      analogue theory rate-function --tau-m 1 --delta 1 --a 0.5 --gamma 100 --w -1,0,1
+    """
+    from .theory.query import theory_rows
+    params = {}
+    if experiment:
+        from .circuit.experiments import load_experiment
+        params = load_experiment(experiment).model.as_dict()
+    given = {"tau_m": tau_m, "delta": delta, "a": a, "gamma": gamma, "mass": mass, "epsilon": epsilon}
+    params.update({key: val for key, val in given.items() if val is not None})
+    missing = [key for key in ("tau_m", "delta", "a", "gamma") if key not in params]
+    if missing:
+        raise click.UsageError("missing model parameter(s): "
+                               + ", ".join("--" + m.replace("_", "-") for m in missing))
+    model = Model(**params)
+    header, rows = theory_rows(model, quantity, v=_floats(v, "--v"), t=_floats(t, "--t"), v0=v0,
+                               w=_floats(w, "--w"), k=_floats(k, "--k"), tau=tau, kind=kind)
+    if as_json:
+        click.echo(json.dumps({"model": model.as_dict(), "quantity": quantity, "kind": kind,
+                               "rows": [dict(zip(header, r)) for r in rows]}, indent=2))
+        return
+    widths = [max(len(str(h)), 12) for h in header]
+    click.echo("  ".join(str(h).rjust(wd) for h, wd in zip(header, widths)))
+    for r in rows:
+        click.echo("  ".join((f"{c:.6g}" if isinstance(c, float) else str(c)).rjust(wd)
+                             for c, wd in zip(r, widths)))
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()
