@@ -1,0 +1,1 @@
+"""Reports: run experiments, compare with theory, write index.html + metrics.json."""
