@@ -1,0 +1,68 @@
+"""Transport of the position x(t) = integral v: drift velocity and diffusion coefficient."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import _checks
+
+__all__ = ["TransportEstimate", "transport"]
+
+
+@dataclass(frozen=True, eq=False)
+class TransportEstimate:
+    """Drift velocity and position diffusion coefficient with replica-spread errors.
+
+    ``t``, ``mean_x``, ``var_x`` are the curves the fits used (t from the burn-in, x re-zeroed
+    there); ``fit_window`` is the time span of the linear fits.
+    """
+
+    drift: float
+    drift_se: float
+    diffusion: float
+    diffusion_se: float
+    fit_window: tuple
+    t: np.ndarray
+    mean_x: np.ndarray
+    var_x: np.ndarray
+    n_replicas: int
+
+
+def transport(ensemble, burn_in=0.0, fit_from=None) -> TransportEstimate:
+    """Drift ``<v> = d<x>/dt`` and diffusion ``D_x`` from ``Var x(t) ~ 2 D_x t + const``.
+
+    After the burn-in the positions are re-zeroed; ``<x(t)>`` and ``Var x(t)`` over the
+    replicas are fitted by straight lines (ordinary least squares, slope and offset) on
+    ``t >= fit_from`` (time since the burn-in; default half of the remaining record).  The
+    offset absorbs the velocity-correlation transient (for an Ornstein-Uhlenbeck velocity
+    ``Var x = 2 D (t - tau_c (1 - e^{-t/tau_c}))``), so ``fit_from`` should exceed a few
+    correlation times.  Errors: the drift slope is the replica average of per-replica
+    slopes, and the variance slope is linear in per-replica squared deviations to first
+    order; the spread of those per-replica contributions gives the standard errors.
+    """
+    ens = _checks.ensemble(ensemble)
+    i0 = _checks.burn_in_index(ens, burn_in, min_samples=3)
+    t = ens.t[i0:] - ens.t[i0]
+    x = ens.x[:, i0:] - ens.x[:, i0:i0 + 1]
+    R = x.shape[0]
+    if R < 2:
+        raise ValueError("transport needs >= 2 independent replicas")
+    if not np.all(np.isfinite(x)):
+        raise ValueError("ensemble positions after burn_in must be finite")
+    start = 0.5 * float(t[-1]) if fit_from is None else _checks.nonnegative("fit_from", fit_from)
+    sel = t >= start - 1e-9 * max(float(t[-1]), 1.0)
+    if np.count_nonzero(sel) < 3:
+        raise ValueError(f"fit_from must leave >= 3 samples to fit, got {start!r} with a record "
+                         f"of {float(t[-1])!r} after burn_in")
+    ts = t[sel]
+    a = (ts - ts.mean()) / np.sum((ts - ts.mean()) ** 2)  # OLS slope = a @ y
+    slopes = x[:, sel] @ a
+    mean_x = x.mean(axis=0)
+    sq = (x - mean_x) ** 2
+    var_x = sq.sum(axis=0) / (R - 1)
+    d_contrib = 0.5 * (sq[:, sel] @ a) * R / (R - 1)  # mean over r equals 0.5 * slope(var_x)
+    return TransportEstimate(
+        drift=float(slopes.mean()), drift_se=float(slopes.std(ddof=1) / np.sqrt(R)),
+        diffusion=float(d_contrib.mean()), diffusion_se=float(d_contrib.std(ddof=1) / np.sqrt(R)),
+        fit_window=(float(ts[0]), float(ts[-1])), t=t, mean_x=mean_x, var_x=var_x, n_replicas=R)
