@@ -1,0 +1,383 @@
+"""From model parameters to component values, and back.
+
+Circuit equation of one replica (node voltage ``V``, circuit time ``t_c``):
+
+    C dV/dt_c = -V/R - I_Delta c(V) + I_F + I_n(t_c),   <I_n I_n'> = 2 D_I delta(t_c - t_c'),
+
+with the Coulomb element ``c(V) = tanh(V/eps_V)`` (diode bridge or B-source).  Writing
+``V = kappa v`` and ``t_c = theta t`` turns it into the paper's eq. bm with the potential of
+eq. U_pot:
+
+    tau_m = R C / theta,  Delta = theta I_Delta / (C kappa),  a = theta I_F / (C kappa),
+    1/gamma = theta D_I / (C kappa)^2,  epsilon = eps_V / kappa.
+
+(The noise: ``eta(t) = theta I_n(theta t)/(C kappa)`` has
+``<eta eta'> = theta^2 2 D_I delta(theta (t - t'))/(C kappa)^2 = 2 theta D_I/(C kappa)^2 delta(t - t')``.)
+
+The noise is a held Gaussian sequence (ngspice ``trrandom``) of hold time ``TS``: a
+piecewise-constant signal of standard deviation ``s`` has white-noise intensity
+``D = s^2 TS / 2`` at low frequency.  Its integral over ``k`` whole hold intervals has exactly
+the white-noise variance ``2 D k TS``; over a window of ``k`` hold times at a random phase the
+variance is ``2 D k TS (k - 1/3)/k`` (:meth:`CircuitMapping.window_factor`).  For the
+velocity, the held noise lowers the time-averaged stationary variance by the relative amount
+``TS/(3 tau_m)`` to first order (``noise_bias``).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+from ..model import Model
+from . import validation as val
+from .parts import DiodePart, get_part, ideal_diode, thermal_voltage, PARTS
+
+__all__ = ["CircuitSpec", "CircuitMapping", "map_model", "COULOMB_KINDS", "DIODES"]
+
+COULOMB_KINDS = ("diode-bridge", "behavioural", "behavioural-sgn")
+DIODES = ("ideal", *PARTS)
+METHODS = ("gear", "trap")
+# How far past the potential minimum the velocity may wander (in units of sqrt(tau_m/gamma))
+# when checking voltage ratings: p_s is log-concave with width <= sqrt(tau_m/gamma), so beyond
+# 8 widths the probability is < 1e-14.
+SWING_WIDTHS = 8.0
+
+
+@dataclass(frozen=True)
+class CircuitSpec:
+    """The user's choices for building the circuit (validated on construction).
+
+    Parameters
+    ----------
+    coulomb : "diode-bridge" | "behavioural" | "behavioural-sgn"
+        The dry-friction element.  ``behavioural-sgn`` (ngspice ``sgn()``) is for comparison
+        only: it has no smoothing.
+    diode : "ideal" | "1N4148" | "BAT54"
+        Bridge diodes (only for ``diode-bridge``).
+    smoothing : float
+        Requested tanh width ``epsilon`` as a fraction of ``sqrt(tau_m/gamma)``, in (0, 1).
+    time_scale : float
+        ``theta``, seconds of circuit time per model time unit.
+    capacitance : float
+        ``C`` (farad), the "mass".
+    volts_per_velocity : float or None
+        ``kappa``.  None: 1 V for the ideal diode and the B-sources; for a real diode, chosen
+        so that the part's own width ``2 N V_T + RS I0`` equals the requested smoothing.
+    noise_dt : float or None
+        Hold time of the noise in model time units; None: ``tau_m/100``.
+    reltol, abstol, vntol : float
+        ngspice tolerances (abstol in A, vntol in V).
+    max_step : float or None
+        Largest solver step in model time units; None: ``noise_dt``.
+    method : "gear" | "trap"
+        Integration method (gear does not ring at the steps of the held noise).
+    bias_tolerance : float
+        Largest accepted estimated bias (relative) from smoothing and noise hold time.
+    allow_bias : bool
+        Accept mappings whose estimated bias exceeds ``bias_tolerance``.
+    """
+
+    coulomb: str = "diode-bridge"
+    diode: str = "ideal"
+    smoothing: float = 0.02
+    time_scale: float = 1e-3
+    capacitance: float = 100e-9
+    volts_per_velocity: float | None = None
+    noise_dt: float | None = None
+    reltol: float = 1e-4
+    abstol: float = 1e-12
+    vntol: float = 1e-7
+    max_step: float | None = None
+    method: str = "gear"
+    bias_tolerance: float = 0.05
+    allow_bias: bool = False
+
+    def __post_init__(self):
+        if self.coulomb not in COULOMB_KINDS:
+            raise ValueError(f"coulomb must be one of {COULOMB_KINDS}, got {self.coulomb!r}")
+        if self.diode not in DIODES:
+            raise ValueError(f"diode must be one of {DIODES}, got {self.diode!r}")
+        if self.method not in METHODS:
+            raise ValueError(f"method must be one of {METHODS}, got {self.method!r}")
+        s = val.positive(self.smoothing, "smoothing")
+        if not s < 1:
+            raise ValueError(f"smoothing must be in (0, 1) (fraction of sqrt(tau_m/gamma)), got {s!r}")
+        object.__setattr__(self, "smoothing", s)
+        for name in ("time_scale", "capacitance", "reltol", "abstol", "vntol", "bias_tolerance"):
+            object.__setattr__(self, name, val.positive(getattr(self, name), name))
+        if not self.reltol < 0.1:
+            raise ValueError(f"reltol must be in (0, 0.1), got {self.reltol!r}")
+        for name in ("volts_per_velocity", "noise_dt", "max_step"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, val.positive(getattr(self, name), name))
+        if not isinstance(self.allow_bias, bool):
+            raise ValueError(f"allow_bias must be True or False, got {self.allow_bias!r}")
+
+    def replace(self, **changes) -> "CircuitSpec":
+        return replace(self, **changes)
+
+    def as_dict(self) -> dict:
+        return {k: getattr(self, k) for k in self.__dataclass_fields__}
+
+
+@dataclass(frozen=True)
+class CircuitMapping:
+    """Component values implementing a :class:`~analogue.Model` (all SI units).
+
+    ``resistance`` is the physical resistor (compensated for the bridge diodes' parallel
+    resistors so that the total viscous conductance is ``1/R_total = theta/(tau_m C)``);
+    ``i_delta`` the bridge (or B-source) current-source value, compensated for the diodes'
+    reverse currents so that the friction amplitude is ``I_Delta = i_delta + 2 IS``.
+    The noise is a voltage ``trrandom`` source on node ``nz`` of standard deviation
+    ``noise_stddev`` (V, equal to the held noise in model units) and hold time ``noise_ts``
+    (s), converted to a current by a VCCS of transconductance ``noise_gain`` (S).
+    """
+
+    model: Model
+    spec: CircuitSpec
+    theta: float
+    capacitance: float
+    kappa: float
+    resistance: float
+    r_total: float
+    i_delta: float
+    i_delta_total: float
+    i_force: float
+    noise_stddev: float
+    noise_ts: float
+    noise_gain: float
+    noise_D: float
+    part: DiodePart | None
+    emission: float | None
+    eps_volts: float
+    epsilon: float
+    cap_x: float
+    g_x: float
+    x_volts_per_unit: float
+    voltage_swing: float
+    model_effective: Model
+    bias: dict = field(default_factory=dict)
+
+    # ---------------------------------------------------------------- derived
+    @property
+    def smoothing_fraction(self) -> float:
+        """epsilon / sqrt(tau_m/gamma) actually realised (0 for the sgn B-source)."""
+        return self.epsilon / self.model.velocity_scale
+
+    @property
+    def noise_dt(self) -> float:
+        """Hold time of the noise in model time units."""
+        return self.noise_ts / self.theta
+
+    @property
+    def noise_correlation(self) -> float:
+        """Noise hold time / tau_m."""
+        return self.noise_dt / self.model.tau_m
+
+    @property
+    def D_effective(self) -> float:
+        """Velocity-noise intensity delivered at low frequency, ``theta D_I/(C kappa)^2``
+        (equals 1/gamma by construction; the window correction is :meth:`window_factor`)."""
+        return self.theta * self.noise_D / (self.capacitance * self.kappa) ** 2
+
+    @staticmethod
+    def window_factor(k, aligned: bool = False):
+        """Variance of the integrated held noise over ``k`` hold times relative to white noise:
+        1 for windows aligned with the holds, ``(k - 1/3)/k`` averaged over a random phase
+        (k >= 1)."""
+        import numpy as np
+        k = np.asarray(k, dtype=float)
+        if np.any(k < 1):
+            raise ValueError("k (window length in hold times) must be >= 1")
+        return np.ones_like(k) if aligned else (k - 1.0 / 3.0) / k
+
+    @property
+    def to_model_v(self) -> float:
+        return 1.0 / self.kappa
+
+    @property
+    def to_model_x(self) -> float:
+        """x (model units) = V(x) * C_x / (g kappa theta)."""
+        return self.cap_x / (self.g_x * self.kappa * self.theta)
+
+    def to_model(self) -> Model:
+        """The model the component values implement (inverse of the mapping formulas)."""
+        ck = self.capacitance * self.kappa
+        return Model(tau_m=self.r_total * self.capacitance / self.theta,
+                     delta=self.theta * self.i_delta_total / ck,
+                     a=self.theta * self.i_force / ck,
+                     gamma=ck**2 / (self.theta * self.noise_D),
+                     mass=self.model.mass, epsilon=self.eps_volts / self.kappa)
+
+    def table(self) -> list[tuple[str, float, str, str]]:
+        """Rows (name, value, unit, meaning) for reports."""
+        rows = [
+            ("theta", self.theta, "s", "circuit seconds per model time unit"),
+            ("kappa", self.kappa, "V", "volts per unit velocity"),
+            ("C", self.capacitance, "F", "mass capacitor"),
+            ("R", self.resistance, "ohm", "viscous-friction resistor (physical)"),
+            ("R_total", self.r_total, "ohm", "total viscous resistance incl. diode leakage; tau_m = R_total C/theta"),
+            ("I_Delta", self.i_delta, "A", "Coulomb current source"),
+            ("I_Delta_total", self.i_delta_total, "A", "friction amplitude incl. 2 IS; Delta = theta I/(C kappa)"),
+            ("I_F", self.i_force, "A", "force current source; a = theta I_F/(C kappa)"),
+            ("noise_stddev", self.noise_stddev, "V", "trrandom standard deviation (node nz)"),
+            ("noise_TS", self.noise_ts, "s", "trrandom hold time"),
+            ("noise_gain", self.noise_gain, "S", "VCCS noise volts -> current"),
+            ("D_I", self.noise_D, "A^2 s", "noise current intensity s^2 TS/2 (theta D_I/(C kappa)^2 = 1/gamma)"),
+            ("eps_V", self.eps_volts, "V", "tanh width of the Coulomb element"),
+            ("epsilon", self.epsilon, "velocity", "smoothing width in model units"),
+            ("smoothing", self.smoothing_fraction, "1", "epsilon / sqrt(tau_m/gamma)"),
+            ("noise_dt/tau_m", self.noise_correlation, "1", "noise hold time / tau_m"),
+            ("C_x", self.cap_x, "F", "position integrator capacitor"),
+            ("g_x", self.g_x, "S", "position integrator transconductance"),
+            ("V_swing", self.voltage_swing, "V", "estimated largest |V(v)|"),
+        ]
+        if self.emission is not None:
+            rows.insert(9, ("N", self.emission, "1", "diode emission coefficient"))
+        for key, value in self.bias.items():
+            rows.append((f"bias_{key}", value, "1", "estimated relative bias"))
+        return rows
+
+
+def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
+    """Component values that make the circuit obey ``model`` (see the module docstring).
+
+    The returned mapping's ``model_effective`` is ``model`` with the realised smoothing width
+    ``epsilon`` (0 for ``behavioural-sgn``).  Raises ValueError (naming the parameter and the
+    limit) when a real part could not do it (current, reverse voltage, smoothing too coarse)
+    or when the estimated bias exceeds ``spec.bias_tolerance`` and ``allow_bias`` is False.
+    """
+    if not isinstance(model, Model):
+        raise ValueError(f"model must be an analogue.Model, got {type(model).__name__}")
+    spec = CircuitSpec() if spec is None else spec
+    if not isinstance(spec, CircuitSpec):
+        raise ValueError(f"spec must be a CircuitSpec, got {type(spec).__name__}")
+    theta, cap = spec.time_scale, spec.capacitance
+    vs = model.velocity_scale
+    eps_target = spec.smoothing * vs
+    vt = thermal_voltage()
+    real = spec.coulomb == "diode-bridge" and spec.diode != "ideal"
+    part = get_part(spec.diode) if real else None
+
+    # --- kappa (volts per unit velocity) and the tanh width
+    if spec.volts_per_velocity is not None:
+        kappa = spec.volts_per_velocity
+    elif real:
+        # eps_V = 2 N V_T + RS (I0 + 2 IS) with I0 ~ Delta C kappa/theta; solve eps_V = kappa eps.
+        room = eps_target - part.RS * model.delta * cap / theta
+        if not room > 0:
+            raise ValueError(f"smoothing={spec.smoothing} is unreachable with {part.name}: its series "
+                             f"resistance alone gives a width of {part.RS * model.delta * cap / theta:.3g} "
+                             f"velocity units; raise smoothing or lower capacitance/time_scale")
+        kappa = 2.0 * part.N * vt / room
+    else:
+        kappa = 1.0
+    ck = cap * kappa
+    i_delta_total = model.delta * ck / theta
+    i_force = model.a * ck / theta
+
+    if spec.coulomb == "diode-bridge":
+        if real:
+            i_delta = i_delta_total - 2.0 * part.IS
+            if not i_delta > 0 and model.delta > 0:
+                raise ValueError(f"Delta={model.delta} needs I_Delta={i_delta_total:.3g} A, below the "
+                                 f"reverse current 2 IS={2 * part.IS:.3g} A of {part.name}; raise "
+                                 f"capacitance or volts_per_velocity")
+            emission = part.N
+            eps_volts = part.smoothing_volts(i_delta)
+        else:
+            i_delta = i_delta_total - 2.0 * 1e-14
+            emission = eps_target * kappa / (2.0 * vt)
+            part = ideal_diode(emission)
+            eps_volts = 2.0 * emission * vt
+    elif spec.coulomb == "behavioural":
+        i_delta, emission, eps_volts = i_delta_total, None, eps_target * kappa
+    else:
+        i_delta, emission, eps_volts = i_delta_total, None, 0.0
+    epsilon = eps_volts / kappa
+
+    # --- viscous resistor: the bridge diodes' parallel resistors (two in parallel across the
+    # terminal once a pair is reverse biased) add conductance 2/rp; take it off R.
+    r_total = model.tau_m * theta / cap
+    g_extra = 2.0 / part.rp if (part is not None and part.rp) else 0.0
+    g_r = 1.0 / r_total - g_extra
+    if not g_r > 0:
+        raise ValueError(f"tau_m={model.tau_m} needs R={r_total:.3g} ohm, beyond the leakage of "
+                         f"{part.name}; lower capacitance or time_scale")
+    resistance = 1.0 / g_r
+
+    # --- noise: node nz carries the held noise in model units (std sqrt(2/(gamma dt)) so that
+    # its intensity is 1/gamma); the VCCS C kappa/theta turns it into the current I_n.
+    noise_dt = spec.noise_dt if spec.noise_dt is not None else model.tau_m / 100.0
+    noise_ts = noise_dt * theta
+    noise_stddev = math.sqrt(2.0 / (model.gamma * noise_dt))
+    noise_gain = ck / theta
+    noise_D = (noise_gain * noise_stddev) ** 2 * noise_ts / 2.0
+
+    # --- position integrator: V(x) = 1 V per unit x with C_x = C.
+    cap_x = cap
+    x_volts_per_unit = 1.0
+    g_x = cap_x * x_volts_per_unit / (kappa * theta)
+
+    centre = abs(model.potential_minimum()) if epsilon > 0 else abs(model.attractor)
+    voltage_swing = kappa * (centre + SWING_WIDTHS * vs)
+
+    model_eff = model.replace(epsilon=epsilon)
+    bias = {
+        # sup |ln p_eps - ln p_0| before normalisation: gamma Delta eps ln 2 (the tanh potential
+        # Delta eps ln cosh(v/eps) differs from Delta|v| by at most Delta eps ln 2).
+        "smoothing": model.gamma * model.delta * epsilon * math.log(2.0),
+        "smoothing_width": epsilon / vs,
+        # held noise: first-order drop of the stationary velocity variance, TS/(3 tau_m).
+        "noise": noise_dt / (3.0 * model.tau_m),
+    }
+    if part is not None and not part.ideal:
+        bias["junction_capacitance"] = 2.0 * part.CJO / cap
+
+    mapping = CircuitMapping(
+        model=model, spec=spec, theta=theta, capacitance=cap, kappa=kappa,
+        resistance=resistance, r_total=r_total, i_delta=i_delta, i_delta_total=i_delta_total,
+        i_force=i_force, noise_stddev=noise_stddev, noise_ts=noise_ts, noise_gain=noise_gain,
+        noise_D=noise_D, part=part if spec.coulomb == "diode-bridge" else None, emission=emission,
+        eps_volts=eps_volts, epsilon=epsilon, cap_x=cap_x, g_x=g_x,
+        x_volts_per_unit=x_volts_per_unit, voltage_swing=voltage_swing,
+        model_effective=model_eff, bias=bias)
+    _check_part(mapping)
+    _check_bias(mapping)
+    return mapping
+
+
+def _check_part(m: CircuitMapping) -> None:
+    part = m.part
+    if part is None or part.ideal:
+        return
+    if m.i_delta > part.max_forward_current:
+        raise ValueError(f"I_Delta={m.i_delta:.3g} A exceeds the {part.name} maximum forward current "
+                         f"{part.max_forward_current:.3g} A; lower capacitance, volts_per_velocity "
+                         f"or raise time_scale")
+    if m.voltage_swing >= part.max_reverse_voltage:
+        raise ValueError(f"volts_per_velocity={m.kappa:.3g} V lets |V| reach {m.voltage_swing:.3g} V, "
+                         f"at or above the {part.name} reverse-voltage rating "
+                         f"{part.max_reverse_voltage:.3g} V; raise smoothing or choose another diode")
+    if m.smoothing_fraction > m.spec.smoothing * (1.0 + 1e-9) and not m.spec.allow_bias:
+        raise ValueError(f"smoothing: {part.name} at volts_per_velocity={m.kappa:.3g} V gives a tanh width "
+                         f"of {m.smoothing_fraction:.3g} sqrt(tau_m/gamma), coarser than the requested "
+                         f"{m.spec.smoothing}; raise volts_per_velocity or set allow_bias")
+
+
+def _check_bias(m: CircuitMapping) -> None:
+    spec = m.spec
+    if spec.allow_bias:
+        return
+    tol = spec.bias_tolerance
+    if spec.coulomb == "behavioural-sgn":
+        pass  # exact sgn: no smoothing bias (it is there for comparison only)
+    elif m.bias["smoothing"] > tol or m.bias["smoothing_width"] > tol:
+        raise ValueError(
+            f"smoothing={spec.smoothing} gives epsilon={m.epsilon:.3g}: estimated bias "
+            f"gamma*Delta*epsilon*ln2={m.bias['smoothing']:.3g} (and epsilon/sqrt(tau_m/gamma)="
+            f"{m.bias['smoothing_width']:.3g}) exceeds bias_tolerance={tol}; lower smoothing below "
+            f"{spec.smoothing * tol / max(m.bias['smoothing'], m.bias['smoothing_width']):.3g} or set allow_bias")
+    if m.bias["noise"] > tol:
+        raise ValueError(f"noise_dt={m.noise_dt:.3g} gives an estimated variance bias noise_dt/(3 tau_m)="
+                         f"{m.bias['noise']:.3g} above bias_tolerance={tol}; lower noise_dt below "
+                         f"{3 * tol * m.model.tau_m:.3g} or set allow_bias")

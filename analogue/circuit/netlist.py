@@ -1,0 +1,182 @@
+"""SPICE decks for an ensemble of independent stick-slip replicas.
+
+One replica ``i`` (subcircuit ``replica``, pins ``v<i> x<i> nz<i>``):
+
+- node ``v<i>`` (voltage = kappa * velocity): ``C`` and ``R`` to ground, the force current
+  ``I_F`` into the node, the noise current ``noise_gain * V(nz<i>)`` into the node, and the
+  Coulomb element from ``v<i>`` to ground (subcircuit ``bridge``: four diodes around the
+  current source ``I_Delta``, or a B-source ``I_Delta tanh(V/eps_V)`` / ``I_Delta sgn(V)``);
+- node ``nz<i>``: a ``trrandom`` Gaussian voltage, held for ``TS``, equal to the velocity noise
+  in model units (saved: the raw file then holds the very noise that drove the replica, so an
+  SDE integrator can be fed the same sequence; it costs one node and no extra breakpoints);
+- node ``x<i>``: the integrator ``g_x V(v<i>)`` into ``C_x`` (V(x) = 1 V per unit position).
+
+Initial conditions by ``.ic`` with ``.tran ... uic`` (no operating point is needed, so the
+integrator node needs no leak resistor and has no bias); the bridge's inner nodes get
+consistent DC values in the ``.ic`` line as well.  ``trrandom`` with
+``.options seed=N`` is reproducible in ngspice 39 (``trnoise`` is not).
+"""
+from __future__ import annotations
+
+import hashlib
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from PySpice.Spice.Netlist import Circuit, SubCircuit
+
+from . import validation as val
+from .mapping import CircuitMapping
+from .parts import bridge_node_voltages
+
+__all__ = ["Deck", "build_deck", "replica_subcircuit", "bridge_subcircuit"]
+
+_MODEL_NAME = "dcoulomb"
+_SEED_MAX = 2**31 - 1
+
+
+@dataclass(frozen=True)
+class Deck:
+    """A complete ngspice deck and how to read its raw file back into model units.
+
+    ``vectors``: {"v": [...], "x": [...], "noise": [...]} raw-file vector names per replica
+    (lower case).  Model value = raw value * ``to_model_v`` / ``to_model_x`` /
+    ``to_model_noise``; model time = raw time / ``time_scale``.
+    """
+
+    text: str
+    vectors: dict
+    to_model_v: float
+    to_model_x: float
+    time_scale: float
+    seed: int
+    replicas: int
+    sha256: str
+    to_model_noise: float = 1.0
+    noise_dt: float = 0.0
+    t_end: float = 0.0
+    sample_dt: float = 0.0
+
+
+def _n(x, what="value") -> str:
+    return val.spice_number(x, what)
+
+
+def bridge_subcircuit(mapping: CircuitMapping) -> SubCircuit:
+    """Four diodes around ``I_Delta`` (current circulates v -> D1 -> p -> I -> n -> D4 -> 0 and
+    0 -> D2 -> p -> I -> n -> D3 -> v): terminal current ``I_Delta tanh(V/(2 N V_T))``."""
+    sub = SubCircuit("bridge", "t")
+    sub.D("1", "t", "p", model=_MODEL_NAME)
+    sub.D("2", sub.gnd, "p", model=_MODEL_NAME)
+    sub.D("3", "n", "t", model=_MODEL_NAME)
+    sub.D("4", "n", sub.gnd, model=_MODEL_NAME)
+    sub.I("delta", "p", "n", _n(mapping.i_delta, "I_Delta"))
+    part = mapping.part
+    if part.rp:
+        # The vendor models' parallel resistor across each diode.
+        sub.R("p1", "t", "p", _n(part.rp, "rp"))
+        sub.R("p2", sub.gnd, "p", _n(part.rp, "rp"))
+        sub.R("p3", "n", "t", _n(part.rp, "rp"))
+        sub.R("p4", "n", sub.gnd, _n(part.rp, "rp"))
+    return sub
+
+
+def replica_subcircuit(mapping: CircuitMapping) -> SubCircuit:
+    """One replica: pins (v, x, nz)."""
+    m, spec = mapping, mapping.spec
+    sub = SubCircuit("replica", "v", "x", "nz")
+    sub.C("m", "v", sub.gnd, _n(m.capacitance, "C"))
+    sub.R("visc", "v", sub.gnd, _n(m.resistance, "R"))
+    sub.I("force", sub.gnd, "v", _n(m.i_force, "I_F"))  # current flows 0 -> source -> v
+    sub.VCCS("noise", sub.gnd, "v", "nz", sub.gnd, _n(m.noise_gain, "noise_gain"))
+    sub.V("noise", "nz", sub.gnd,
+          f"dc 0 trrandom(2 {_n(m.noise_ts, 'noise_ts')} 0 {_n(m.noise_stddev, 'noise_stddev')} 0)")
+    if spec.coulomb == "diode-bridge":
+        sub.X("coulomb", "bridge", "v")
+    elif spec.coulomb == "behavioural":
+        sub.BehavioralSource("coulomb", "v", sub.gnd, current_expression=(
+            f"{_n(m.i_delta, 'I_Delta')}*tanh(V(v)/{_n(m.eps_volts, 'eps_V')})"))
+    else:
+        sub.BehavioralSource("coulomb", "v", sub.gnd,
+                             current_expression=f"{_n(m.i_delta, 'I_Delta')}*sgn(V(v))")
+    sub.VCCS("x", sub.gnd, "x", "v", sub.gnd, _n(m.g_x, "g_x"))
+    sub.C("x", "x", sub.gnd, _n(m.cap_x, "C_x"))
+    return sub
+
+
+def _check_int(value, what, lo, hi) -> int:
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise ValueError(f"{what} must be an integer in [{lo}, {hi}], got {value!r}")
+    if not lo <= int(value) <= hi:
+        raise ValueError(f"{what} must be an integer in [{lo}, {hi}], got {value!r}")
+    return int(value)
+
+
+def build_deck(mapping: CircuitMapping, *, replicas: int, v0, t_end: float, seed: int,
+               sample_dt: float, title: str = "analogue") -> Deck:
+    """The ngspice deck for ``replicas`` independent replicas started at ``v0`` (model units).
+
+    ``t_end`` and ``sample_dt`` are in model time units; the deck asks for
+    ``.tran sample_dt*theta t_end*theta 0 max_step*theta uic`` and saves only
+    ``v(v<i>)``, ``v(x<i>)`` and ``v(nz<i>)``.  No ``.control`` block: run it as
+    ``ngspice -b -r out.raw deck.cir``.
+    """
+    if not isinstance(mapping, CircuitMapping):
+        raise ValueError(f"mapping must be a CircuitMapping, got {type(mapping).__name__}")
+    title = val.check_name(title, "title")
+    replicas = _check_int(replicas, "replicas", 1, 100_000)
+    seed = _check_int(seed, "seed", 0, _SEED_MAX)
+    t_end = val.positive(t_end, "t_end")
+    sample_dt = val.positive(sample_dt, "sample_dt")
+    if not sample_dt <= t_end:
+        raise ValueError(f"sample_dt must be in (0, t_end={t_end}], got {sample_dt!r}")
+    try:
+        v0 = np.asarray(v0, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError("v0 must be an array of finite floats of shape (replicas,)") from None
+    if v0.shape != (replicas,):
+        raise ValueError(f"v0 must have shape (replicas,) = ({replicas},), got {v0.shape}")
+    if not np.all(np.isfinite(v0)):
+        raise ValueError("v0 must be finite")
+    part = mapping.part
+    if part is not None and not part.ideal:
+        vmax = mapping.kappa * float(np.max(np.abs(v0)))
+        if vmax >= part.max_reverse_voltage:
+            raise ValueError(f"v0: |v0| up to {np.max(np.abs(v0)):.3g} means {vmax:.3g} V, at or above the "
+                             f"{part.name} reverse-voltage rating {part.max_reverse_voltage:.3g} V")
+
+    spec, theta = mapping.spec, mapping.theta
+    max_step = spec.max_step if spec.max_step is not None else mapping.noise_dt
+    max_step = min(max_step, t_end)
+
+    circuit = Circuit(title)
+    if spec.coulomb == "diode-bridge":
+        circuit.model(_MODEL_NAME, "D", **{k: _n(v, k) for k, v in part.model})
+        circuit.subcircuit(bridge_subcircuit(mapping))
+    circuit.subcircuit(replica_subcircuit(mapping))
+    for i in range(replicas):
+        circuit.X(f"r{i}", "replica", f"v{i}", f"x{i}", f"nz{i}")
+
+    lines = [str(circuit).rstrip("\n")]
+    volts = mapping.kappa * v0
+    ic = [f"v(v{i})={_n(volts[i], 'v0')} v(x{i})=0" for i in range(replicas)]
+    if spec.coulomb == "diode-bridge":
+        # uic skips the operating point, so the bridge's inner nodes need consistent starting
+        # values too (else D1 starts forward biased by the whole of V and the first step fails).
+        vp, vn = bridge_node_voltages(part, mapping.i_delta, volts)
+        ic += [f"v(xr{i}.xcoulomb.p)={_n(vp[i])} v(xr{i}.xcoulomb.n)={_n(vn[i])}"
+               for i in range(replicas)]
+    lines.append(".ic " + " ".join(ic))
+    lines.append(f".options seed={seed} reltol={_n(spec.reltol)} abstol={_n(spec.abstol)} "
+                 f"vntol={_n(spec.vntol)} method={spec.method} temp=27 tnom=27")
+    vectors = {"v": [f"v(v{i})" for i in range(replicas)],
+               "x": [f"v(x{i})" for i in range(replicas)],
+               "noise": [f"v(nz{i})" for i in range(replicas)]}
+    lines.append(".save " + " ".join(vectors["v"] + vectors["x"] + vectors["noise"]))
+    lines.append(f".tran {_n(sample_dt * theta)} {_n(t_end * theta)} 0 {_n(max_step * theta)} uic")
+    lines.append(".end")
+    text = "\n".join(lines) + "\n"
+    return Deck(text=text, vectors=vectors, to_model_v=mapping.to_model_v,
+                to_model_x=mapping.to_model_x, time_scale=theta, seed=seed, replicas=replicas,
+                sha256=hashlib.sha256(text.encode()).hexdigest(), to_model_noise=1.0,
+                noise_dt=mapping.noise_dt, t_end=t_end, sample_dt=sample_dt)
