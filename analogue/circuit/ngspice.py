@@ -31,7 +31,7 @@ import numpy as np
 from .rawfile import RawPlot, read_raw
 
 __all__ = ["NgspiceError", "NgspiceNotFoundError", "RunResult", "find_ngspice",
-           "ngspice_version", "run_deck", "resample"]
+           "ngspice_version", "run_deck", "resample", "interp_rows"]
 
 INSTALL_HINT = ("install it with your package manager, e.g. `sudo apt-get install ngspice` "
                 "(Debian/Ubuntu), `brew install ngspice` (macOS) or `conda install -c "
@@ -176,11 +176,20 @@ def resample(plot: RawPlot, names, times, initial=None) -> np.ndarray:
                        or times[-1] > t_raw[-1] * (1 + 1e-9)):
         raise ValueError(f"times [{times[0]:.6g}, {times[-1]:.6g}] s lie outside the simulated "
                          f"interval [{t_raw[0]:.6g}, {t_raw[-1]:.6g}] s")
-    tq = np.clip(times, t_raw[0], t_raw[-1])
-    # One searchsorted for all vectors (they share the time axis); "right" then step back so
-    # repeated breakpoint times (ngspice can emit t twice) never give a zero-width interval.
+    return interp_rows(t_raw, vals, times)
+
+
+def interp_rows(t_raw, rows, times) -> np.ndarray:
+    """Linear interpolation of every row of ``rows`` (n, len(t_raw)) at ``times`` (clipped to
+    the range of ``t_raw``, which must be non-decreasing); vectorised over rows."""
+    t_raw = np.asarray(t_raw, dtype=float)
+    rows = np.asarray(rows, dtype=float)
+    tq = np.clip(np.asarray(times, dtype=float), t_raw[0], t_raw[-1])
+    # One searchsorted for all rows (they share the time axis); side="right" and the step
+    # back mean repeated breakpoint times (ngspice can emit a time twice) never give a
+    # zero-width interval inside the data.
     i = np.clip(np.searchsorted(t_raw, tq, side="right"), 1, t_raw.size - 1)
     t_lo, t_hi = t_raw[i - 1], t_raw[i]
     span = t_hi - t_lo
     w = np.divide(tq - t_lo, span, out=np.zeros_like(tq), where=span > 0)
-    return vals[:, i - 1] * (1.0 - w) + vals[:, i] * w
+    return rows[:, i - 1] * (1.0 - w) + rows[:, i] * w

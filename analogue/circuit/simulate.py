@@ -1,0 +1,431 @@
+"""``analogue.simulate``: ensembles of stick-slip trajectories from the ngspice circuit.
+
+The replicas are split into decks (batches) of at most ``replicas_per_deck``; deck ``b`` gets
+an ngspice seed derived from ``(seed, b)`` with numpy's SeedSequence, so the arrays depend
+only on the arguments and never on which worker ran which deck or in what order.  Each deck
+runs as its own ``ngspice -b -r`` process (:func:`analogue.circuit.ngspice.run_deck`), its
+raw output is resampled onto the requested uniform grid, converted to model units with the
+deck's factors and stored in the content-addressed run store
+(:mod:`analogue.circuit.store`) as soon as it finishes.
+
+Parallelism: locally, ``workers`` ngspice processes run at once (a thread per process is
+enough: the work happens inside ngspice, and the numpy resampling releases the GIL); with
+``scheduler=`` ("tcp://host:port" or a ``distributed.Client``) the same batch function runs on
+a Dask cluster through ``client.get_executor()``.  Results are identical either way.
+"""
+from __future__ import annotations
+
+import concurrent.futures as cf
+import json
+import logging
+import math
+import os
+import sys
+import time as _time
+from dataclasses import asdict, dataclass, field, is_dataclass
+from numbers import Integral, Real
+
+import numpy as np
+
+from ..ensemble import Ensemble
+from ..model import Model
+from . import ngspice as _ng
+from .store import SCHEMA_VERSION, batch_key, open_store
+
+__all__ = ["simulate", "run_decks", "BatchTask", "run_batch", "deck_seeds", "time_grid",
+           "initial_velocities"]
+
+log = logging.getLogger(__name__)
+
+DEFAULT_REPLICAS_PER_DECK = 64
+DEFAULT_TIMEOUT = 3600.0
+_EXTRA = ("replicas_per_deck", "store", "progress", "timeout", "scheduler")
+# ngspice parses `.options seed=` as a C int; seeds above 2**31 - 1 are ignored with a warning.
+_SEED_MAX = 2**31 - 1
+
+
+# ----------------------------------------------------------------------------- validation
+def _int(name, value, lo, hi=None) -> int:
+    if isinstance(value, bool) or not isinstance(value, Integral):
+        raise ValueError(f"{name} must be an integer >= {lo}" + (f" and <= {hi}" if hi else "")
+                         + f", got {value!r}")
+    value = int(value)
+    if value < lo or (hi is not None and value > hi):
+        raise ValueError(f"{name} must be an integer >= {lo}" + (f" and <= {hi}" if hi else "")
+                         + f", got {value}")
+    return value
+
+
+def _real(name, value, *, positive=True) -> float:
+    if isinstance(value, bool) or not isinstance(value, Real) or not math.isfinite(float(value)):
+        raise ValueError(f"{name} must be a finite real number > 0, got {value!r}")
+    value = float(value)
+    if positive and not value > 0:
+        raise ValueError(f"{name} must be a finite real number > 0, got {value!r}")
+    return value
+
+
+def time_grid(t_end, sample_dt) -> np.ndarray:
+    """Uniform grid ``0, sample_dt, ..., t_end`` (model units); t_end must be a whole number of
+    sample intervals (to 1e-6 relative)."""
+    t_end = _real("t_end", t_end)
+    sample_dt = _real("sample_dt", sample_dt)
+    if sample_dt > t_end:
+        raise ValueError(f"sample_dt must be <= t_end (= {t_end!r}), got {sample_dt!r}")
+    n = round(t_end / sample_dt)
+    if abs(n * sample_dt - t_end) > 1e-6 * t_end:
+        raise ValueError(f"t_end must be a whole number of sample_dt intervals; t_end/sample_dt "
+                         f"= {t_end / sample_dt!r} (choose e.g. sample_dt = {t_end / max(n, 1)!r})")
+    return np.arange(n + 1) * (t_end / n)
+
+
+def deck_seeds(seed: int, n_decks: int) -> list[int]:
+    """ngspice seeds (1 .. 2**31-1) of decks 0..n_decks-1, from SeedSequence(seed, spawn_key
+    (1, b)): a fixed function of (seed, b), independent of scheduling."""
+    seed = _int("seed", seed, 0)
+    out = []
+    for b in range(n_decks):
+        word = np.random.SeedSequence(seed, spawn_key=(1, b)).generate_state(1, np.uint32)[0]
+        out.append(int(word) % _SEED_MAX + 1)
+    return out
+
+
+def _sample_stationary(model: Model, size: int, rng: np.random.Generator) -> np.ndarray:
+    """Samples from p_s (eq. p_stat); B1's exact sampler when present, else a tabulated
+    inverse CDF of ``model.stationary_pdf``."""
+    try:
+        from ..theory.exact import sample_stationary
+    except ImportError:
+        sample_stationary = None
+    if sample_stationary is not None:
+        return np.asarray(sample_stationary(model, size, seed=rng), dtype=float)
+    # p_s is log-concave with U'' >= 1/tau_m, so its std is below sqrt(tau_m/gamma): +-14
+    # widths around the mode hold all but ~1e-44 of the mass.  Node on v = 0 (the kink).
+    centre = model.potential_minimum()
+    w = 14.0 * model.velocity_scale
+    lo, hi = min(centre - w, -1e-300), max(centre + w, 1e-300)
+    n = 40001
+    h = (hi - lo) / (n - 1)
+    grid = np.unique(np.concatenate([lo + h * np.arange(n), [0.0]]))
+    pdf = model.stationary_pdf(grid)
+    cdf = np.concatenate([[0.0], np.cumsum(0.5 * (pdf[1:] + pdf[:-1]) * np.diff(grid))])
+    cdf /= cdf[-1]
+    return np.interp(rng.random(size), cdf, grid)
+
+
+def initial_velocities(model: Model, v0, replicas: int, seed: int) -> np.ndarray:
+    """``v0`` as a (replicas,) array in model units; "stationary" draws from the stationary law
+    of ``model`` with SeedSequence(seed, spawn_key=(0,))."""
+    if isinstance(v0, str):
+        if v0 != "stationary":
+            raise ValueError(f"v0 must be a number, an array of shape (replicas,) or "
+                             f"'stationary', got {v0!r}")
+        rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(0,)))
+        return _sample_stationary(model, replicas, rng)
+    try:
+        arr = np.asarray(v0, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"v0 must be a number, an array of shape (replicas,) or 'stationary', "
+                         f"got {v0!r}") from None
+    if arr.ndim == 0:
+        arr = np.full(replicas, float(arr))
+    if arr.shape != (replicas,):
+        raise ValueError(f"v0 must be a number or an array of shape (replicas,) = ({replicas},), "
+                         f"got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError("v0 must be finite")
+    return arr
+
+
+# ------------------------------------------------------------------------------ batches
+@dataclass(frozen=True)
+class BatchTask:
+    """Everything one worker needs to run one deck and return arrays in model units.
+    Picklable (sent to Dask workers)."""
+
+    index: int
+    text: str
+    v_names: tuple
+    x_names: tuple | None
+    to_model_v: float
+    to_model_x: float
+    time_scale: float
+    times: np.ndarray = field(repr=False)   # model units
+    v0: np.ndarray = field(repr=False)      # model units, (replicas,)
+    timeout: float = DEFAULT_TIMEOUT
+
+
+def run_batch(task: BatchTask) -> dict:
+    """Run one deck; return ``{"v": (r, n_t), "x": (r, n_t), "info": {...}}`` in model units.
+
+    The raw file of a ``uic`` run starts after t = 0: the known initial values (v0, x = 0) are
+    prepended before the linear resampling (see :func:`analogue.circuit.ngspice.resample`).
+    """
+    t_s = task.times * task.time_scale
+    res = _ng.run_deck(task.text, timeout=task.timeout, t_stop=float(t_s[-1]))
+    v_raw0 = task.v0 / task.to_model_v
+    v = _ng.resample(res.plot, task.v_names, t_s, initial=v_raw0) * task.to_model_v
+    if task.x_names:
+        x = _ng.resample(res.plot, task.x_names, t_s,
+                         initial=np.zeros(len(task.x_names))) * task.to_model_x
+    else:
+        # No integrator node: integrate v on the simulator's own time points (trapezoid).
+        t_raw = res.plot["time"]
+        vr = res.plot.columns(task.v_names)
+        if t_raw[0] > 0:
+            t_raw = np.concatenate([[0.0], t_raw])
+            vr = np.hstack([v_raw0[:, None], vr])
+        xr = np.concatenate([np.zeros((vr.shape[0], 1)),
+                             np.cumsum(0.5 * (vr[:, 1:] + vr[:, :-1]) * np.diff(t_raw), axis=1)],
+                            axis=1) * task.to_model_v / task.time_scale
+        x = _ng.interp_rows(t_raw, xr, t_s)
+    warnings = [ln.strip() for ln in res.stderr.splitlines()
+                if ln.strip() and "warning" in ln.lower()]
+    info = {"wall_time": res.wall_time, "raw_points": int(res.plot.n_points),
+            "ngspice_version": res.version, "warnings": warnings[:20]}
+    return {"v": v, "x": x, "info": info}
+
+
+def _jsonable(obj):
+    """A JSON-safe deep copy (numpy scalars/arrays, dataclasses, tuples, paths...)."""
+    def default(o):
+        if isinstance(o, np.generic):
+            return o.item()
+        if isinstance(o, np.ndarray):
+            return o.tolist()
+        if is_dataclass(o) and not isinstance(o, type):
+            return asdict(o)
+        return str(o)
+    return json.loads(json.dumps(obj, default=default))
+
+
+def _progress_enabled(progress, n_run: int) -> bool:
+    if progress is None:
+        return n_run > 1 and sys.stderr.isatty()
+    if not isinstance(progress, bool):
+        raise ValueError(f"progress must be True, False or None (auto), got {progress!r}")
+    return progress
+
+
+def _executor(workers, scheduler, n_tasks):
+    """(executor, closer) for the local thread pool or a Dask cluster."""
+    if scheduler is None:
+        return cf.ThreadPoolExecutor(max_workers=max(1, min(workers, n_tasks))), None
+    if isinstance(scheduler, str):
+        if not scheduler.startswith(("tcp://", "tls://", "inproc://", "ucx://")):
+            raise ValueError(f"scheduler must be a Dask scheduler address such as "
+                             f"'tcp://host:8786' or a distributed.Client, got {scheduler!r}")
+        from distributed import Client
+        client = Client(scheduler)
+        return client.get_executor(), client.close
+    if hasattr(scheduler, "get_executor"):
+        return scheduler.get_executor(), None
+    raise ValueError(f"scheduler must be a Dask scheduler address such as 'tcp://host:8786' or "
+                     f"a distributed.Client, got {scheduler!r}")
+
+
+def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, progress=None,
+              timeout=DEFAULT_TIMEOUT):
+    """Run (or load from the store) a list of decks and stack their replicas.
+
+    ``decks``: objects with the netlist.Deck interface (``text``, ``vectors``, ``to_model_v``,
+    ``to_model_x``, ``time_scale``, ``replicas``); ``times``: the grid in model units;
+    ``v0``: (sum of replicas,) initial velocities in model units (the decks' ``.ic`` values).
+    Returns ``(v, x, info)`` with v, x of shape (replicas, n_t) and info a JSON-safe dict
+    (store keys, per-deck wall times, how many decks came from the store).
+    """
+    times = np.asarray(times, dtype=float)
+    if workers is None:
+        workers = os.cpu_count() or 1
+    workers = _int("workers", workers, 1)
+    timeout = _real("timeout", timeout)
+    st = open_store(store)
+    version = _ng.ngspice_version()  # also: a missing ngspice fails here, with the hint
+    tasks, keys, offsets = [], [], [0]
+    for b, deck in enumerate(decks):
+        n = int(deck.replicas)
+        offsets.append(offsets[-1] + n)
+        vec = deck.vectors
+        x_names = tuple(vec["x"]) if vec.get("x") else None
+        tasks.append(BatchTask(index=b, text=deck.text, v_names=tuple(vec["v"]), x_names=x_names,
+                               to_model_v=float(deck.to_model_v), to_model_x=float(deck.to_model_x),
+                               time_scale=float(deck.time_scale), times=times,
+                               v0=np.asarray(v0[offsets[b]:offsets[b + 1]], dtype=float),
+                               timeout=timeout))
+        keys.append(batch_key(deck.text, times, version))
+    if offsets[-1] != len(v0):
+        raise ValueError(f"v0 has {len(v0)} entries but the decks hold {offsets[-1]} replicas")
+
+    results: list = [None] * len(tasks)
+    from_store = 0
+    if st is not None:
+        for b, key in enumerate(keys):
+            hit = st.get(key)
+            if hit is not None:
+                arrays, meta = hit
+                results[b] = {"v": arrays["v"], "x": arrays["x"], "info": meta.get("info", {})}
+                from_store += 1
+    todo = [t for t in tasks if results[t.index] is None]
+    where = "local" if scheduler is None else "dask"
+    log.info("analogue.simulate: %d decks, %d from the store, %d to run (%s, %s)", len(tasks),
+             from_store, len(todo), where,
+             f"{workers} ngspice processes" if scheduler is None else repr(scheduler))
+    t0 = _time.perf_counter()
+    if todo:
+        ex, closer = _executor(workers, scheduler, len(todo))
+        bar = None
+        if _progress_enabled(progress, len(todo)):
+            from tqdm.auto import tqdm
+            bar = tqdm(total=len(todo), desc="ngspice decks", unit="deck")
+        try:
+            futures = {ex.submit(run_batch, t): t for t in todo}
+            for fut in cf.as_completed(futures):
+                task = futures[fut]
+                out = fut.result()
+                results[task.index] = out
+                if st is not None:
+                    meta = {"schema_version": SCHEMA_VERSION, "ngspice_version": version,
+                            "deck_text": task.text, "deck_index": task.index,
+                            "vectors": {"v": list(task.v_names),
+                                        "x": list(task.x_names) if task.x_names else None},
+                            "to_model_v": task.to_model_v, "to_model_x": task.to_model_x,
+                            "time_scale": task.time_scale, "info": out["info"]}
+                    st.put(keys[task.index], {"v": out["v"], "x": out["x"], "t": times}, meta)
+                if bar is not None:
+                    bar.update(1)
+        except BaseException:
+            for f in futures if "futures" in locals() else ():
+                f.cancel()
+            raise
+        finally:
+            if bar is not None:
+                bar.close()
+            ex.shutdown(wait=True, cancel_futures=True)
+            if closer is not None:
+                closer()
+    wall = _time.perf_counter() - t0
+    v = np.vstack([r["v"] for r in results]) if results else np.empty((0, times.size))
+    x = np.vstack([r["x"] for r in results]) if results else np.empty((0, times.size))
+    info = {"ngspice_version": version, "store": str(st.root) if st is not None else None,
+            "store_keys": keys, "from_store": from_store, "ran": len(todo), "wall_time": wall,
+            "deck_wall_times": [r["info"].get("wall_time") for r in results],
+            "schema_version": SCHEMA_VERSION, "executor": where}
+    return v, x, info
+
+
+# ------------------------------------------------------------------------------ simulate
+def _spec(circuit):
+    from .mapping import CircuitSpec
+    if circuit is None:
+        return CircuitSpec()
+    if isinstance(circuit, CircuitSpec):
+        return circuit
+    if isinstance(circuit, dict):
+        try:
+            return CircuitSpec(**circuit)
+        except TypeError as exc:
+            raise ValueError(f"circuit: {exc}") from None
+    raise ValueError(f"circuit must be None, a CircuitSpec or a dict of CircuitSpec fields, "
+                     f"got {type(circuit).__name__}")
+
+
+def _default_sample_dt(model: Model, t_end: float) -> float:
+    """About tau_m/100, adjusted so that t_end is a whole number of intervals."""
+    n = max(1, math.ceil(t_end / (model.tau_m / 100.0) - 1e-9))
+    return t_end / n
+
+
+def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, workers=None,
+             **extra) -> Ensemble:
+    """Simulate ``replicas`` trajectories of the stick-slip model (eqs. bm, U_pot) in ngspice.
+
+    Parameters
+    ----------
+    model : analogue.Model
+        The model to realise; the circuit implements ``mapping.model_effective`` (the same
+        parameters with the diode smoothing width epsilon), recorded in ``meta``.
+    v0 : float, array (replicas,) or "stationary"
+        Initial velocities in model units; "stationary" draws them from the stationary law of
+        the circuit's model (eq. p_stat) with a seed derived from ``seed``.
+    t_end : float
+        Final time (model units); a whole number of ``sample_dt``.
+    replicas : int
+        Number of independent trajectories (>= 1).
+    seed : int
+        Master seed (>= 0): same seed => identical arrays.
+    sample_dt : float, optional
+        Output grid step (model units); default about tau_m/100.
+    circuit : None, CircuitSpec or dict
+        Circuit choices (see :mod:`analogue.circuit.mapping`); None = default spec.
+    workers : int, optional
+        ngspice processes run at once locally; default ``os.cpu_count()``.
+    **extra
+        ``replicas_per_deck`` (default 64), ``store`` (directory, False to disable; default
+        $ANALOGUE_STORE or ~/.cache/analogue/runs), ``progress`` (bool; default: a tqdm bar
+        when stderr is a terminal), ``timeout`` (seconds per deck, default 3600),
+        ``scheduler`` ("tcp://host:port" or a distributed.Client: run on a Dask cluster).
+
+    Returns
+    -------
+    Ensemble with ``t`` (0..t_end step sample_dt), ``v`` and ``x`` (replicas, n_t) in model
+    units (x[:, 0] = 0), and ``meta`` holding the provenance.
+    """
+    unknown = sorted(set(extra) - set(_EXTRA))
+    if unknown:
+        raise ValueError(f"unknown keyword argument(s) {', '.join(map(repr, unknown))} for "
+                         f"simulate; allowed extras: {', '.join(_EXTRA)}")
+    if not isinstance(model, Model):
+        raise ValueError(f"model must be an analogue.Model, got {type(model).__name__}")
+    replicas = _int("replicas", replicas, 1)
+    seed = _int("seed", seed, 0)
+    t_end = _real("t_end", t_end)
+    if sample_dt is None:
+        sample_dt = _default_sample_dt(model, t_end)
+    times = time_grid(t_end, sample_dt)
+    sample_dt = float(times[1] - times[0])
+    if workers is not None:
+        workers = _int("workers", workers, 1)
+    per_deck = _int("replicas_per_deck", extra.get("replicas_per_deck",
+                                                   DEFAULT_REPLICAS_PER_DECK), 1)
+    timeout = _real("timeout", extra.get("timeout", DEFAULT_TIMEOUT))
+    progress = extra.get("progress")
+    if progress is not None and not isinstance(progress, bool):
+        raise ValueError(f"progress must be True, False or None (auto), got {progress!r}")
+    open_store(extra.get("store"))  # validates the store argument early
+
+    spec = _spec(circuit)
+    from .mapping import map_model
+    from .netlist import build_deck
+    mapping = map_model(model, spec)
+    model_eff = mapping.model_effective
+    v0_arr = initial_velocities(model_eff, v0, replicas, seed)
+
+    n_decks = -(-replicas // per_deck)
+    sizes = [replicas // n_decks + (1 if b < replicas % n_decks else 0) for b in range(n_decks)]
+    starts = np.concatenate([[0], np.cumsum(sizes)])
+    seeds = deck_seeds(seed, n_decks)
+    decks = [build_deck(mapping, replicas=sizes[b], v0=v0_arr[starts[b]:starts[b + 1]],
+                        t_end=t_end, seed=seeds[b], sample_dt=sample_dt)
+             for b in range(n_decks)]
+    t0 = _time.perf_counter()
+    v, x, info = run_decks(decks, times, v0_arr, store=extra.get("store"), workers=workers,
+                           scheduler=extra.get("scheduler"), progress=progress, timeout=timeout)
+    table = mapping.table() if hasattr(mapping, "table") else None
+    meta = {
+        "source": "circuit",
+        "model": model.as_dict(),
+        "model_effective": model_eff.as_dict(),
+        "circuit_spec": spec,
+        "circuit": table,
+        "seed": seed,
+        "deck_seeds": seeds,
+        "deck_replicas": sizes,
+        "replicas_per_deck": per_deck,
+        "deck_sha256": [d.sha256 for d in decks],
+        "v0": v0 if isinstance(v0, str) else "given",
+        "t_end": t_end,
+        "sample_dt": sample_dt,
+        **info,
+        "wall_time": _time.perf_counter() - t0,
+    }
+    return Ensemble(times, v, x, _jsonable(meta))
