@@ -180,3 +180,32 @@ def build_deck(mapping: CircuitMapping, *, replicas: int, v0, t_end: float, seed
                 to_model_x=mapping.to_model_x, time_scale=theta, seed=seed, replicas=replicas,
                 sha256=hashlib.sha256(text.encode()).hexdigest(), to_model_noise=1.0,
                 noise_dt=mapping.noise_dt, t_end=t_end, sample_dt=sample_dt)
+
+
+def bridge_dc_deck(mapping: CircuitMapping, v_max: float, points: int = 201) -> str:
+    """A ``.dc`` deck sweeping the voltage across one Coulomb element from ``-v_max`` to
+    ``v_max`` volts (source ``vs``; the element's current is ``-i(vs)``): checks the friction
+    law of the bridge (or B-source) directly."""
+    if not isinstance(mapping, CircuitMapping):
+        raise ValueError(f"mapping must be a CircuitMapping, got {type(mapping).__name__}")
+    v_max = val.positive(v_max, "v_max")
+    points = _check_int(points, "points", 3, 100_001)
+    spec = mapping.spec
+    circuit = Circuit("bridgedc")
+    if spec.coulomb == "diode-bridge":
+        circuit.model(_MODEL_NAME, "D", **{k: _n(v, k) for k, v in mapping.part.model})
+        circuit.subcircuit(bridge_subcircuit(mapping))
+        circuit.X("coulomb", "bridge", "t")
+    elif spec.coulomb == "behavioural":
+        circuit.BehavioralSource("coulomb", "t", circuit.gnd, current_expression=(
+            f"{_n(mapping.i_delta)}*tanh(V(t)/{_n(mapping.eps_volts)})"))
+    else:
+        circuit.BehavioralSource("coulomb", "t", circuit.gnd,
+                                 current_expression=f"{_n(mapping.i_delta)}*sgn(V(t))")
+    circuit.V("s", "t", circuit.gnd, "dc 0")
+    step = 2.0 * v_max / (points - 1)
+    lines = [str(circuit).rstrip("\n"),
+             # tight tolerances: the test compares with the closed form to 1e-5 of I_Delta
+             f".options reltol=1e-9 abstol=1e-18 vntol=1e-12 temp=27 tnom=27",
+             f".dc vs {_n(-v_max)} {_n(v_max + 0.5 * step)} {_n(step)}", ".end"]
+    return "\n".join(lines) + "\n"
