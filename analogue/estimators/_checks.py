@@ -80,7 +80,8 @@ def time_index(ens: Ensemble, name: str, time) -> int:
     tt = finite(name, time)
     half = 0.5 * (ens.dt if ens.t.size > 1 else 0.0)
     if not ens.t[0] - half <= tt <= ens.t[-1] + half:
-        raise ValueError(f"{name} must be in [{ens.t[0]!r}, {ens.t[-1]!r}], got {tt!r}")
+        raise ValueError(f"{name} must be in [{float(ens.t[0])!r}, {float(ens.t[-1])!r}], "
+                         f"got {tt!r}")
     return int(np.argmin(np.abs(ens.t - tt)))
 
 
