@@ -193,7 +193,6 @@ def _spread_ratio(estimates, stated):
     return math.sqrt(np.mean(stated**2) / np.mean(np.var(estimates, axis=0, ddof=1)))
 
 
-@pytest.mark.slow
 def test_overlapping_window_errors_are_honest():
     seeds, reps, n_t, tau = 60, 30, 800, 2.0
     big = exact_ou(seeds * reps, n_t, seed=5)
