@@ -66,6 +66,11 @@ class WorkDistribution:
     ``replica_fractions[r, j]`` is the fraction of replica r's windows falling in bin j; the
     density is their replica mean over the bin width.  ``mean`` and ``mean_se`` are the mean
     work rate and its replica-spread error.
+
+    The replica-spread error is only as good as the number of replicas that actually reach a
+    bin (``contributing``): in the tails one rare excursion fills many overlapping windows, so
+    a bin with 30 counts may rest on 5 replicas, and its (skewed, zero-inflated) spread gives
+    heavy-tailed z-scores.  Trust the errors where ``contributing`` is a few tens or more.
     """
 
     centres: np.ndarray
@@ -89,6 +94,11 @@ class WorkDistribution:
     @property
     def widths(self) -> np.ndarray:
         return np.diff(self.edges)
+
+    @property
+    def contributing(self) -> np.ndarray:
+        """Number of replicas with at least one window in each bin."""
+        return np.count_nonzero(self.replica_fractions > 0, axis=0)
 
 
 def work_distribution(ensemble, tau, force, bins=41, range=None, burn_in=0.0, overlap=True,
@@ -188,16 +198,17 @@ def _tau_gamma(dist, tau, gamma) -> tuple[float, float]:
     return t, g
 
 
-def fluctuation_ratio(dist, tau=None, gamma=1.0, min_count=5) -> FluctuationRatio:
+def fluctuation_ratio(dist, tau=None, gamma=1.0, min_replicas=10) -> FluctuationRatio:
     """``ln[P_tau(w)/P_tau(-w)] / (tau gamma)`` (paper, eqs. ftexp, dryft) from a
     :func:`work_distribution` whose bins are symmetric about 0.
 
-    Only pairs of bins ``(w, -w)`` with ``w > 0`` where both sides have at least
-    ``min_count`` pooled counts are used (the delta-method error of a log is poor below a
-    few counts).  ``tau`` defaults to (and must equal) the distribution's.
+    Only pairs of bins ``(w, -w)`` with ``w > 0`` where both sides are reached by at least
+    ``min_replicas`` replicas are used: the delta-method error of a log rests on the
+    replicas that contribute, and is poor with only a few.  ``tau`` defaults to (and must
+    equal) the distribution's.
     """
     tau, gamma = _tau_gamma(dist, tau, gamma)
-    mc = _checks.positive_int("min_count", min_count)
+    mc = _checks.positive_int("min_replicas", min_replicas)
     e = dist.edges
     scale = float(np.max(np.abs(e)))
     if not np.allclose(e, -e[::-1], rtol=0, atol=1e-9 * scale):
@@ -205,7 +216,8 @@ def fluctuation_ratio(dist, tau=None, gamma=1.0, min_count=5) -> FluctuationRati
     nb = dist.centres.size
     pos = np.flatnonzero(dist.centres > 1e-9 * scale)
     neg = nb - 1 - pos
-    ok = (dist.counts[pos] >= mc) & (dist.counts[neg] >= mc)
+    n_rep = dist.contributing
+    ok = (n_rep[pos] >= mc) & (n_rep[neg] >= mc)
     pos, neg = pos[ok], neg[ok]
     P = dist.replica_fractions.mean(axis=0)
     f = dist.replica_fractions
@@ -233,15 +245,15 @@ class RateFunctionEstimate:
     gamma: float
 
 
-def empirical_rate_function(dist, tau=None, gamma=1.0, min_count=5) -> RateFunctionEstimate:
-    """``I_tau(w) = -ln P_tau(w) / (tau gamma)`` minus its minimum, on bins with at least
-    ``min_count`` pooled counts.  Errors propagate ``ln P`` and the shift replica by replica
+def empirical_rate_function(dist, tau=None, gamma=1.0, min_replicas=10) -> RateFunctionEstimate:
+    """``I_tau(w) = -ln P_tau(w) / (tau gamma)`` minus its minimum, on bins reached by at
+    least ``min_replicas`` replicas.  Errors propagate ``ln P`` and the shift replica by replica
     (so the error at the minimum bin is 0 and the others include its uncertainty)."""
     tau, gamma = _tau_gamma(dist, tau, gamma)
-    mc = _checks.positive_int("min_count", min_count)
-    keep = np.flatnonzero(dist.counts >= mc)
+    mc = _checks.positive_int("min_replicas", min_replicas)
+    keep = np.flatnonzero(dist.contributing >= mc)
     if keep.size == 0:
-        raise ValueError(f"no bin has >= min_count={mc} counts")
+        raise ValueError(f"no bin is reached by >= min_replicas={mc} replicas")
     f = dist.replica_fractions[:, keep]
     P = f.mean(axis=0)
     tg = tau * gamma
