@@ -66,6 +66,9 @@ class StationaryObservables:
     n_times: int
 
 
+_FFT_BLOCK = 1 << 22  # complex values per FFT batch (~64 MB)
+
+
 def integrated_autocorrelation_time(series, c=5.0) -> AutocorrelationTime:
     """Integrated autocorrelation time (in samples) of a stationary series, 1-D ``(n,)`` or
     several independent replicas ``(replicas, n)`` pooled (see module docstring)."""
@@ -76,10 +79,14 @@ def integrated_autocorrelation_time(series, c=5.0) -> AutocorrelationTime:
     if not np.all(np.isfinite(y)):
         raise ValueError("series must be finite")
     n = y.shape[1]
-    y = y - y.mean()
+    mean = y.mean()
     size = 1 << int(np.ceil(np.log2(2 * n)))
-    f = np.fft.rfft(y, size, axis=1)
-    acov = np.fft.irfft((f * f.conj()).real, size, axis=1)[:, :n].sum(axis=0) / (y.shape[0] * n)
+    acov = np.zeros(n)
+    block = max(1, _FFT_BLOCK // size)  # bound the FFT workspace for long circuit records
+    for r0 in range(0, y.shape[0], block):
+        f = np.fft.rfft(y[r0:r0 + block] - mean, size, axis=1)
+        acov += np.fft.irfft(f.real**2 + f.imag**2, size, axis=1)[:, :n].sum(axis=0)
+    acov /= y.shape[0] * n
     if acov[0] <= 0:
         return AutocorrelationTime(1.0, 0, True)
     rho = acov / acov[0]

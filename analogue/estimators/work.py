@@ -198,14 +198,14 @@ def _tau_gamma(dist, tau, gamma) -> tuple[float, float]:
     return t, g
 
 
-def fluctuation_ratio(dist, tau=None, gamma=1.0, min_replicas=10) -> FluctuationRatio:
+def fluctuation_ratio(dist, tau, gamma, min_replicas=10) -> FluctuationRatio:
     """``ln[P_tau(w)/P_tau(-w)] / (tau gamma)`` (paper, eqs. ftexp, dryft) from a
     :func:`work_distribution` whose bins are symmetric about 0.
 
     Only pairs of bins ``(w, -w)`` with ``w > 0`` where both sides are reached by at least
     ``min_replicas`` replicas are used: the delta-method error of a log rests on the
-    replicas that contribute, and is poor with only a few.  ``tau`` defaults to (and must
-    equal) the distribution's.
+    replicas that contribute, and is poor with only a few.  ``tau`` must equal the
+    distribution's (pass None to take it from ``dist``).
     """
     tau, gamma = _tau_gamma(dist, tau, gamma)
     mc = _checks.positive_int("min_replicas", min_replicas)
@@ -245,10 +245,11 @@ class RateFunctionEstimate:
     gamma: float
 
 
-def empirical_rate_function(dist, tau=None, gamma=1.0, min_replicas=10) -> RateFunctionEstimate:
+def empirical_rate_function(dist, tau, gamma, min_replicas=10) -> RateFunctionEstimate:
     """``I_tau(w) = -ln P_tau(w) / (tau gamma)`` minus its minimum, on bins reached by at
     least ``min_replicas`` replicas.  Errors propagate ``ln P`` and the shift replica by replica
-    (so the error at the minimum bin is 0 and the others include its uncertainty)."""
+    (so the error at the minimum bin is 0 and the others include its uncertainty).  ``tau``
+    must equal the distribution's (None takes it from ``dist``)."""
     tau, gamma = _tau_gamma(dist, tau, gamma)
     mc = _checks.positive_int("min_replicas", min_replicas)
     keep = np.flatnonzero(dist.contributing >= mc)
