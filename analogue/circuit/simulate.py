@@ -199,6 +199,16 @@ def _jsonable(obj):
     return json.loads(json.dumps(obj, default=default))
 
 
+def _batch_meta(task: BatchTask, version: str, info: dict) -> dict:
+    """Provenance stored with one batch."""
+    return {"schema_version": SCHEMA_VERSION, "ngspice_version": version,
+            "deck_text": task.text, "deck_index": task.index,
+            "vectors": {"v": list(task.v_names),
+                        "x": list(task.x_names) if task.x_names else None},
+            "to_model_v": task.to_model_v, "to_model_x": task.to_model_x,
+            "time_scale": task.time_scale, "info": info}
+
+
 def _progress_enabled(progress, n_run: int) -> bool:
     if progress is None:
         return n_run > 1 and sys.stderr.isatty()
@@ -277,6 +287,8 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
         if _progress_enabled(progress, len(todo)):
             from tqdm.auto import tqdm
             bar = tqdm(total=len(todo), desc="ngspice decks", unit="deck")
+        futures = {}
+        failed = True
         try:
             futures = {ex.submit(run_batch, t): t for t in todo}
             for fut in cf.as_completed(futures):
@@ -284,23 +296,21 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
                 out = fut.result()
                 results[task.index] = out
                 if st is not None:
-                    meta = {"schema_version": SCHEMA_VERSION, "ngspice_version": version,
-                            "deck_text": task.text, "deck_index": task.index,
-                            "vectors": {"v": list(task.v_names),
-                                        "x": list(task.x_names) if task.x_names else None},
-                            "to_model_v": task.to_model_v, "to_model_x": task.to_model_x,
-                            "time_scale": task.time_scale, "info": out["info"]}
-                    st.put(keys[task.index], {"v": out["v"], "x": out["x"], "t": times}, meta)
+                    # Written as each deck finishes: an interrupted call resumes from here.
+                    st.put(keys[task.index], {"v": out["v"], "x": out["x"], "t": times},
+                           _batch_meta(task, version, out["info"]))
                 if bar is not None:
                     bar.update(1)
-        except BaseException:
-            for f in futures if "futures" in locals() else ():
-                f.cancel()
-            raise
+            failed = False
         finally:
+            if failed:
+                for f in futures:
+                    f.cancel()
             if bar is not None:
                 bar.close()
-            ex.shutdown(wait=True, cancel_futures=True)
+            # Do not wait for decks still running after a failure (threads cannot be killed;
+            # their ngspice processes finish on their own, bounded by the timeout).
+            ex.shutdown(wait=not failed)
             if closer is not None:
                 closer()
     wall = _time.perf_counter() - t0
