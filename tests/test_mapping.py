@@ -165,3 +165,20 @@ def test_map_model_type_checks():
         map_model({"tau_m": 1})
     with pytest.raises(ValueError, match="spec"):
         map_model(STICK, {"diode": "ideal"})
+
+
+def test_noise_bias_estimate_matches_exact_held_noise_ou():
+    """For Delta = 0 the velocity is an OU process driven by held noise; its exact variance a
+    fraction u into a hold is e^{-2 lam u h} V + s^2 (1 - e^{-lam u h})^2 / lam^2 with the
+    grid variance V = s^2 tanh(lam h / 2) / lam^2.  Averaged over u it falls short of the
+    white-noise value by noise_dt/(3 tau_m) to first order, the mapping's bias estimate."""
+    for noise_dt in (0.01, 0.003):
+        model = Model(tau_m=1.0, delta=0.0, a=0.0, gamma=10.0)
+        m = map_model(model, CircuitSpec(coulomb="behavioural", noise_dt=noise_dt))
+        lam, h, s2 = 1.0 / model.tau_m, m.noise_dt, m.noise_stddev**2
+        grid_var = s2 * math.tanh(lam * h / 2) / lam**2
+        u = np.linspace(0.0, 1.0, 20001)
+        var_u = np.exp(-2 * lam * u * h) * grid_var + s2 * (1 - np.exp(-lam * u * h)) ** 2 / lam**2
+        mean_var = integrate.simpson(var_u, x=u)
+        drop = 1.0 - mean_var / (model.tau_m / model.gamma)
+        assert drop == pytest.approx(m.bias["noise"], rel=3 * lam * h)  # next order is O(h^2)

@@ -5,5 +5,7 @@ The runner (ngspice, raw files, :func:`analogue.simulate`) lives in the sibling 
 """
 from .mapping import CircuitSpec, CircuitMapping, map_model
 from .netlist import Deck, build_deck
+from .experiments import Experiment, load_experiment, regenerate_netlists
 
-__all__ = ["CircuitSpec", "CircuitMapping", "map_model", "Deck", "build_deck"]
+__all__ = ["CircuitSpec", "CircuitMapping", "map_model", "Deck", "build_deck",
+           "Experiment", "load_experiment", "regenerate_netlists"]

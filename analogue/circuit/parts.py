@@ -26,6 +26,12 @@ What the non-ideal parameters do to the friction law of a bridge around a curren
   fraction of ``C``; negligible for C ~ 100 nF).
 - ``BV``: beyond the rated reverse voltage the reverse-biased pair breaks down and the
   friction law is destroyed; mappings whose voltage swing reaches the rating are refused.
+
+Measured with ngspice 39 (DC sweeps over +-5 eps_V, stick experiment defaults: I0 ~ 1.1 mA for
+the 1N4148, 0.6 mA for the BAT54): the ideal bridge equals ``I0 tanh(V/(2 N V_T))`` to 2e-9 of
+I0; the vendor bridges follow the series-resistance law to 1e-7 (1N4148) and 1e-5 (BAT54, its
+36 Mohm parallel resistors) of I0, and depart from the slope-matched tanh by at most 8e-4
+(1N4148) and 3.3e-3 (BAT54) of I0.
 """
 from __future__ import annotations
 
