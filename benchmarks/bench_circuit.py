@@ -1,0 +1,139 @@
+"""Benchmark of the circuit runner: replica-steps per second (not a test).
+
+A replica-step is one replica advanced by one noise hold time (``noise_dt``, tau_m/100 by
+default): ngspice's cost scales with the number of held-noise breakpoints.  Configurations:
+
+* ``pyspice-loop``  - the naive baseline: one trajectory per run of PySpice's shared-library
+  simulator (NgSpiceShared: load the one-replica deck, ``run``, fetch vectors, interpolate).
+* ``ngspice -b``    - the raw subprocess on one single-replica deck, nothing else (the ceiling
+  for a one-replica deck: process start, parse, transient, raw write).
+* ``simulate ...``  - :func:`analogue.simulate` with 1 or many replicas per deck, on one ngspice
+  process or on all cores (no store, so every deck really runs).
+
+Usage:  .venv/bin/python benchmarks/bench_circuit.py [--replicas 32] [--t-end 10] [--quick]
+Set NGSPICE_LIBRARY_PATH if libngspice is not found (default tried:
+/usr/lib/x86_64-linux-gnu/libngspice.so.0).
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+import analogue
+from analogue import Model
+from analogue.circuit import map_model, build_deck
+from analogue.circuit.ngspice import find_ngspice
+
+LIB_CANDIDATES = ("/usr/lib/x86_64-linux-gnu/libngspice.so.0", "/usr/lib/libngspice.so.0",
+                  "/usr/local/lib/libngspice.so")
+
+
+def bench_simulate(model, *, replicas, t_end, per_deck, workers):
+    t0 = time.perf_counter()
+    e = analogue.simulate(model, v0=0.5, t_end=t_end, replicas=replicas, seed=1, store=False,
+                          progress=False, replicas_per_deck=per_deck, workers=workers)
+    wall = time.perf_counter() - t0
+    assert e.v.shape[0] == replicas
+    return wall, -(-replicas // per_deck)
+
+
+def bench_raw(deck_text, repeats):
+    exe = find_ngspice()
+    with tempfile.TemporaryDirectory() as tmp:
+        Path(tmp, "deck.cir").write_text(deck_text)
+        t0 = time.perf_counter()
+        for _ in range(repeats):
+            subprocess.run([exe, "-b", "-r", "out.raw", "deck.cir"], cwd=tmp, check=True,
+                           stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        return time.perf_counter() - t0
+
+
+def bench_pyspice(mapping, *, trajectories, t_end, sample_dt):
+    """One trajectory per shared-library run, as a first PySpice script would do it."""
+    if "NGSPICE_LIBRARY_PATH" not in os.environ:
+        for cand in LIB_CANDIDATES:
+            if Path(cand).exists():
+                os.environ["NGSPICE_LIBRARY_PATH"] = cand
+                break
+    import logging
+    logging.getLogger("PySpice").setLevel(logging.ERROR)  # "Unsupported Ngspice version 39"
+    from PySpice.Spice.NgSpice.Shared import NgSpiceShared
+    ns = NgSpiceShared.new_instance()
+    grid = np.arange(round(t_end / sample_dt) + 1) * sample_dt * mapping.theta
+    t0 = time.perf_counter()
+    for k in range(trajectories):
+        deck = build_deck(mapping, replicas=1, v0=np.array([0.5]), t_end=t_end, seed=k + 1,
+                          sample_dt=sample_dt)
+        ns.load_circuit(deck.text)
+        ns.run()
+        plot = ns.plot(None, ns.last_plot)  # vectors keyed by node name ("v0", "time")
+        t = np.real(np.asarray(plot["time"]._data))
+        v = np.real(np.asarray(plot["v0"]._data))
+        if t[-1] < grid[-1] * (1 - 1e-9):
+            raise RuntimeError(f"shared-library run {k} stopped at {t[-1]:g} s")
+        np.interp(grid, t, v)
+        ns.destroy()
+        ns.remove_circuit()
+    return time.perf_counter() - t0
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--replicas", type=int, default=32)
+    ap.add_argument("--t-end", type=float, default=10.0, help="model time units (tau_m = 1)")
+    ap.add_argument("--pyspice-trajectories", type=int, default=8)
+    ap.add_argument("--quick", action="store_true", help="a quarter of the work")
+    args = ap.parse_args(argv)
+    R, T = args.replicas, args.t_end
+    if args.quick:
+        R, T = max(4, R // 2), T / 2
+    cores = os.cpu_count() or 1
+    model = Model(tau_m=1.0, delta=0.7, a=0.2, gamma=10.0)  # stick regime (the costlier one)
+    mapping = map_model(model)
+    steps = T / mapping.noise_dt  # noise hold times per replica
+    sample_dt = mapping.noise_dt
+    print(f"model {model.as_dict()}; default circuit (ideal diode bridge, noise_dt = "
+          f"{mapping.noise_dt:g}); t_end = {T:g} -> {steps:.0f} replica-steps per replica; "
+          f"{cores} cores; ngspice {analogue.circuit.ngspice.ngspice_version()}")
+
+    rows = []  # (label, replicas, decks, processes, wall)
+    n_py = args.pyspice_trajectories
+    try:
+        rows.append(("pyspice-loop (1 traj/run)", n_py, n_py, 1,
+                     bench_pyspice(mapping, trajectories=n_py, t_end=T, sample_dt=sample_dt)))
+    except Exception as exc:  # noqa: BLE001 - report and go on: the others still mean something
+        print(f"PySpice shared-library run failed: {exc!r}", file=sys.stderr)
+    one = build_deck(mapping, replicas=1, v0=np.array([0.5]), t_end=T, seed=1,
+                     sample_dt=sample_dt)
+    reps = max(3, n_py)
+    rows.append(("ngspice -b, 1-replica deck", reps, reps, 1, bench_raw(one.text, reps)))
+    rows.append(("simulate, 1 replica/deck, 1 proc", R, *_sim(model, R, T, 1, 1)))
+    rows.append(("simulate, 1 replica/deck, all cores", R, *_sim(model, R, T, 1, cores)))
+    rows.append(("simulate, R replicas/deck, 1 proc", R, *_sim(model, R, T, R, 1)))
+    rows.append(("simulate, R/cores replicas/deck, all cores", R,
+                 *_sim(model, R, T, -(-R // cores), cores)))
+
+    base = rows[0][1] * steps / rows[0][4]
+    print(f"\n{'configuration':44s} {'replicas':>8s} {'decks':>6s} {'procs':>5s} {'wall s':>8s} "
+          f"{'replica-steps/s':>16s} {'us/rep-step':>11s} {'x baseline':>10s}")
+    for label, n, decks, procs, wall in rows:
+        rate = n * steps / wall
+        print(f"{label:44s} {n:8d} {decks:6d} {procs:5d} {wall:8.2f} {rate:16.0f} "
+              f"{1e6 / rate:11.1f} {rate / base:10.2f}")
+    print(f"\nbaseline: {rows[0][0]}")
+
+
+def _sim(model, R, T, per_deck, workers):
+    wall, decks = bench_simulate(model, replicas=R, t_end=T, per_deck=per_deck, workers=workers)
+    return decks, workers, wall
+
+
+if __name__ == "__main__":
+    main()
