@@ -15,7 +15,8 @@ from scipy import signal, stats
 from analogue import Ensemble
 from analogue.estimators import (empirical_rate_function, fluctuation_ratio,
                                  integrated_autocorrelation_time, stationary_density,
-                                 stationary_observables, transport, work_distribution,
+                                 stationary_observables, stationary_prehistory, transport,
+                                 work_distribution,
                                  work_rate_samples)
 
 TAU_M, GAMMA, A, MASS = 1.0, 2.0, 0.4, 1.0
@@ -286,3 +287,50 @@ def test_autocorrelation_blocking_does_not_change_the_result(monkeypatch):
     rho = [np.sum(yc[:, : yc.shape[1] - k] * yc[:, k:]) / np.sum(yc * yc)
            for k in range(1, full.window + 1)]
     assert full.tau_int == pytest.approx(1 + 2 * np.sum(rho), rel=1e-10)
+
+
+def _truncated_mean(centre, half):
+    """E[v | |v - centre| < half] for the stationary N(MU, S2)."""
+    s = math.sqrt(S2)
+    a, b = (centre - half - MU) / s, (centre + half - MU) / s
+    return MU + s * (stats.norm.pdf(a) - stats.norm.pdf(b)) / (stats.norm.cdf(b) - stats.norm.cdf(a))
+
+
+def test_stationary_prehistory_is_the_gaussian_conditional_mean(long_ou):
+    # OU is Gaussian and reversible: E[v(t - s) | v(t)] = MU + e^{-s/tau_m} (v(t) - MU), so
+    # conditioning on v(t) in the window gives MU + e^{-s/tau_m} (E[v | window] - MU) exactly.
+    target, half = MU + 2 * math.sqrt(S2), 0.1
+    ph = stationary_prehistory(long_ou, target, half, lookback=3.0, entries_only=False)
+    assert ph.t[0] == pytest.approx(-3.0) and ph.t[-1] == 0.0 and ph.t_target == 0.0
+    assert ph.count > 5000
+    expected = MU + np.exp(ph.t / TAU_M) * (_truncated_mean(target, half) - MU)
+    z = (ph.mean - expected) / ph.mean_se
+    assert np.max(np.abs(z)) < 4.5   # 61 correlated lags
+    assert np.all(np.abs(long_ou.v[ph.indices, np.searchsorted(long_ou.t, ph.arrival_times)]
+                         - target) < half)
+
+
+def test_stationary_prehistory_entries_and_honest_errors():
+    seeds, reps, n_t = 60, 20, 2000
+    big = exact_ou(seeds * reps, n_t, seed=8)
+    target, half = MU + 1.5 * math.sqrt(S2), 0.1
+    means, ses = [], []
+    for k in range(seeds):
+        sl = slice(k * reps, (k + 1) * reps)
+        ens = Ensemble(big.t, big.v[sl], big.x[sl])
+        ph = stationary_prehistory(ens, target, half, lookback=2.0, burn_in=1.0)
+        means.append(ph.mean[::10])
+        ses.append(ph.mean_se[::10])
+    ratio = _spread_ratio(np.array(means), np.array(ses))
+    assert 0.7 < ratio < 1.4
+    # entries: in the window now, outside one sample before, counted by hand
+    inside = np.abs(ens.v - target) < half
+    entries = inside[:, 1:] & ~inside[:, :-1]
+    entries[:, : 20 + 40 - 1] = False   # segment must start after the burn-in (index 20)
+    assert ph.count == np.count_nonzero(entries)
+    cols = np.searchsorted(ens.t, ph.arrival_times)
+    assert np.all(inside[ph.indices, cols]) and not np.any(inside[ph.indices, cols - 1])
+    with pytest.raises(ValueError, match="lookback must be > 0"):
+        stationary_prehistory(ens, target, half, lookback=0.0)
+    with pytest.raises(ValueError, match="no path reaches"):
+        stationary_prehistory(ens, 50.0, half, lookback=1.0)
