@@ -1,4 +1,5 @@
-"""Transport of the position x(t) = integral v: drift velocity and diffusion coefficient."""
+"""Transport of the position x(t) = integral v (the integral in the work, paper eq. work):
+drift velocity and diffusion coefficient."""
 from __future__ import annotations
 
 from dataclasses import dataclass

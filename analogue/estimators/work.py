@@ -101,7 +101,7 @@ class WorkDistribution:
         return np.count_nonzero(self.replica_fractions > 0, axis=0)
 
 
-def work_distribution(ensemble, tau, force, bins=41, range=None, burn_in=0.0, overlap=True,
+def work_distribution(ensemble, tau, force, bins=41, burn_in=0.0, overlap=True, range=None,
                       stride=None, confidence=0.95) -> WorkDistribution:
     """Distribution ``P_tau(w)`` of the work rate (paper, eqs. eqpi1, largeDev).
 
