@@ -106,6 +106,36 @@ def test_stationary_initial_values_follow_p_s():
     np.testing.assert_array_equal(v0, initial_velocities(m, "stationary", 20000, seed=1))
 
 
+# ------------------------------------------------------------------- the recorded noise
+def test_recorded_noise_drove_the_circuit():
+    """return_noise gives the standard normals of each hold; an independent integrator of
+    dv = -U'(v) dt + sqrt(2 h/gamma) z_k (per hold h, held constant, 20 Euler substeps) driven by
+    them retraces the circuit's paths; shifting the noise by one hold does not."""
+    R, T = 4, 5.0
+    e, z = run(STICK, v0=0.5, t_end=T, replicas=R, seed=2, return_noise=True)
+    h = e.meta["noise_dt"]
+    assert z.shape == (R, round(T / h))
+    n = z.size
+    assert abs(z.mean()) < 4 / math.sqrt(n) and abs(z.std() - 1) < 4 / math.sqrt(2 * n)
+    eff = Model(**e.meta["model_effective"])
+    every = round(h / e.dt)
+    assert every * e.dt == pytest.approx(h)
+
+    def integrate_held(zz):
+        v, path = np.full(R, 0.5), [np.full(R, 0.5)]
+        for k in range(zz.shape[1]):
+            xi = math.sqrt(2 / (STICK.gamma * h)) * zz[:, k]
+            for _ in range(20):
+                v = v + (eff.drift(v) + xi) * h / 20
+            path.append(v)
+        return np.array(path).T
+
+    err = np.max(np.abs(integrate_held(z) - e.v[:, ::every]))
+    assert err < 0.01 * STICK.velocity_scale  # Euler O(h/20) and the solver's reltol
+    shifted = np.max(np.abs(integrate_held(np.roll(z, 1, axis=1)) - e.v[:, ::every]))
+    assert shifted > 10 * err
+
+
 # --------------------------------------------------------------------------- noise-free
 @pytest.mark.parametrize("model,v0", [(STICK, 1.0), (SLIP, -1.0)])
 def test_noise_free_circuit_follows_deterministic_motion(model, v0):
@@ -262,6 +292,7 @@ BASE = dict(v0=0.0, t_end=1.0, replicas=2, seed=0)
     ({"circuit": {"nonsense": 1}}, "circuit"), ({"replicas_per_deck": 0}, "replicas_per_deck"),
     ({"timeout": -1}, "timeout"), ({"store": 3.5}, "store"), ({"progress": "yes"}, "progress"),
     ({"colour": "red"}, "colour"), ({"scheduler": "localhost"}, "scheduler"),
+    ({"return_noise": 1}, "return_noise"),
 ])
 def test_bad_input_names_parameter(change, name):
     kw = {**BASE, **change}

@@ -39,7 +39,7 @@ log = logging.getLogger(__name__)
 
 DEFAULT_REPLICAS_PER_DECK = 64
 DEFAULT_TIMEOUT = 3600.0
-_EXTRA = ("replicas_per_deck", "store", "progress", "timeout", "scheduler")
+_EXTRA = ("replicas_per_deck", "store", "progress", "timeout", "scheduler", "return_noise")
 # ngspice parses `.options seed=` as a C int; seeds above 2**31 - 1 are ignored with a warning.
 _SEED_MAX = 2**31 - 1
 
@@ -153,10 +153,25 @@ class BatchTask:
     times: np.ndarray = field(repr=False)   # model units
     v0: np.ndarray = field(repr=False)      # model units, (replicas,)
     timeout: float = DEFAULT_TIMEOUT
+    noise_names: tuple | None = None        # held-noise vectors, if the deck records them
+    noise_dt: float = 0.0                   # their hold time (model units)
+    to_model_noise: float = 1.0
+
+
+def held_values(t_raw, rows, t_end, hold) -> np.ndarray:
+    """The values of piecewise-constant signals on each hold interval [k h, (k+1) h), k < t_end/h:
+    read at the last simulator point at or before the interval's midpoint (no interpolation
+    across a jump).  ``rows``: (n, len(t_raw)); returns (n, n_hold)."""
+    n_hold = int(math.floor(t_end / hold + 1e-9))
+    mid = (np.arange(n_hold) + 0.5) * hold
+    idx = np.clip(np.searchsorted(t_raw, mid, side="right") - 1, 0, len(t_raw) - 1)
+    return rows[:, idx]
 
 
 def run_batch(task: BatchTask) -> dict:
-    """Run one deck; return ``{"v": (r, n_t), "x": (r, n_t), "info": {...}}`` in model units.
+    """Run one deck; return ``{"v": (r, n_t), "x": (r, n_t), "info": {...}}`` in model units,
+    plus ``"noise"``: (r, n_hold) the held velocity noise (model units) on each hold interval
+    when the deck records it.
 
     The raw file of a ``uic`` run starts after t = 0: the known initial values (v0, x = 0) are
     prepended before the linear resampling (see :func:`analogue.circuit.ngspice.resample`).
@@ -183,7 +198,12 @@ def run_batch(task: BatchTask) -> dict:
                 if ln.strip() and "warning" in ln.lower()]
     info = {"wall_time": res.wall_time, "raw_points": int(res.plot.n_points),
             "ngspice_version": res.version, "warnings": warnings[:20]}
-    return {"v": v, "x": x, "info": info}
+    out = {"v": v, "x": x, "info": info}
+    if task.noise_names and task.noise_dt > 0:
+        out["noise"] = held_values(res.plot["time"], res.plot.columns(task.noise_names),
+                                   float(t_s[-1]), task.noise_dt * task.time_scale) \
+            * task.to_model_noise
+    return out
 
 
 def _jsonable(obj):
@@ -241,8 +261,10 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
     ``decks``: objects with the netlist.Deck interface (``text``, ``vectors``, ``to_model_v``,
     ``to_model_x``, ``time_scale``, ``replicas``); ``times``: the grid in model units;
     ``v0``: (sum of replicas,) initial velocities in model units (the decks' ``.ic`` values).
-    Returns ``(v, x, info)`` with v, x of shape (replicas, n_t) and info a JSON-safe dict
-    (store keys, per-deck wall times, how many decks came from the store).
+    Returns ``(v, x, noise, info)`` with v, x of shape (replicas, n_t), noise (replicas, n_hold)
+    the held velocity noise of each hold interval in model units (None if the decks do not
+    record it) and info a JSON-safe dict (store keys, per-deck wall times, how many decks came
+    from the store).
     """
     times = np.asarray(times, dtype=float)
     if workers is None:
@@ -257,11 +279,14 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
         offsets.append(offsets[-1] + n)
         vec = deck.vectors
         x_names = tuple(vec["x"]) if vec.get("x") else None
+        noise_names = tuple(vec["noise"]) if vec.get("noise") else None
         tasks.append(BatchTask(index=b, text=deck.text, v_names=tuple(vec["v"]), x_names=x_names,
                                to_model_v=float(deck.to_model_v), to_model_x=float(deck.to_model_x),
                                time_scale=float(deck.time_scale), times=times,
                                v0=np.asarray(v0[offsets[b]:offsets[b + 1]], dtype=float),
-                               timeout=timeout))
+                               timeout=timeout, noise_names=noise_names,
+                               noise_dt=float(getattr(deck, "noise_dt", 0.0) or 0.0),
+                               to_model_noise=float(getattr(deck, "to_model_noise", 1.0))))
         keys.append(batch_key(deck.text, times, version))
     if offsets[-1] != len(v0):
         raise ValueError(f"v0 has {len(v0)} entries but the decks hold {offsets[-1]} replicas")
@@ -273,7 +298,8 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
             hit = st.get(key)
             if hit is not None:
                 arrays, meta = hit
-                results[b] = {"v": arrays["v"], "x": arrays["x"], "info": meta.get("info", {})}
+                results[b] = {**{k: arrays[k] for k in ("v", "x", "noise") if k in arrays},
+                              "info": meta.get("info", {})}
                 from_store += 1
     todo = [t for t in tasks if results[t.index] is None]
     where = "local" if scheduler is None else "dask"
@@ -295,9 +321,16 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
                 task = futures[fut]
                 out = fut.result()
                 results[task.index] = out
-                if st is not None:
+                worker_version = out["info"].get("ngspice_version")
+                if st is not None and worker_version != version:
+                    # The key names this machine's ngspice; a worker with another version
+                    # would file its numbers under the wrong key.
+                    log.warning("deck %d ran on ngspice %s, not %s: not stored", task.index,
+                                worker_version, version)
+                elif st is not None:
                     # Written as each deck finishes: an interrupted call resumes from here.
-                    st.put(keys[task.index], {"v": out["v"], "x": out["x"], "t": times},
+                    arrays = {k: out[k] for k in ("v", "x", "noise") if k in out}
+                    st.put(keys[task.index], {**arrays, "t": times},
                            _batch_meta(task, version, out["info"]))
                 if bar is not None:
                     bar.update(1)
@@ -316,11 +349,15 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
     wall = _time.perf_counter() - t0
     v = np.vstack([r["v"] for r in results]) if results else np.empty((0, times.size))
     x = np.vstack([r["x"] for r in results]) if results else np.empty((0, times.size))
+    if results and all("noise" in r for r in results):
+        noise = np.vstack([r["noise"] for r in results])
+    else:
+        noise = None
     info = {"ngspice_version": version, "store": str(st.root) if st is not None else None,
             "store_keys": keys, "from_store": from_store, "ran": len(todo), "wall_time": wall,
             "deck_wall_times": [r["info"].get("wall_time") for r in results],
             "schema_version": SCHEMA_VERSION, "executor": where}
-    return v, x, info
+    return v, x, noise, info
 
 
 # ------------------------------------------------------------------------------ simulate
@@ -373,12 +410,18 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
         ``replicas_per_deck`` (default 64), ``store`` (directory, False to disable; default
         $ANALOGUE_STORE or ~/.cache/analogue/runs), ``progress`` (bool; default: a tqdm bar
         when stderr is a terminal), ``timeout`` (seconds per deck, default 3600),
-        ``scheduler`` ("tcp://host:port" or a distributed.Client: run on a Dask cluster).
+        ``scheduler`` ("tcp://host:port" or a distributed.Client: run on a Dask cluster),
+        ``return_noise`` (bool, default False: see Returns).
 
     Returns
     -------
     Ensemble with ``t`` (0..t_end step sample_dt), ``v`` and ``x`` (replicas, n_t) in model
     units (x[:, 0] = 0), and ``meta`` holding the provenance.
+    With ``return_noise=True``: ``(ensemble, z)`` where ``z`` (replicas, n_hold) are the
+    standard normal numbers that drove the circuit, one per noise hold time ``h =
+    meta["noise_dt"]``: the velocity-noise increment over hold k is ``sqrt(2 h/gamma) z[:, k]``
+    (the convention of ``analogue.montecarlo.simulate_sde(..., dt=h, noise=z)``, so an SDE
+    integrator can be driven by the very same noise).
     """
     unknown = sorted(set(extra) - set(_EXTRA))
     if unknown:
@@ -401,6 +444,9 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
     progress = extra.get("progress")
     if progress is not None and not isinstance(progress, bool):
         raise ValueError(f"progress must be True, False or None (auto), got {progress!r}")
+    return_noise = extra.get("return_noise", False)
+    if not isinstance(return_noise, bool):
+        raise ValueError(f"return_noise must be True or False, got {return_noise!r}")
     open_store(extra.get("store"))  # validates the store argument early
 
     spec = _spec(circuit)
@@ -418,7 +464,7 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
                         t_end=t_end, seed=seeds[b], sample_dt=sample_dt)
              for b in range(n_decks)]
     t0 = _time.perf_counter()
-    v, x, info = run_decks(decks, times, v0_arr, store=extra.get("store"), workers=workers,
+    v, x, noise, info = run_decks(decks, times, v0_arr, store=extra.get("store"), workers=workers,
                            scheduler=extra.get("scheduler"), progress=progress, timeout=timeout)
     table = mapping.table() if hasattr(mapping, "table") else None
     meta = {
@@ -435,7 +481,14 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
         "v0": v0 if isinstance(v0, str) else "given",
         "t_end": t_end,
         "sample_dt": sample_dt,
+        "noise_dt": mapping.noise_dt,
         **info,
         "wall_time": _time.perf_counter() - t0,
     }
-    return Ensemble(times, v, x, _jsonable(meta))
+    ens = Ensemble(times, v, x, _jsonable(meta))
+    if not return_noise:
+        return ens
+    if noise is None:
+        raise ValueError("return_noise: the circuit's decks do not record their noise")
+    # The noise node holds the velocity noise, std sqrt(2/(gamma h)) (mapping): standardise.
+    return ens, noise * math.sqrt(model.gamma * mapping.noise_dt / 2.0)
