@@ -125,17 +125,39 @@ def test_table_rows_have_units_and_meanings():
 
 # ------------------------------------------------------------------ refusals
 def test_bias_from_smoothing_is_refused_unless_allowed():
-    model = Model(tau_m=1.0, delta=0.7, a=0.2, gamma=1000.0)  # gamma Delta eps ln2 ~ 0.3
+    model = Model(tau_m=1.0, delta=0.7, a=0.2, gamma=100.0)
+    fine_noise = CircuitSpec(noise_dt=0.002)
     with pytest.raises(ValueError, match="smoothing.*bias_tolerance"):
-        map_model(model)
-    m = map_model(model, CircuitSpec(allow_bias=True))
+        map_model(model, fine_noise)
+    m = map_model(model, fine_noise.replace(allow_bias=True))
     assert m.bias["smoothing"] > 0.05
-    assert map_model(model, CircuitSpec(smoothing=0.003)).bias["smoothing"] <= 0.05
+    assert map_model(model, fine_noise.replace(smoothing=0.01)).bias["smoothing"] <= 0.05
+
+
+@pytest.mark.parametrize("model", [STICK, SLIP, WORK, Model(1.0, 0.7, 0.2, 300.0), Model(1.0, 0.7, -1.5, 50.0)])
+def test_bias_measures_against_brute_force_grids(model):
+    """stationary_std (closed form) and central_bin_bias (shifted integrals near 0) against
+    plain grid integration of the normalised stationary densities (eq. p_stat)."""
+    from analogue.circuit.mapping import central_bin_bias, stationary_std
+    eps = 0.02 * model.velocity_scale
+    v = np.linspace(-4.0, 4.0, 2_000_001)
+    p0 = model.stationary_pdf(v)
+    mean = np.trapezoid(v * p0, v)
+    std = math.sqrt(np.trapezoid((v - mean) ** 2 * p0, v))
+    assert stationary_std(model) == pytest.approx(std, rel=1e-4)
+    inside = np.abs(v) <= 0.05 * std
+    p_eps = model.replace(epsilon=eps).stationary_pdf(v)
+    brute = abs(np.trapezoid(p_eps * inside, v) / np.trapezoid(p0 * inside, v) - 1.0)
+    # the grid resolves the bin with ~ 0.1 std / 4e-6 points: a few 1e-3 of the bias
+    assert central_bin_bias(model, eps) == pytest.approx(brute, rel=0.02, abs=1e-4)
 
 
 def test_bias_from_noise_hold_is_refused_unless_allowed():
     with pytest.raises(ValueError, match="noise_dt"):
         map_model(STICK, CircuitSpec(noise_dt=0.2))
+    # weak noise in the stick regime: the peak at v = 0 relaxes in ~ gamma std^2 << tau_m
+    with pytest.raises(ValueError, match="noise_dt.*t_rel"):
+        map_model(Model(1.0, 0.7, 0.2, 100.0), CircuitSpec(smoothing=0.01))
     assert map_model(STICK, CircuitSpec(noise_dt=0.2, allow_bias=True)).noise_correlation == pytest.approx(0.2)
 
 
@@ -182,3 +204,19 @@ def test_noise_bias_estimate_matches_exact_held_noise_ou():
         mean_var = integrate.simpson(var_u, x=u)
         drop = 1.0 - mean_var / (model.tau_m / model.gamma)
         assert drop == pytest.approx(m.bias["noise"], rel=3 * lam * h)  # next order is O(h^2)
+
+
+@pytest.mark.parametrize("alpha", [-2.0, 0.0, 3.0, 39.0, 41.0, 200.0, 5000.0])
+def test_positive_part_moments_by_quadrature(alpha):
+    """Y ~ N(-alpha, 1) conditioned on Y > 0 has density ~ exp(-y^2/2 - alpha y) on y > 0:
+    its mean and variance by quadrature against the closed form / asymptotic series."""
+    from analogue.circuit.mapping import _positive_part_moments
+    top = 60.0 / max(alpha, 1.0) + max(-alpha, 0.0) + 10.0
+    mom = [integrate.quad(lambda y: y**k * math.exp(-y * y / 2 - alpha * y), 0.0, top,
+                          epsabs=0, epsrel=1e-13, limit=400)[0] for k in range(3)]
+    mean, var = _positive_part_moments(-alpha, 1.0)
+    assert mean == pytest.approx(mom[1] / mom[0], rel=1e-6)
+    assert var == pytest.approx(mom[2] / mom[0] - (mom[1] / mom[0]) ** 2, rel=1e-6)
+    # and the scale: N(-alpha s, s^2) gives s * mean, s^2 * var
+    m2, v2 = _positive_part_moments(-alpha * 0.01, 0.01)
+    assert m2 == pytest.approx(0.01 * mean, rel=1e-12) and v2 == pytest.approx(1e-4 * var, rel=1e-12)
