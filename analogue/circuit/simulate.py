@@ -37,7 +37,12 @@ __all__ = ["simulate", "run_decks", "BatchTask", "run_batch", "deck_seeds", "tim
 
 log = logging.getLogger(__name__)
 
-DEFAULT_REPLICAS_PER_DECK = 64
+# Replicas share the simulator's time steps: every replica's diode switching near v = 0 forces
+# small steps on all of them, so the cost per replica-step grows again for large decks while
+# process start-up (~50-90 ms) dominates small ones.  Measured (benchmarks/bench_circuit.py,
+# stick regime): 1/deck 150, 4/deck 69, 8/deck 52, 16/deck 55, 32/deck 79, 64/deck 87
+# microseconds per replica-step.
+DEFAULT_REPLICAS_PER_DECK = 16
 DEFAULT_TIMEOUT = 3600.0
 _EXTRA = ("replicas_per_deck", "store", "progress", "timeout", "scheduler", "return_noise")
 # ngspice parses `.options seed=` as a C int; seeds above 2**31 - 1 are ignored with a warning.
@@ -407,7 +412,7 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
     workers : int, optional
         ngspice processes run at once locally; default ``os.cpu_count()``.
     **extra
-        ``replicas_per_deck`` (default 64), ``store`` (directory, False to disable; default
+        ``replicas_per_deck`` (default 16, the measured optimum), ``store`` (directory, False to disable; default
         $ANALOGUE_STORE or ~/.cache/analogue/runs), ``progress`` (bool; default: a tqdm bar
         when stderr is a terminal), ``timeout`` (seconds per deck, default 3600),
         ``scheduler`` ("tcp://host:port" or a distributed.Client: run on a Dask cluster),
