@@ -25,9 +25,10 @@ class Budget:
     bandwidth: float = 0.0      # held noise of finite sample interval (SDE at TS vs TS/2)
     integration: float = 0.0    # ngspice tolerances (same noise, tighter reltol)
     sampling: float = 0.0       # output grid / histogram binning
+    finite_noise: float = 0.0   # weak-noise comparisons: exact(gamma) - (gamma -> infinity)
 
     def total(self) -> float:
-        return abs(self.smoothing) + abs(self.bandwidth) + abs(self.integration) + abs(self.sampling)
+        return sum(abs(v) for v in asdict(self).values())
 
     def dominant(self) -> str:
         items = {k: abs(v) for k, v in asdict(self).items()}

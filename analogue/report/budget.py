@@ -1,0 +1,49 @@
+"""Independent estimates of the circuit's systematic errors (the error budget).
+
+- **smoothing**: the diode bridge implements ``tanh(v/epsilon)`` instead of ``sgn(v)``; exact
+  Fokker-Planck numerics at the circuit's epsilon minus those at epsilon = 0 give the bias.
+- **bandwidth**: the noise is held constant over ``TS`` (ngspice ``trrandom``), not white.  A
+  Monte Carlo pair driven by the *same* Wiener increments - white, and held (each hold interval
+  gets the mean of its fine increments, i.e. the same integrated noise spread evenly) -
+  isolates the effect with little statistical noise (common random numbers).
+- **integration**: the circuit re-run with 100x tighter tolerances on the same noise
+  (see :mod:`analogue.report.runs`); the path-by-path difference.
+- **finite noise** (weak-noise comparisons only): exact finite-gamma minus the paper's
+  gamma -> infinity formula.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..ensemble import Ensemble
+from ..model import Model
+
+__all__ = ["held_noise_pair", "SE_MULTIPLIER"]
+
+# A measured bias enters the budget as |estimate| + SE_MULTIPLIER * its standard error.
+SE_MULTIPLIER = 2.0
+
+
+def held_noise_pair(model: Model, *, v0, t_end: float, replicas: int, seed: int,
+                    noise_dt: float, sample_dt: float) -> tuple[Ensemble, Ensemble]:
+    """(held, white) SDE ensembles driven by common Wiener increments.
+
+    ``noise_dt`` is the circuit's hold time (model units); the fine step divides it.
+    """
+    from ..montecarlo import default_dt, simulate_sde
+
+    per_hold = max(1, math.ceil(noise_dt / default_dt(model) - 1e-9))
+    dt = noise_dt / per_hold
+    n_hold = round(t_end / noise_dt)
+    if abs(n_hold * noise_dt - t_end) > 1e-9 * t_end:
+        raise ValueError(f"t_end={t_end!r} must be a whole number of noise hold times {noise_dt!r}")
+    sample_dt = noise_dt * max(1, round(sample_dt / noise_dt))
+    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(7,)))
+    z = rng.standard_normal((replicas, n_hold * per_hold))
+    held = np.repeat(z.reshape(replicas, n_hold, per_hold).mean(axis=2), per_hold, axis=1)
+    kw = dict(v0=v0, t_end=t_end, replicas=replicas, dt=dt, sample_dt=sample_dt)
+    white_ens = simulate_sde(model, noise=z, **kw)
+    held_ens = simulate_sde(model, noise=held, **kw)
+    return held_ens, white_ens

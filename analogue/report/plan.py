@@ -1,0 +1,116 @@
+"""What a report measures: the runs of one experiment and the settings of its analysis.
+
+The ``[report]`` table of ``circuits/<name>.toml`` (all keys optional)::
+
+    [report]
+    stationary_replicas = 128      # replicas started from p_s (eq. p_stat)
+    stationary_t_end = 100.0       # their length (model time)
+    stationary_burn_in = 2.0       # discarded at the start of each
+    stick_threshold = 0.1          # |v| below this many sqrt(tau_m/gamma) counts as stuck
+    prehistory = [[0.5, 3.0]]      # (v, t) targets: paths from v0[0] reaching them
+    prehistory_window = 0.15       # half-width of the target window (velocity units)
+    work_paths = [[1.0, 5.0]]      # (w, tau): circuit windows of work rate ~ w vs eq. eqelk1
+    check_replicas = 64            # replicas re-run for the integration / bandwidth checks
+
+``--quick`` divides replica counts by four (at least 32) and halves the stationary length.
+"""
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+from ..circuit.experiments import Experiment
+
+__all__ = ["RunOptions", "ReportSettings", "report_settings", "QUICK_DIVISOR"]
+
+QUICK_DIVISOR = 4
+MIN_QUICK_REPLICAS = 32
+
+
+@dataclass(frozen=True)
+class RunOptions:
+    """How to run: where (workers / Dask scheduler), the run store, size, progress."""
+
+    workers: int | None = None
+    scheduler: str | None = None
+    store: Path | None = None
+    quick: bool = False
+    progress: bool = True
+
+    def simulate_kwargs(self) -> dict:
+        kw = {"workers": self.workers, "progress": self.progress}
+        if self.scheduler:
+            kw["scheduler"] = self.scheduler
+        if self.store is not None:
+            kw["store"] = self.store
+        return kw
+
+    def scaled(self, replicas: int) -> int:
+        if not self.quick:
+            return int(replicas)
+        return max(MIN_QUICK_REPLICAS, int(replicas) // QUICK_DIVISOR)
+
+
+@dataclass(frozen=True)
+class ReportSettings:
+    stationary_replicas: int = 128
+    stationary_t_end: float = 100.0
+    stationary_burn_in: float = 2.0
+    stick_threshold: float = 0.1
+    prehistory: tuple = ()
+    prehistory_window: float = 0.15
+    work_paths: tuple = ()
+    check_replicas: int = 64
+
+    def __post_init__(self):
+        for name in ("stationary_replicas", "check_replicas"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or not 2 <= v <= 100_000:
+                raise ValueError(f"report.{name} must be an integer in [2, 100000], got {v!r}")
+        for name in ("stationary_t_end", "stick_threshold", "prehistory_window"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not (math.isfinite(v) and v > 0):
+                raise ValueError(f"report.{name} must be a finite number > 0, got {v!r}")
+        b = self.stationary_burn_in
+        if not (isinstance(b, (int, float)) and 0 <= b < self.stationary_t_end):
+            raise ValueError(f"report.stationary_burn_in must be in [0, stationary_t_end), got {b!r}")
+        for name in ("prehistory", "work_paths"):
+            pairs = getattr(self, name)
+            ok = all(isinstance(p, (list, tuple)) and len(p) == 2
+                     and all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                             and math.isfinite(x) for x in p) for p in pairs)
+            if not ok:
+                raise ValueError(f"report.{name} must be a list of [number, number] pairs")
+            object.__setattr__(self, name, tuple(tuple(float(x) for x in p) for p in pairs))
+        for v, t in self.prehistory:
+            if t <= 0:
+                raise ValueError(f"report.prehistory times must be > 0, got {t}")
+        for w, tau in self.work_paths:
+            if tau <= 0:
+                raise ValueError(f"report.work_paths tau must be > 0, got {tau}")
+
+    def for_options(self, opts: RunOptions) -> "ReportSettings":
+        if not opts.quick:
+            return self
+        return replace(self, stationary_replicas=opts.scaled(self.stationary_replicas),
+                       stationary_t_end=self.stationary_t_end / 2,
+                       check_replicas=max(16, self.check_replicas // 2))
+
+
+_KEYS = set(ReportSettings.__dataclass_fields__)
+
+
+def report_settings(exp: Experiment) -> ReportSettings:
+    """Read the ``[report]`` table of the experiment's TOML file (defaults if absent)."""
+    data = {}
+    if exp.source is not None and Path(exp.source).exists():
+        with open(exp.source, "rb") as fh:
+            data = tomllib.load(fh).get("report", {})
+    if not isinstance(data, dict):
+        raise ValueError(f"{exp.name}: [report] must be a table")
+    unknown = sorted(set(data) - _KEYS)
+    if unknown:
+        raise ValueError(f"{exp.name}: unknown key report.{unknown[0]} (allowed: {', '.join(sorted(_KEYS))})")
+    return ReportSettings(**data)
