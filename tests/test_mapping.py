@@ -182,6 +182,13 @@ def test_spec_validation(kwargs, name):
         CircuitSpec(**kwargs)
 
 
+def test_voltage_tolerance_stays_below_friction_width():
+    for gamma in (10.0, 1e4):
+        m = map_model(Model(1.0, 0.7, 0.2, gamma), CircuitSpec(smoothing=0.002, noise_dt=1e-4, allow_bias=True))
+        assert m.vntol <= 1e-3 * m.eps_volts
+    assert map_model(STICK, CircuitSpec(vntol=1e-9)).vntol == 1e-9
+
+
 def test_map_model_type_checks():
     with pytest.raises(ValueError, match="model"):
         map_model({"tau_m": 1})

@@ -77,8 +77,11 @@ class CircuitSpec:
         so that the part's own width ``2 N V_T + RS I0`` equals the requested smoothing.
     noise_dt : float or None
         Hold time of the noise in model time units; None: ``tau_m/100``.
-    reltol, abstol, vntol : float
-        ngspice tolerances (abstol in A, vntol in V).
+    reltol, abstol : float
+        ngspice tolerances (abstol in A).
+    vntol : float or None
+        ngspice voltage tolerance (V); None: ``min(1e-7 V, 1e-3 eps_V)`` so that it stays far
+        below the width of the friction law.
     max_step : float or None
         Largest solver step in model time units; None: ``noise_dt``.
     method : "gear" | "trap"
@@ -98,7 +101,7 @@ class CircuitSpec:
     noise_dt: float | None = None
     reltol: float = 1e-4
     abstol: float = 1e-12
-    vntol: float = 1e-7
+    vntol: float | None = None
     max_step: float | None = None
     method: str = "gear"
     bias_tolerance: float = 0.05
@@ -115,11 +118,11 @@ class CircuitSpec:
         if not s < 1:
             raise ValueError(f"smoothing must be in (0, 1) (fraction of sqrt(tau_m/gamma)), got {s!r}")
         object.__setattr__(self, "smoothing", s)
-        for name in ("time_scale", "capacitance", "reltol", "abstol", "vntol", "bias_tolerance"):
+        for name in ("time_scale", "capacitance", "reltol", "abstol", "bias_tolerance"):
             object.__setattr__(self, name, val.positive(getattr(self, name), name))
         if not self.reltol < 0.1:
             raise ValueError(f"reltol must be in (0, 0.1), got {self.reltol!r}")
-        for name in ("volts_per_velocity", "noise_dt", "max_step"):
+        for name in ("volts_per_velocity", "noise_dt", "max_step", "vntol"):
             if getattr(self, name) is not None:
                 object.__setattr__(self, name, val.positive(getattr(self, name), name))
         if not isinstance(self.allow_bias, bool):
@@ -175,6 +178,13 @@ class CircuitMapping:
     def smoothing_fraction(self) -> float:
         """epsilon / sqrt(tau_m/gamma) actually realised (0 for the sgn B-source)."""
         return self.epsilon / self.model.velocity_scale
+
+    @property
+    def vntol(self) -> float:
+        """ngspice vntol (V): the spec's, or min(1e-7 V, 1e-3 eps_V)."""
+        if self.spec.vntol is not None:
+            return self.spec.vntol
+        return min(1e-7, 1e-3 * self.eps_volts) if self.eps_volts > 0 else 1e-7
 
     @property
     def noise_dt(self) -> float:
@@ -243,6 +253,7 @@ class CircuitMapping:
             ("C_x", self.cap_x, "F", "position integrator capacitor"),
             ("g_x", self.g_x, "S", "position integrator transconductance"),
             ("V_swing", self.voltage_swing, "V", "estimated largest |V(v)|"),
+            ("vntol", self.vntol, "V", "ngspice voltage tolerance"),
         ]
         if self.emission is not None:
             rows.insert(9, ("N", self.emission, "1", "diode emission coefficient"))

@@ -168,7 +168,7 @@ def build_deck(mapping: CircuitMapping, *, replicas: int, v0, t_end: float, seed
                for i in range(replicas)]
     lines.append(".ic " + " ".join(ic))
     lines.append(f".options seed={seed} reltol={_n(spec.reltol)} abstol={_n(spec.abstol)} "
-                 f"vntol={_n(spec.vntol)} method={spec.method} temp=27 tnom=27")
+                 f"vntol={_n(mapping.vntol)} method={spec.method} temp=27 tnom=27")
     vectors = {"v": [f"v(v{i})" for i in range(replicas)],
                "x": [f"v(x{i})" for i in range(replicas)],
                "noise": [f"v(nz{i})" for i in range(replicas)]}
