@@ -32,7 +32,6 @@ Schema (every table and key optional unless marked; unknown keys are errors)::
 """
 from __future__ import annotations
 
-import math
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path

@@ -40,6 +40,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 
+import numpy as np
+from scipy import special
+
 from ..model import Model
 from . import validation as val
 from .parts import DiodePart, get_part, ideal_diode, thermal_voltage, PARTS
@@ -207,7 +210,6 @@ class CircuitMapping:
         """Variance of the integrated held noise over ``k`` hold times relative to white noise:
         1 for windows aligned with the holds, ``(k - 1/3)/k`` averaged over a random phase
         (k >= 1)."""
-        import numpy as np
         k = np.asarray(k, dtype=float)
         if np.any(k < 1):
             raise ValueError("k (window length in hold times) must be >= 1")
@@ -389,7 +391,6 @@ def _positive_part_moments(mu: float, s: float) -> tuple[float, float]:
     for alpha > 40 that difference loses more than 6 digits and the asymptotic series
     lam - alpha = 1/alpha - 2/alpha^3 + 10/alpha^5, var/s^2 = 1/alpha^2 - 6/alpha^4 + 50/alpha^6
     is used instead (relative error < 2e-7)."""
-    from scipy import special
     alpha = -mu / s
     if alpha > 40.0:
         a2 = alpha * alpha
@@ -405,8 +406,6 @@ def stationary_std(model: Model) -> float:
     tau_m/gamma centred at (a - Delta) tau_m (v > 0) or (a + Delta) tau_m (v < 0).  In the stick
     regime at weak noise it is ~ 1/(gamma (Delta - |a|)), far below sqrt(tau_m/gamma): the
     scale the smoothing must be small against."""
-    import numpy as np
-    from scipy import special
     tau, g, s = model.tau_m, model.gamma, model.velocity_scale
     means, variances, logw = [], [], []
     for sign, centre in ((1.0, (model.a - model.delta) * tau), (-1.0, (model.a + model.delta) * tau)):
@@ -432,7 +431,6 @@ def central_bin_bias(model: Model, epsilon: float, std: float | None = None) -> 
     normaliser) beyond ~20 eps, so only integrals over |v| < 20 eps are needed."""
     if epsilon == 0 or model.delta == 0:
         return 0.0
-    import numpy as np
     std = stationary_std(model) if std is None else std
     exact = model.replace(epsilon=0.0)
     gde = model.gamma * model.delta * epsilon

@@ -19,7 +19,6 @@ consistent DC values in the ``.ic`` line as well.  ``trrandom`` with
 from __future__ import annotations
 
 import hashlib
-import math
 from dataclasses import dataclass
 
 import numpy as np
