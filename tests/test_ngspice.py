@@ -207,3 +207,32 @@ def test_delivered_noise_intensity_ou():
     assert se < 0.05 * expect
     # and this is the white-noise growth 2 D s (D = 1/gamma) up to the O(s/tau) relaxation
     assert abs(expect / (2 * s / gamma) - 1) < 0.06
+
+
+def test_terminate_group_stops_only_that_group():
+    import threading
+    slow = ou_deck(replicas=20, v0=0.0, t_end=2000.0, seed=1, noise_dt=0.001).text
+    quick = ou_deck(replicas=1, v0=0.0, t_end=1.0, seed=2).text
+    errors = {}
+
+    def target():
+        try:
+            ng.run_deck(slow, group="g-slow", timeout=60)
+        except ng.NgspiceError as exc:
+            errors["slow"] = str(exc)
+
+    th = threading.Thread(target=target)
+    th.start()
+    for _ in range(200):  # wait until the process exists
+        if ng._ACTIVE.get("g-slow"):
+            break
+        threading.Event().wait(0.01)
+    assert ng.terminate_group("g-other") == 0
+    res = ng.run_deck(quick, group="g-other2")  # another group is unaffected
+    assert res.plot.n_points > 10
+    assert ng.terminate_group("g-slow") == 1
+    th.join(timeout=30)
+    assert not th.is_alive()
+    assert "stopped by signal" in errors["slow"]
+    with pytest.raises(ng.NgspiceError, match="stopped by signal"):
+        ng.run_deck(quick, group="g-slow")  # a cancelled group starts nothing new

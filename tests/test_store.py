@@ -135,6 +135,7 @@ def test_interrupted_run_resumes(tmp_path, counted):
         analogue.simulate(STICK, store=tmp_path, workers=1, **KW)
     done = len(RunStore(tmp_path).keys())
     assert 1 <= done <= 3  # decks finished before the crash were kept
+    assert not ng._ACTIVE  # no ngspice process of the failed call is left running
     counted["fail_seed"] = None
     before = counted["runs"]
     resumed = analogue.simulate(STICK, store=tmp_path, **KW)

@@ -22,6 +22,7 @@ import re
 import shutil
 import subprocess
 import tempfile
+import threading
 import time as _time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -31,7 +32,7 @@ import numpy as np
 from .rawfile import RawPlot, read_raw
 
 __all__ = ["NgspiceError", "NgspiceNotFoundError", "RunResult", "find_ngspice",
-           "ngspice_version", "run_deck", "resample", "interp_rows"]
+           "ngspice_version", "run_deck", "terminate_group", "resample", "interp_rows"]
 
 INSTALL_HINT = ("install it with your package manager, e.g. `sudo apt-get install ngspice` "
                 "(Debian/Ubuntu), `brew install ngspice` (macOS) or `conda install -c "
@@ -92,8 +93,30 @@ def _tail(text: str, lines: int = 25) -> str:
     return "\n".join(kept[-lines:])
 
 
+# Running ngspice processes by caller-chosen group, so that a caller whose run failed or was
+# interrupted can stop the processes it started (and only those) instead of letting them run on.
+_ACTIVE: dict = {}
+_CANCELLED: set = set()
+_ACTIVE_LOCK = threading.Lock()
+
+
+def terminate_group(group) -> int:
+    """Kill the ngspice processes still running for ``group`` (and any it would start later);
+    returns how many were killed."""
+    with _ACTIVE_LOCK:
+        procs = list(_ACTIVE.pop(group, ()))
+        if group is not None:
+            _CANCELLED.add(group)
+    killed = 0
+    for proc in procs:
+        if proc.poll() is None:
+            proc.kill()
+            killed += 1
+    return killed
+
+
 def run_deck(text: str, *, timeout: float = 3600.0, t_stop: float | None = None,
-             keep_dir=None) -> RunResult:
+             keep_dir=None, group=None) -> RunResult:
     """Run one complete deck (``.end``-terminated, no ``.control`` block) in batch mode.
 
     Parameters
@@ -104,6 +127,7 @@ def run_deck(text: str, *, timeout: float = 3600.0, t_stop: float | None = None,
         reported as incomplete (ngspice 39 exits 0 after some aborted analyses).
     keep_dir : if given, the deck, raw file and logs are written there and kept (debugging);
         otherwise a temporary directory is used and removed.
+    group : any hashable; the process can be stopped by :func:`terminate_group` (group).
     """
     if not isinstance(text, str) or not text.strip():
         raise ValueError("text must be a non-empty SPICE deck string")
@@ -119,41 +143,60 @@ def run_deck(text: str, *, timeout: float = 3600.0, t_stop: float | None = None,
         (work / "deck.cir").write_text(text)
         raw = work / "out.raw"
         t0 = _time.perf_counter()
+        proc = subprocess.Popen([exe, "-b", "-r", raw.name, "deck.cir"], cwd=work,
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                stdin=subprocess.DEVNULL)
+        with _ACTIVE_LOCK:
+            _ACTIVE.setdefault(group, set()).add(proc)
+            if group in _CANCELLED:
+                proc.kill()  # its run was given up while this deck was being prepared
         try:
-            proc = subprocess.run([exe, "-b", "-r", raw.name, "deck.cir"], cwd=work,
-                                  capture_output=True, text=True, timeout=timeout,
-                                  stdin=subprocess.DEVNULL)
-        except subprocess.TimeoutExpired as exc:
-            err = exc.stderr.decode(errors="replace") if isinstance(exc.stderr, bytes) else (exc.stderr or "")
+            stdout, stderr = proc.communicate(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            _, stderr = proc.communicate()
             raise NgspiceError(f"ngspice did not finish within timeout={timeout} s"
-                               + (f"; it said:\n{_tail(err)}" if err.strip() else "")) from None
+                               + (f"; it said:\n{_tail(stderr)}" if stderr.strip() else "")) from None
+        except BaseException:
+            proc.kill()  # interrupted while waiting: do not leave the process behind
+            proc.communicate()
+            raise
+        finally:
+            with _ACTIVE_LOCK:
+                live = _ACTIVE.get(group)
+                if live is not None:
+                    live.discard(proc)
+                    if not live:
+                        del _ACTIVE[group]
         wall = _time.perf_counter() - t0
         if keep_dir is not None:
-            (work / "stdout.txt").write_text(proc.stdout)
-            (work / "stderr.txt").write_text(proc.stderr)
+            (work / "stdout.txt").write_text(stdout)
+            (work / "stderr.txt").write_text(stderr)
         if proc.returncode != 0:
-            said = _tail(proc.stderr) or _tail(proc.stdout)
+            said = _tail(stderr) or _tail(stdout)
+            if proc.returncode < 0:
+                raise NgspiceError(f"ngspice was stopped by signal {-proc.returncode}"
+                                   + (f"; it said:\n{said}" if said else ""))
             raise NgspiceError(f"ngspice exited with status {proc.returncode}; it said:\n{said}")
         if not raw.exists():
             raise NgspiceError("ngspice wrote no raw file; it said:\n"
-                               + (_tail(proc.stderr) or _tail(proc.stdout)))
+                               + (_tail(stderr) or _tail(stdout)))
         try:
             plots = read_raw(raw)
         except ValueError as exc:
             raise NgspiceError(f"unreadable raw file ({exc}); ngspice said:\n"
-                               + _tail(proc.stderr)) from None
+                               + _tail(stderr)) from None
     tran = [p for p in plots if "transient" in p.plotname.lower()]
     if not tran:
         raise NgspiceError("the raw file holds no transient plot (plots: "
-                           f"{[p.plotname for p in plots]}); ngspice said:\n{_tail(proc.stderr)}")
+                           f"{[p.plotname for p in plots]}); ngspice said:\n{_tail(stderr)}")
     plot = tran[-1]
     if t_stop is not None:
         reached = float(plot["time"][-1]) if plot.n_points else 0.0
         if reached < t_stop * (1.0 - 1e-9):
             raise NgspiceError(f"transient stopped at t = {reached:.6g} s before t_stop = "
-                               f"{t_stop:.6g} s; ngspice said:\n{_tail(proc.stderr)}")
-    return RunResult(plot=plot, stdout=proc.stdout, stderr=proc.stderr, wall_time=wall,
-                     version=version)
+                               f"{t_stop:.6g} s; ngspice said:\n{_tail(stderr)}")
+    return RunResult(plot=plot, stdout=stdout, stderr=stderr, wall_time=wall, version=version)
 
 
 def resample(plot: RawPlot, names, times, initial=None) -> np.ndarray:

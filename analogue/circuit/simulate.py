@@ -22,6 +22,7 @@ import math
 import os
 import sys
 import time as _time
+import uuid
 from dataclasses import asdict, dataclass, field, is_dataclass
 from numbers import Integral, Real
 
@@ -158,6 +159,7 @@ class BatchTask:
     times: np.ndarray = field(repr=False)   # model units
     v0: np.ndarray = field(repr=False)      # model units, (replicas,)
     timeout: float = DEFAULT_TIMEOUT
+    group: str | None = None                # run id: lets the caller stop its processes
     noise_names: tuple | None = None        # held-noise vectors, if the deck records them
     noise_dt: float = 0.0                   # their hold time (model units)
     to_model_noise: float = 1.0
@@ -182,7 +184,7 @@ def run_batch(task: BatchTask) -> dict:
     prepended before the linear resampling (see :func:`analogue.circuit.ngspice.resample`).
     """
     t_s = task.times * task.time_scale
-    res = _ng.run_deck(task.text, timeout=task.timeout, t_stop=float(t_s[-1]))
+    res = _ng.run_deck(task.text, timeout=task.timeout, t_stop=float(t_s[-1]), group=task.group)
     v_raw0 = task.v0 / task.to_model_v
     v = _ng.resample(res.plot, task.v_names, t_s, initial=v_raw0) * task.to_model_v
     if task.x_names:
@@ -279,6 +281,7 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
     st = open_store(store)
     version = _ng.ngspice_version()  # also: a missing ngspice fails here, with the hint
     tasks, keys, offsets = [], [], [0]
+    group = uuid.uuid4().hex
     for b, deck in enumerate(decks):
         n = int(deck.replicas)
         offsets.append(offsets[-1] + n)
@@ -289,7 +292,7 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
                                to_model_v=float(deck.to_model_v), to_model_x=float(deck.to_model_x),
                                time_scale=float(deck.time_scale), times=times,
                                v0=np.asarray(v0[offsets[b]:offsets[b + 1]], dtype=float),
-                               timeout=timeout, noise_names=noise_names,
+                               timeout=timeout, group=group, noise_names=noise_names,
                                noise_dt=float(getattr(deck, "noise_dt", 0.0) or 0.0),
                                to_model_noise=float(getattr(deck, "to_model_noise", 1.0))))
         keys.append(batch_key(deck.text, times, version))
@@ -344,11 +347,11 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
             if failed:
                 for f in futures:
                     f.cancel()
+                if scheduler is None:
+                    _ng.terminate_group(group)  # our own ngspice processes still running
             if bar is not None:
                 bar.close()
-            # Do not wait for decks still running after a failure (threads cannot be killed;
-            # their ngspice processes finish on their own, bounded by the timeout).
-            ex.shutdown(wait=not failed)
+            ex.shutdown(wait=True)
             if closer is not None:
                 closer()
     wall = _time.perf_counter() - t0
