@@ -269,6 +269,7 @@ def _check_moments(e, model):
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("circuit-slip-run")  # share the module fixture under -n 2
 def test_stationary_moments_slip(slip_run):
     ex, ex0, est = _check_moments(slip_run, SLIP)
     assert est["mean"][1] < 0.02 * ex["mean"]  # the test has power
@@ -283,6 +284,7 @@ def test_stationary_moments_stick(stick_run):
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("circuit-slip-run")
 def test_replicas_are_independent(slip_run):
     """Cross-correlations of the stationary velocity series of different replicas (same and
     different decks) vanish within 4 standard errors; Bartlett: Var r_ij = (1/N) sum_k rho(k)^2

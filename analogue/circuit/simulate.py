@@ -355,6 +355,8 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
             if closer is not None:
                 closer()
     wall = _time.perf_counter() - t0
+    if todo:
+        log.info("analogue.simulate: %d decks ran in %.2f s", len(todo), wall)
     v = np.vstack([r["v"] for r in results]) if results else np.empty((0, times.size))
     x = np.vstack([r["x"] for r in results]) if results else np.empty((0, times.size))
     if results and all("noise" in r for r in results):
