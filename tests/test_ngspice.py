@@ -236,3 +236,22 @@ def test_terminate_group_stops_only_that_group():
     assert "stopped by signal" in errors["slow"]
     with pytest.raises(ng.NgspiceError, match="stopped by signal"):
         ng.run_deck(quick, group="g-slow")  # a cancelled group starts nothing new
+
+
+def test_batch_without_integrator_node_integrates_velocity():
+    """run_batch: positions from the deck's integrator node agree with the fallback (trapezoid
+    on the simulator's own points) used when a deck has no x vectors."""
+    from analogue.circuit.simulate import BatchTask, run_batch
+    deck = ou_deck(replicas=3, v0=[0.5, -0.3, 0.0], t_end=4.0, seed=9)
+    times = np.arange(401) * 0.01
+    common = dict(index=0, text=deck.text, v_names=tuple(deck.vectors["v"]),
+                  to_model_v=deck.to_model_v, to_model_x=deck.to_model_x,
+                  time_scale=deck.time_scale, times=times, v0=np.array([0.5, -0.3, 0.0]))
+    with_node = run_batch(BatchTask(x_names=tuple(deck.vectors["x"]), **common))
+    without = run_batch(BatchTask(x_names=None, **common))
+    np.testing.assert_array_equal(with_node["v"], without["v"])
+    np.testing.assert_array_equal(without["x"][:, 0], 0.0)
+    scale = np.max(np.abs(with_node["x"]))
+    assert scale > 0.1
+    # integrator node (solver reltol 1e-5) vs trapezoid on the solver points
+    np.testing.assert_allclose(without["x"], with_node["x"], rtol=0, atol=1e-3 * scale)

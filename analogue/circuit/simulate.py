@@ -244,21 +244,25 @@ def _progress_enabled(progress, n_run: int) -> bool:
     return progress
 
 
+def _check_scheduler(scheduler) -> None:
+    ok = (scheduler is None or hasattr(scheduler, "get_executor")
+          or (isinstance(scheduler, str)
+              and scheduler.startswith(("tcp://", "tls://", "inproc://", "ucx://"))))
+    if not ok:
+        raise ValueError(f"scheduler must be a Dask scheduler address such as 'tcp://host:8786' "
+                         f"or a distributed.Client, got {scheduler!r}")
+
+
 def _executor(workers, scheduler, n_tasks):
     """(executor, closer) for the local thread pool or a Dask cluster."""
+    _check_scheduler(scheduler)
     if scheduler is None:
         return cf.ThreadPoolExecutor(max_workers=max(1, min(workers, n_tasks))), None
     if isinstance(scheduler, str):
-        if not scheduler.startswith(("tcp://", "tls://", "inproc://", "ucx://")):
-            raise ValueError(f"scheduler must be a Dask scheduler address such as "
-                             f"'tcp://host:8786' or a distributed.Client, got {scheduler!r}")
         from distributed import Client
         client = Client(scheduler)
         return client.get_executor(), client.close
-    if hasattr(scheduler, "get_executor"):
-        return scheduler.get_executor(), None
-    raise ValueError(f"scheduler must be a Dask scheduler address such as 'tcp://host:8786' or "
-                     f"a distributed.Client, got {scheduler!r}")
+    return scheduler.get_executor(), None
 
 
 def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, progress=None,
@@ -278,6 +282,7 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
         workers = os.cpu_count() or 1
     workers = _int("workers", workers, 1)
     timeout = _real("timeout", timeout)
+    _check_scheduler(scheduler)
     st = open_store(store)
     version = _ng.ngspice_version()  # also: a missing ngspice fails here, with the hint
     tasks, keys, offsets = [], [], [0]
@@ -458,6 +463,7 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
     if not isinstance(return_noise, bool):
         raise ValueError(f"return_noise must be True or False, got {return_noise!r}")
     open_store(extra.get("store"))  # validates the store argument early
+    _check_scheduler(extra.get("scheduler"))
 
     spec = _spec(circuit)
     from .mapping import map_model
