@@ -17,7 +17,6 @@ Two ngspice 39 facts shape this module (see shared/theory.md):
 from __future__ import annotations
 
 import functools
-import os
 import re
 import shutil
 import subprocess
