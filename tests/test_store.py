@@ -1,7 +1,6 @@
 """Run store: content keys, atomic writes, repeated calls cost nothing, interrupted runs resume."""
 from __future__ import annotations
 
-
 import numpy as np
 import pytest
 
