@@ -32,10 +32,7 @@ from .propagation import initial_delta, propagate
 from .stationary import (StationaryMoments, autocorrelation, half_line_moments, sample_stationary,
                          stationary_moments)
 
-try:  # B2's work statistics; absent only while that module is being written.
-    from .work_statistics import rate_function, scgf, work_pdf
-except ImportError:  # pragma: no cover
-    pass
+from .work_statistics import rate_function, scgf, work_pdf
 
 __all__ = ["propagator", "stationary_moments", "StationaryMoments", "autocorrelation",
            "sample_stationary", "scgf", "rate_function", "work_pdf"]

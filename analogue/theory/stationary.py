@@ -89,6 +89,16 @@ class StationaryMoments(Mapping):
         return tuple(f.name for f in fields(cls))
 
 
+def _check_model(model) -> None:
+    if not isinstance(model, Model):
+        raise ValueError(f"model must be an analogue.Model, got {type(model).__name__}")
+
+
+def _check_h(h) -> None:
+    if h is not None and not (isinstance(h, (int, float, np.floating)) and math.isfinite(h) and h > 0):
+        raise ValueError(f"h must be None or a finite number > 0, got {h!r}")
+
+
 # ---------------------------------------------------------------- truncated Gaussians (eps = 0)
 def _upper_truncated_standard(z):
     """Mean and variance of ``Y = X | X > 0`` for ``X ~ N(z, 1)`` (vectorised in z).
@@ -203,6 +213,7 @@ def _halves_quad(model: Model) -> _Halves:
 def half_line_moments(model: Model, method: str = "auto") -> _Halves:
     """Per-half-line weights and conditional moments; ``method`` is "closed" (sgn law only),
     "quad", or "auto" (closed for epsilon = 0, quad otherwise)."""
+    _check_model(model)
     if method == "auto":
         method = "closed" if model.epsilon == 0 else "quad"
     if method == "closed":
@@ -252,6 +263,8 @@ def _refined_grids(model: Model, h: float | None, extra=()):
 def diffusion_coefficient(model: Model, h: float | None = None, richardson: bool = True) -> float:
     """Green-Kubo ``D_x = int_0^inf C(t) dt`` from the grid Poisson equation (module docstring);
     with ``richardson`` the results on h and h/2 are combined as ``(4 D_{h/2} - D_h)/3``."""
+    _check_model(model)
+    _check_h(h)
     coarse, fine = _refined_grids(model, h)
     d_fine = _diffusion_on_grid(model, fine)
     if not richardson:
@@ -285,7 +298,12 @@ def autocorrelation(model: Model, lags, h: float | None = None, richardson: bool
     """Connected stationary velocity autocorrelation ``C(t) = <v(0) v(t)> - <v>^2`` at ``|lags|``
     (C is even in the lag; C(0) is the variance).  Spectral sum on the FP grid, Richardson
     extrapolated over (h, h/2) unless ``richardson=False``."""
-    lags = np.asarray(lags, dtype=float)
+    _check_model(model)
+    _check_h(h)
+    try:
+        lags = np.asarray(lags, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError("lags must be an array of real numbers") from None
     if not np.all(np.isfinite(lags)):
         raise ValueError("lags must be finite")
     flat = np.abs(lags.ravel())
@@ -306,6 +324,8 @@ def stationary_moments(model: Model, h: float | None = None) -> StationaryMoment
     Richardson-extrapolated and changes by < 1e-5 relative when h is halved at the default
     spacing (tests check this).
     """
+    _check_model(model)
+    _check_h(h)
     halves = half_line_moments(model)
     pp, pm = halves.p_positive, halves.p_negative
     mean = pp * halves.mean_p + pm * halves.mean_m
@@ -326,6 +346,7 @@ def sample_stationary(model: Model, size, seed=None) -> np.ndarray:
     ``min(sqrt(tau_m/gamma)/400, epsilon/20)`` over the mode +- 40 widths (CDF error O(h^2)).
     ``seed``: None, an int, a SeedSequence or a numpy Generator.
     """
+    _check_model(model)
     try:
         shape = tuple(int(s) for s in np.atleast_1d(size))
     except (TypeError, ValueError):
