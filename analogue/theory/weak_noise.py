@@ -1,0 +1,413 @@
+"""The paper's weak-noise theory: optimal paths and transition probability (sections III-IV).
+
+In the limit ``gamma -> infinity`` the propagator is ``f(v,t|v0,t0) ~ exp(-gamma A*)``
+(eq. sp_approx) with ``A*`` the minimal Onsager-Machlup action (eq. action, Lagrangian
+eq. lagrangian ``L = (v' + U'(v))^2 / 4``).  The minimum is taken over the paper's five kinds
+of admissible optimal paths:
+
+* ``direct``: one basic solution (eq. sol_basic) on one half plane, action ``Lambda_pm``
+  (eqs. Adir, lambda);
+* ``direct-crossing``: two basic solutions glued at ``v = 0`` at ``t_cross`` (eqs. dirx_par,
+  Adirx), ``t_cross`` the root of eq. tbar_eq;
+* ``indirect`` / ``indirect-crossing`` (``|a| <= Delta`` only): relax deterministically to
+  ``v = 0`` at ``t_a`` (eq. tbar1), stick, leave at ``t_b`` (eq. tbar2); valid iff
+  ``t_a <= t_b``; action ``U(v)`` with ``U(0) = 0`` (eqs. Aind2, Aind2b);
+* ``twice-crossing`` (``|a| > Delta``, v0 and v on the side opposite the attractor): eq. Adc,
+  the crossing times ``t_1 < t_2`` found numerically (see below).
+
+A path is *admissible* only if each basic piece stays on its own half plane; a basic solution
+that dips through ``v = 0`` is not a direct path.  ``v0 = 0`` or ``v = 0`` belong to both half
+planes (every candidate on either side is tried), which gives the correct limits.
+
+Other signs: the paper writes out ``a > 0``.  ``a < 0`` is reduced to ``a > 0`` by the symmetry
+``f(v, t | v0; a) = f(-v, t | -v0; -a)`` (section II), i.e. everything is computed for
+``(-v, -v0, -a)`` and mirrored back.  ``v0 < 0`` cases (which the paper leaves to the reader)
+are handled by the same half-plane algebra with ``b_sigma = Delta - sigma a`` on the side
+``sigma = sgn v`` (see :mod:`.weak_noise_pieces`); ``a = +-Delta`` (``b = 0``: sticking is
+free but never reached from that side, ``t_a = inf``), ``a = 0`` and ``Delta = 0`` (pure
+Ornstein-Uhlenbeck) come out of the same formulas.
+
+Twice-crossing times: with the conserved "energy" ``E = y'^2 - y^2/tau^2`` of each piece
+(``y = |v| + b tau_m``), stationarity of eq. Adc in ``t_1, t_2`` means the three pieces share
+one ``E``; the durations are then closed-form (:func:`.weak_noise_pieces.monotone_time` for the
+monotone outer pieces, ``2 tau arccosh(|b|/sqrt(-E))`` for the bump), their sum increases
+strictly with ``E`` (so the root is unique), and one scalar root gives ``t_1, t_2``.
+
+This is the theory of the exact ``sgn`` law: ``model.epsilon`` is ignored.  The action does
+not involve the mass (``gamma`` only enters the propagator).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.integrate import trapezoid
+from scipy.optimize.elementwise import find_root
+
+from ..model import Model
+from .weak_noise_pieces import bridge, bridge_min, monotone_time, ou_action, ou_action_rate
+
+__all__ = ["action", "optimal_path", "OptimalPath", "boundaries", "propagator", "Lambda",
+           "crossing_time", "lagrangian", "KINDS",
+           "rate_function", "fluctuation_relation", "work_optimal_path"]
+
+KINDS = ("direct", "direct-crossing", "indirect", "indirect-crossing", "twice-crossing")
+_DIRECT, _DCROSS, _INDIRECT, _ICROSS, _TWICE = range(5)
+
+# A piece that touches v = 0 only within this relative rounding still counts as admissible.
+_ADMISSIBLE_RTOL = 1e-11
+
+
+# ----------------------------------------------------------------------------- validation
+def _finite(name: str, value) -> float:
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a real number, got {value!r}") from None
+    if not math.isfinite(x):
+        raise ValueError(f"{name} must be finite, got {x!r}")
+    return x
+
+
+def _times(t, t0):
+    t0 = _finite("t0", t0)
+    t = _finite("t", t)
+    if not t > t0:
+        raise ValueError(f"t must be > t0 (= {t0!r}), got {t!r}")
+    return t, t0
+
+
+def _velocities(v):
+    arr = np.asarray(v, dtype=float)
+    if not np.all(np.isfinite(arr)):
+        raise ValueError("v must be finite")
+    return arr
+
+
+# ----------------------------------------------------------------------------- canonical frame
+@dataclass(frozen=True)
+class _Frame:
+    """Parameters mirrored to ``a >= 0`` (``flip = -1`` if the model has ``a < 0``)."""
+
+    tau: float
+    delta: float
+    a: float
+    flip: float
+
+    @classmethod
+    def of(cls, model: Model) -> "_Frame":
+        flip = -1.0 if model.a < 0 else 1.0
+        return cls(model.tau_m, model.delta, abs(model.a), flip)
+
+    def b(self, sigma: float) -> float:
+        """``b_sigma = Delta - sigma a`` (eq. lambda: ``Delta -+ a`` on the upper/lower plane)."""
+        return self.delta - sigma * self.a
+
+    def c(self, sigma: float) -> float:
+        """``v = 0`` in the shifted coordinate ``y = |v| + b tau`` of side sigma."""
+        return self.b(sigma) * self.tau
+
+    def potential(self, v):
+        return v * v / (2.0 * self.tau) + self.delta * np.abs(v) - self.a * v
+
+    def stick_time(self, sigma: float, speed):
+        """Deterministic time to reach v = 0 from |v| = speed on side sigma (eqs. tbar1/tbar2);
+        inf if that side never reaches v = 0 (b <= 0) unless speed == 0."""
+        b = self.b(sigma)
+        speed = np.asarray(speed, dtype=float)
+        if b <= 0:
+            return np.where(speed == 0, 0.0, np.inf)
+        return self.tau * np.log1p(speed / (b * self.tau))
+
+
+def _admissible(y0, y1, T, c, tau):
+    """Does the basic piece from y0 to y1 in time T stay on its side (y >= c)?"""
+    scale = np.maximum(np.maximum(np.abs(y0), np.abs(y1)), abs(c))
+    return bridge_min(y0, y1, T, tau) >= c - _ADMISSIBLE_RTOL * scale
+
+
+# ----------------------------------------------------------------------------- candidates
+@dataclass
+class _Best:
+    """Running minimum over candidate kinds (arrays of the shape of v)."""
+
+    action: np.ndarray
+    kind: np.ndarray
+    side0: np.ndarray
+    side1: np.ndarray
+    times: dict = field(default_factory=dict)
+
+    @classmethod
+    def empty(cls, shape):
+        nan = np.full(shape, np.nan)
+        return cls(np.full(shape, np.inf), np.full(shape, -1), np.zeros(shape), np.zeros(shape),
+                   {k: nan.copy() for k in ("t_cross", "t_a", "t_b", "t_1", "t_2")})
+
+    def offer(self, cand, kind, side0, side1, **times):
+        cand = np.where(np.isfinite(cand), cand, np.inf)
+        better = cand < self.action
+        if not np.any(better):
+            return
+        self.action = np.where(better, cand, self.action)
+        self.kind = np.where(better, kind, self.kind)
+        self.side0 = np.where(better, side0, self.side0)
+        self.side1 = np.where(better, side1, self.side1)
+        for key in self.times:
+            new = np.broadcast_to(np.asarray(times.get(key, np.nan), float), better.shape)
+            self.times[key] = np.where(better, new, self.times[key])
+
+
+def _direct(fr: _Frame, sigma, v0, v, T):
+    """eq. Adir: Lambda_sigma, if the basic solution stays on side sigma."""
+    c = fr.c(sigma)
+    y0, y1 = abs(v0) + c, np.abs(v) + c
+    ok = _admissible(y0, y1, T, c, fr.tau)
+    return np.where(ok, ou_action(y0, y1, T, fr.tau), np.inf)
+
+
+def _crossing(fr: _Frame, sigma0, v0, v, T):
+    """eqs. Adirx, tbar_eq: minimise Lambda_s0(0,tx;v0,0) + Lambda_-s0(v,T;0,tx) over tx.
+
+    Returns (action, tx); inf/NaN where eq. tbar_eq has no interior root or a piece leaves its
+    half plane."""
+    sigma1 = -sigma0
+    c0, c1, tau = fr.c(sigma0), fr.c(sigma1), fr.tau
+    yA0 = abs(v0) + c0
+    yC1 = np.abs(np.asarray(v, float)) + c1
+    shape = yC1.shape
+    yC1 = yC1.ravel()
+
+    def slope(x, yc1):
+        return ou_action_rate(yA0, c0, x, tau) - ou_action_rate(c1, yc1, T - x, tau)
+
+    lo, hi = T * 1e-12, T * (1.0 - 1e-12)
+    f_lo, f_hi = slope(lo, yC1), slope(hi, yC1)
+    has = (f_lo < 0) & (f_hi > 0)
+    tx = np.full(yC1.shape, np.nan)
+    if np.any(has):
+        res = find_root(slope, (np.full(has.sum(), lo), np.full(has.sum(), hi)), args=(yC1[has],),
+                        tolerances=dict(xatol=1e-15 * T, xrtol=1e-15, fatol=0.0, frtol=0.0))
+        tx[has] = np.where(res.success, res.x, np.nan)
+    ok = np.isfinite(tx)
+    txs = np.where(ok, tx, 0.5 * T)
+    ok &= _admissible(yA0, c0, txs, c0, tau) & _admissible(c1, yC1, T - txs, c1, tau)
+    act = ou_action(yA0, c0, txs, tau) + ou_action(c1, yC1, T - txs, tau)
+    act = np.where(ok, act, np.inf)
+    return act.reshape(shape), np.where(ok, tx, np.nan).reshape(shape)
+
+
+def _indirect(fr: _Frame, sigma0, sigma1, v0, v, T):
+    """eqs. Aind2/Aind2b: action U(v) when sticking is free (b >= 0 on both sides) and
+    t_a (eq. tbar1) <= t_b (eq. tbar2).  Returns (action, t_a, t_b)."""
+    if fr.a > fr.delta:  # sticking on v = 0 costs (a - Delta)^2/4 per unit time: no indirect paths
+        return np.inf, np.nan, np.nan
+    ta = fr.stick_time(sigma0, abs(v0))
+    tb = T - fr.stick_time(sigma1, np.abs(v))
+    ok = ta <= tb + 1e-12 * T
+    return np.where(ok, fr.potential(v), np.inf), np.where(ok, ta, np.nan), np.where(ok, tb, np.nan)
+
+
+def _twice(fr: _Frame, sigma, v0, v, T):
+    """eq. Adc: v0 and v on side sigma, the attractor on the other side (b_-sigma < 0).
+
+    The common energy ``E = -b_B^2 q`` (``0 < q <= 1``) of the three pieces is the unique root
+    of ``T_A(E) + T_B(E) + T_C(E) = T`` (the sum is strictly increasing in E: ``|T_A'| +
+    |T_C'|`` is bounded by the first term of ``T_B'`` because ``b_A > |b_B|``).  Solved in
+    ``z = ln q``.  Returns (action, t_1, t_2)."""
+    bA, bB, tau = fr.b(sigma), fr.b(-sigma), fr.tau
+    v = np.asarray(v, float)
+    if not (bB < 0 < bA):
+        nan = np.full(v.shape, np.nan)
+        return np.full(v.shape, np.inf), nan, nan
+    cA, cB = bA * tau, bB * tau
+    yA0 = abs(v0) + cA
+    yC1 = (np.abs(v) + cA).ravel()
+
+    def durations(z, yc1):
+        q = np.exp(z)
+        E = -bB * bB * q
+        tA = monotone_time(yA0, cA, E, tau)
+        tB = 2.0 * tau * (np.log1p(np.sqrt(np.maximum(1.0 - q, 0.0))) - 0.5 * z)
+        tC = monotone_time(cA, yc1, E, tau)
+        return tA, tB, tC
+
+    def excess(z, yc1):
+        tA, tB, tC = durations(z, yc1)
+        return tA + tB + tC - T
+
+    z_lo = -(T / tau) - 2.0  # there T_B alone exceeds T
+    zl = np.full(yC1.shape, z_lo)
+    zh = np.zeros(yC1.shape)
+    has = excess(zh, yC1) < 0  # at q = 1 the bump has zero length: the shortest total time
+    act = np.full(yC1.shape, np.inf)
+    t1 = np.full(yC1.shape, np.nan)
+    t2 = np.full(yC1.shape, np.nan)
+    if np.any(has):
+        res = find_root(excess, (zl[has], zh[has]), args=(yC1[has],),
+                        tolerances=dict(xatol=1e-15, xrtol=1e-15, fatol=0.0, frtol=0.0))
+        tA, tB, tC = durations(res.x, yC1[has])
+        with np.errstate(invalid="ignore"):
+            a_A = np.where(tA > 0, ou_action(yA0, cA, tA, tau), 0.0)
+            a_C = np.where(tC > 0, ou_action(cA, yC1[has], tC, tau), 0.0)
+        a_B = ou_action(cB, cB, tB, tau)
+        act[has] = np.where(res.success, a_A + a_B + a_C, np.inf)
+        t1[has] = tA
+        t2[has] = T - tC
+    return act.reshape(v.shape), t1.reshape(v.shape), t2.reshape(v.shape)
+
+
+def _solve(fr: _Frame, v, T, v0):
+    """Minimal action over all admissible candidates, canonical frame (a >= 0), t0 = 0."""
+    v = np.asarray(v, float)
+    best = _Best.empty(v.shape)
+    sides0 = (1.0, -1.0) if v0 == 0 else (math.copysign(1.0, v0),)
+    for s0 in sides0:
+        for s1 in (1.0, -1.0):
+            on = (s1 * v >= 0)
+            if not np.any(on):
+                continue
+            inf = np.where(on, 0.0, np.inf)  # candidates only for v on side s1
+            if s0 == s1:
+                best.offer(_direct(fr, s0, v0, v, T) + inf, _DIRECT, s0, s1)
+                act, t1, t2 = _twice(fr, s0, v0, v, T)
+                best.offer(act + inf, _TWICE, s0, s1, t_1=t1, t_2=t2)
+            else:
+                act, tx = _crossing(fr, s0, v0, v, T)
+                best.offer(act + inf, _DCROSS, s0, s1, t_cross=tx)
+            act, ta, tb = _indirect(fr, s0, s1, v0, v, T)
+            kind = np.where((s0 != s1) & (v != 0) & (v0 != 0), _ICROSS, _INDIRECT)
+            best.offer(act + inf, kind, s0, s1, t_a=ta, t_b=tb)
+    if not np.all(np.isfinite(best.action)):
+        raise RuntimeError("no admissible optimal path found (please report: v0=%r, T=%r)"
+                           % (v0, T))
+    return best
+
+
+# ----------------------------------------------------------------------------- public API
+def Lambda(sign, v, t, v0, t0, model: Model):
+    """Action of the basic solution on the upper (``sign = +1``) or lower (``-1``) half plane,
+    eq. lambda: ``Lambda_pm(v,t;v0,t0)`` with ``Delta -+ a``; uses ``|v|, |v0|`` as the paper
+    does.  No admissibility check (that is the caller's business).  Vectorised in v."""
+    if sign not in (1, -1):
+        raise ValueError(f"sign must be +1 or -1, got {sign!r}")
+    t, t0 = _times(t, t0)
+    v0 = _finite("v0", v0)
+    c = (model.delta - sign * model.a) * model.tau_m
+    out = ou_action(abs(v0) + c, np.abs(_velocities(v)) + c, t - t0, model.tau_m)
+    return float(out) if np.ndim(out) == 0 else out
+
+
+def crossing_time(model: Model, v, t, v0, t0=0.0):
+    """Crossing time ``t_cross`` of the direct crossing path (root of eq. tbar_eq), absolute
+    time; NaN where v and v0 are on the same side (or v0 = 0 / v = 0) or where the direct
+    crossing path is not admissible.  Vectorised in v."""
+    t, t0 = _times(t, t0)
+    v0 = _finite("v0", v0)
+    v = _velocities(v)
+    fr = _Frame.of(model)
+    vc, v0c = fr.flip * v, fr.flip * v0
+    if v0c == 0:
+        out = np.full(v.shape, np.nan)
+    else:
+        s0 = math.copysign(1.0, v0c)
+        _, tx = _crossing(fr, s0, v0c, vc, t - t0)
+        out = np.where(s0 * vc < 0, t0 + tx, np.nan)
+    return float(out) if out.ndim == 0 else out
+
+
+def action(model: Model, v, t, v0, t0=0.0):
+    """Minimal Onsager-Machlup action ``A*(v, t | v0, t0)`` (eqs. action, lagrangian) over the
+    admissible direct, direct-crossing, indirect, indirect-crossing and twice-crossing paths
+    (eqs. Adir, Adirx, Aind2, Aind2b, Adc).  ``f ~ exp(-gamma A*)`` (eq. sp_approx).
+
+    ``v`` may be a scalar (returns float) or an array (same shape).  ``U(0) = 0`` convention.
+    """
+    t, t0 = _times(t, t0)
+    v0 = _finite("v0", v0)
+    v = _velocities(v)
+    fr = _Frame.of(model)
+    out = _solve(fr, fr.flip * v, t - t0, fr.flip * v0).action
+    return float(out) if out.ndim == 0 else out
+
+
+def lagrangian(model: Model, v, vdot):
+    """Onsager-Machlup Lagrangian eq. lagrangian ``(v' + U'(v))^2 / 4`` for the sgn law; on
+    ``v = 0`` the set-valued ``sgn(0) in [-1, 1]`` is resolved to the cheapest value (Filippov),
+    so sticking costs nothing when ``|a| <= Delta``."""
+    v = np.asarray(v, float)
+    vdot = np.asarray(vdot, float)
+    force = vdot + v / model.tau_m - model.a
+    moving = force + model.delta * np.sign(v)
+    sticking = np.maximum(np.abs(force) - model.delta, 0.0)
+    return np.where(v == 0, sticking, moving) ** 2 / 4.0
+
+
+@dataclass(frozen=True, eq=False)
+class OptimalPath:
+    """The minimal-action path from ``(v0, t0)`` to ``(v, t)``.
+
+    ``kind`` is one of :data:`KINDS`; ``s`` and ``v`` hold ``n + 1`` samples on ``[t0, t]``;
+    switching times are absolute and NaN where they do not apply: ``t_cross`` (direct crossing,
+    eq. tbar_eq), ``t_a``/``t_b`` (indirect, eqs. tbar1/tbar2), ``t_1``/``t_2`` (twice crossing,
+    eq. Adc)."""
+
+    kind: str
+    s: np.ndarray
+    v: np.ndarray
+    action: float
+    t_cross: float = math.nan
+    t_a: float = math.nan
+    t_b: float = math.nan
+    t_1: float = math.nan
+    t_2: float = math.nan
+
+
+def optimal_path(model: Model, v, t, v0, t0=0.0, n=400) -> OptimalPath:
+    """The optimal path (eqs. dir_par, dirx_par, id_par, idx_par, dc_par) and its action."""
+    t, t0 = _times(t, t0)
+    v0 = _finite("v0", v0)
+    v = _finite("v", v)
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
+        raise ValueError(f"n must be an integer >= 2, got {n!r}")
+    fr = _Frame.of(model)
+    T = t - t0
+    vc, v0c = fr.flip * v, fr.flip * v0
+    best = _solve(fr, np.asarray(vc), T, v0c)
+    kind = int(best.kind)
+    s0, s1 = float(best.side0), float(best.side1)
+    times = {k: float(x) for k, x in best.times.items()}
+    s = np.linspace(0.0, T, n + 1)
+
+    def piece(sigma, speed0, speed1, start, end):
+        """Basic solution on side sigma between (start, speed0) and (end, speed1)."""
+        c = fr.c(sigma)
+        inside = (s >= start) & (s <= end)
+        if end <= start:
+            return inside, np.zeros_like(s)
+        y = bridge(speed0 + c, speed1 + c, end - start, fr.tau, np.clip(s - start, 0.0, end - start))
+        return inside, sigma * np.maximum(y - c, 0.0)
+
+    path = np.zeros_like(s)
+    if kind == _DIRECT:
+        segs = [(s0, abs(v0c), abs(vc), 0.0, T)]
+    elif kind == _DCROSS:
+        tx = times["t_cross"]
+        segs = [(s0, abs(v0c), 0.0, 0.0, tx), (s1, 0.0, abs(vc), tx, T)]
+    elif kind in (_INDIRECT, _ICROSS):
+        ta, tb = times["t_a"], times["t_b"]
+        segs = [(s0, abs(v0c), 0.0, 0.0, ta), (s1, 0.0, abs(vc), tb, T)]
+    else:
+        t1, t2 = times["t_1"], times["t_2"]
+        segs = [(s0, abs(v0c), 0.0, 0.0, t1), (-s0, 0.0, 0.0, t1, t2), (s1, 0.0, abs(vc), t2, T)]
+    for seg in segs:
+        inside, vals = piece(*seg)
+        path = np.where(inside, vals, path)
+    path[0], path[-1] = v0c, vc
+    return OptimalPath(kind=KINDS[kind], s=t0 + s, v=fr.flip * path, action=float(best.action),
+                       **{k: (t0 + x if math.isfinite(x) else math.nan) for k, x in times.items()})
+
+
+# The work large deviations (section V) live in their own module; re-exported here so that
+# ``analogue.theory.weak_noise`` is the one entry point to the paper's weak-noise theory.
+from .weak_noise_work import rate_function, fluctuation_relation, work_optimal_path  # noqa: E402
