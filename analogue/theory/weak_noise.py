@@ -214,15 +214,17 @@ def _twice(fr: _Frame, sigma, v0, v, T):
     The common energy ``E = -b_B^2 q`` (``0 < q <= 1``) of the three pieces is the unique root
     of ``T_A(E) + T_B(E) + T_C(E) = T`` (the sum is strictly increasing in E: ``|T_A'| +
     |T_C'|`` is bounded by the first term of ``T_B'`` because ``b_A > |b_B|``).  Solved in
-    ``z = ln q``.  Returns (action, t_1, t_2)."""
+    ``z = ln q``.  ``T`` may be an array broadcastable with v.  Returns (action, t_1, t_2)."""
     bA, bB, tau = fr.b(sigma), fr.b(-sigma), fr.tau
-    v = np.asarray(v, float)
+    v, T = np.broadcast_arrays(np.asarray(v, float), np.asarray(T, float))
+    shape = v.shape
     if not (bB < 0 < bA):
-        nan = np.full(v.shape, np.nan)
-        return np.full(v.shape, np.inf), nan, nan
+        nan = np.full(shape, np.nan)
+        return np.full(shape, np.inf), nan, nan
     cA, cB = bA * tau, bB * tau
     yA0 = abs(v0) + cA
     yC1 = (np.abs(v) + cA).ravel()
+    T = T.ravel()
 
     def durations(z, yc1):
         q = np.exp(z)
@@ -232,29 +234,28 @@ def _twice(fr: _Frame, sigma, v0, v, T):
         tC = monotone_time(cA, yc1, E, tau)
         return tA, tB, tC
 
-    def excess(z, yc1):
+    def excess(z, yc1, tt):
         tA, tB, tC = durations(z, yc1)
-        return tA + tB + tC - T
+        return tA + tB + tC - tt
 
-    z_lo = -(T / tau) - 2.0  # there T_B alone exceeds T
-    zl = np.full(yC1.shape, z_lo)
-    zh = np.zeros(yC1.shape)
-    has = excess(zh, yC1) < 0  # at q = 1 the bump has zero length: the shortest total time
-    act = np.full(yC1.shape, np.inf)
-    t1 = np.full(yC1.shape, np.nan)
-    t2 = np.full(yC1.shape, np.nan)
+    zl = -(T / tau) - 2.0  # there T_B alone exceeds T
+    zh = np.zeros(T.shape)
+    has = excess(zh, yC1, T) < 0  # at q = 1 the bump has zero length: the shortest total time
+    act = np.full(T.shape, np.inf)
+    t1 = np.full(T.shape, np.nan)
+    t2 = np.full(T.shape, np.nan)
     if np.any(has):
-        res = find_root(excess, (zl[has], zh[has]), args=(yC1[has],),
+        res = find_root(excess, (zl[has], zh[has]), args=(yC1[has], T[has]),
                         tolerances=dict(xatol=1e-15, xrtol=1e-15, fatol=0.0, frtol=0.0))
         tA, tB, tC = durations(res.x, yC1[has])
-        with np.errstate(invalid="ignore"):
+        with np.errstate(invalid="ignore", divide="ignore"):
             a_A = np.where(tA > 0, ou_action(yA0, cA, tA, tau), 0.0)
             a_C = np.where(tC > 0, ou_action(cA, yC1[has], tC, tau), 0.0)
         a_B = ou_action(cB, cB, tB, tau)
         act[has] = np.where(res.success, a_A + a_B + a_C, np.inf)
         t1[has] = tA
-        t2[has] = T - tC
-    return act.reshape(v.shape), t1.reshape(v.shape), t2.reshape(v.shape)
+        t2[has] = T[has] - tC
+    return act.reshape(shape), t1.reshape(shape), t2.reshape(shape)
 
 
 def _solve(fr: _Frame, v, T, v0):
@@ -406,6 +407,100 @@ def optimal_path(model: Model, v, t, v0, t0=0.0, n=400) -> OptimalPath:
     path[0], path[-1] = v0c, vc
     return OptimalPath(kind=KINDS[kind], s=t0 + s, v=fr.flip * path, action=float(best.action),
                        **{k: (t0 + x if math.isfinite(x) else math.nan) for k, x in times.items()})
+
+
+def _w_cr(fr: _Frame, v0, T):
+    """eq. cond3: the v (on v0's side) where the direct and the twice-crossing actions are
+    equal, by bisection in ``x = ln(1 + |v|/((Delta+a) tau))`` (canonical frame, v0 < 0).
+
+    The twice-crossing path wins on ``(w_cr, 0)``; it is infeasible below the v at which even a
+    zero-length bump cannot fit into ``T``, which brackets the root.  NaN where the twice
+    crossing never wins."""
+    bA, bB, tau = fr.b(-1.0), fr.b(1.0), fr.tau
+    cA, cB = bA * tau, bB * tau
+
+    def sign(x):
+        v = -cA * np.expm1(x)
+        d = _direct(fr, -1.0, v0, v, T)
+        tc, _, _ = _twice(fr, -1.0, v0, v, T)
+        return np.where(np.isinf(tc), -1.0, np.where(np.isinf(d), 1.0, np.sign(d - tc)))
+
+    y_max = (cA + math.sqrt(cA * cA - cB * cB)) * np.exp(np.minimum(T / tau, 700.0))
+    lo = np.zeros(T.shape)
+    hi = np.log1p(y_max / cA)
+    found = sign(lo) > 0
+    for _ in range(80):  # 2^-80 of the bracket: below double precision
+        mid = 0.5 * (lo + hi)
+        up = sign(mid) > 0
+        lo, hi = np.where(up, mid, lo), np.where(up, hi, mid)
+    return np.where(found, -cA * np.expm1(0.5 * (lo + hi)), np.nan)
+
+
+def boundaries(model: Model, t, v0, t0=0.0):
+    """Boundary lines of the optimal-path kinds in the (v, t) plane (section IV).
+
+    Returns a dict of arrays (floats for scalar t):
+
+    * ``"w"``: eq. dpm, ``w^+`` for ``v0 > 0`` and ``w^-`` for ``v0 < 0``: indirect paths (action
+      ``U(v)``) beat direct ones between 0 and w.  Only for ``|a| <= Delta`` and ``t >= t_a``.
+    * ``"u"``: eq. vc_b (upper sign for ``v0 > 0``, see theory.md), the limit ``t_b = t_a`` of
+      indirect crossing paths: between u and 0 the indirect crossing path wins.  Only for
+      ``|a| <= Delta`` and ``t >= t_a``.
+    * ``"w_cr"``: eq. cond3 (numerical), for ``|a| > Delta`` and v0 on the side opposite to the
+      attractor: between w_cr and 0 the twice-crossing path beats the direct one.
+
+    NaN where a boundary does not apply.  ``v0 = 0`` is taken as the limit ``v0 -> 0+`` (then
+    w and u are the upper and lower edges of the indirect region).  Each formula agrees with
+    the continuity of the minimal action across it (checked in the tests).
+    """
+    t0 = _finite("t0", t0)
+    v0 = _finite("v0", v0)
+    t_arr = np.asarray(t, dtype=float)
+    if not np.all(np.isfinite(t_arr)):
+        raise ValueError("t must be finite")
+    if np.any(t_arr <= t0):
+        raise ValueError(f"t must be > t0 (= {t0!r})")
+    T = t_arr - t0
+    fr = _Frame.of(model)
+    v0c = fr.flip * v0
+    s0 = fr.flip * (math.copysign(1.0, v0) if v0 != 0 else 1.0)  # canonical side of v0
+    nan = np.full(T.shape, np.nan)
+    w = u = w_cr = nan
+    if fr.a <= fr.delta:
+        c0, c1 = fr.c(s0), fr.c(-s0)
+        y0 = abs(v0c) + c0
+        after = T >= fr.stick_time(s0, abs(v0c))
+        if np.any(after):
+            tt = np.minimum(T / fr.tau, 700.0)
+            E, Ei = np.exp(tt), np.exp(-tt)
+            # eq. dpm, lower root, written without cancellation for large t
+            root = np.sqrt(np.maximum((y0 * y0 - c0 * c0) * -np.expm1(-2.0 * tt), 0.0))
+            w_mag = (y0 * y0 * Ei + c0 * c0 * (E - Ei)) / (y0 + root) - c0
+            w = np.where(after, s0 * fr.flip * w_mag, np.nan)
+            ratio = c0 / y0 if y0 > 0 else 1.0
+            u_mag = c1 * (E * ratio - 1.0)  # eq. vc_b
+            u = np.where(after, -s0 * fr.flip * u_mag, np.nan)
+    elif s0 < 0:
+        w_cr = fr.flip * _w_cr(fr, v0c, np.maximum(T, 0.0).astype(float))
+    out = {"w": w, "u": u, "w_cr": w_cr}
+    if t_arr.ndim == 0:
+        return {k: float(x) for k, x in out.items()}
+    return out
+
+
+def propagator(model: Model, v, t, v0, t0=0.0):
+    """Saddle-point transition probability ``f(v,t|v0,t0) ~ exp(-gamma A*)`` (eq. sp_approx;
+    eqs. sol1, sol2, sol3 and their mirror images), normalised on the grid ``v`` by the
+    trapezoid rule, because the paper drops the Jacobian (eq. jacobian) and the fluctuation
+    factor.  The minimum action is subtracted before exponentiating (no underflow)."""
+    t, t0 = _times(t, t0)
+    v0 = _finite("v0", v0)
+    v = _velocities(v)
+    if v.ndim != 1 or v.size < 2 or not np.all(np.diff(v) > 0):
+        raise ValueError("v must be a 1-D strictly increasing grid with at least 2 points")
+    A = action(model, v, t, v0, t0)
+    f = np.exp(-model.gamma * (A - A.min()))
+    return f / trapezoid(f, v)
 
 
 # The work large deviations (section V) live in their own module; re-exported here so that
