@@ -155,18 +155,18 @@ def fig5_boundaries(axes=None, tau_m=1.0, delta=0.7, a=0.2, v0s=(2.0, -2.0), t_m
             p = weak_noise.optimal_path(m, v_end, t_end, v0, n=600)
             ax.plot(p.s, p.v, color=KIND_COLOURS.get(p.kind, "k"), lw=1.8, label=f"{p.kind} path")
         _zero_line(ax)
-        ax.set_ylim(-3.2, 3.2)
+        ax.set_ylim(-3.5, 3.5)
         ax.set_title(f"Fig. 5({tag}): boundaries, $\\tau_m$={tau_m:g}, $\\Delta$={delta:g}, "
                      f"a={a:g}, $v_0$={v0:g}", fontsize=10, pad=14)
         ax.set_xlabel(TIME)
         ax.set_ylabel(VELOCITY)
-        ax.legend(fontsize=7, loc="upper right" if v0 < 0 else "lower right")
+        ax.legend(fontsize=7, loc="upper left" if v0 < 0 else "lower left")
     return axes
 
 
 # ------------------------------------------------------------------------- Fig. 6
 def fig6_propagator(axes=None, tau_m=1.0, delta=0.7, a=0.2, gamma=10.0, v0=2.0,
-                    times=(1.0, 2.2, 3.5, 12.0), v_range=(-3.0, 4.0)):
+                    times=(1.0, 2.2, 3.5, 12.0), v_range=(-1.5, 2.5)):
     """Fig. 6: saddle-point transition probability f(v, t | v0, 0) (eqs. sol1, sol2), normalised
     on the grid, at four times; vertical dashed lines at u^+ and w^+ where they exist; the last
     time is compared with the stationary law p_s (eq. p_stat)."""
