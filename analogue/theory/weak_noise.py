@@ -122,9 +122,9 @@ class _Frame:
 
 
 def _admissible(y0, y1, T, c, tau):
-    """Does the basic piece from y0 to y1 in time T stay on its side (y >= c)?"""
-    scale = np.maximum(np.maximum(np.abs(y0), np.abs(y1)), abs(c))
-    return bridge_min(y0, y1, T, tau) >= c - _ADMISSIBLE_RTOL * scale
+    """Does the basic piece from y0 to y1 in time T stay on its side (y >= c)?  Touching
+    within rounding of c counts as staying (pieces ending on v = 0 have y = c exactly)."""
+    return bridge_min(y0, y1, T, tau) >= c - _ADMISSIBLE_RTOL * abs(c)
 
 
 # ----------------------------------------------------------------------------- candidates
@@ -146,7 +146,8 @@ class _Best:
 
     def offer(self, cand, kind, side0, side1, **times):
         cand = np.where(np.isfinite(cand), cand, np.inf)
-        better = cand < self.action
+        margin = np.where(np.isfinite(self.action), 1e-13 * (1.0 + np.abs(self.action)), 0.0)
+        better = cand < self.action - margin
         if not np.any(better):
             return
         self.action = np.where(better, cand, self.action)
@@ -269,16 +270,20 @@ def _solve(fr: _Frame, v, T, v0):
             if not np.any(on):
                 continue
             inf = np.where(on, 0.0, np.inf)  # candidates only for v on side s1
+            # Offered from the simplest kind up; a later kind must be strictly cheaper, so
+            # degenerate ties (e.g. v0 = 0 at a = Delta, where a zero-cost "bump" on v = 0 is
+            # sticking) keep the simpler name.
             if s0 == s1:
                 best.offer(_direct(fr, s0, v0, v, T) + inf, _DIRECT, s0, s1)
-                act, t1, t2 = _twice(fr, s0, v0, v, T)
-                best.offer(act + inf, _TWICE, s0, s1, t_1=t1, t_2=t2)
-            else:
-                act, tx = _crossing(fr, s0, v0, v, T)
-                best.offer(act + inf, _DCROSS, s0, s1, t_cross=tx)
             act, ta, tb = _indirect(fr, s0, s1, v0, v, T)
             kind = np.where((s0 != s1) & (v != 0) & (v0 != 0), _ICROSS, _INDIRECT)
             best.offer(act + inf, kind, s0, s1, t_a=ta, t_b=tb)
+            if s0 != s1:
+                act, tx = _crossing(fr, s0, v0, v, T)
+                best.offer(act + inf, _DCROSS, s0, s1, t_cross=tx)
+            else:
+                act, t1, t2 = _twice(fr, s0, v0, v, T)
+                best.offer(act + inf, _TWICE, s0, s1, t_1=t1, t_2=t2)
     if not np.all(np.isfinite(best.action)):
         raise RuntimeError("no admissible optimal path found (please report: v0=%r, T=%r)"
                            % (v0, T))
@@ -425,15 +430,19 @@ def _w_cr(fr: _Frame, v0, T):
         tc, _, _ = _twice(fr, -1.0, v0, v, T)
         return np.where(np.isinf(tc), -1.0, np.where(np.isinf(d), 1.0, np.sign(d - tc)))
 
-    y_max = (cA + math.sqrt(cA * cA - cB * cB)) * np.exp(np.minimum(T / tau, 700.0))
+    # Actions grow like v^2: beyond |v| ~ 1e150 they overflow, and there w_cr is reported
+    # as -inf (it grows like e^{t/tau_m}; that happens for t > ~340 tau_m).
+    y_max = (cA + math.sqrt(cA * cA - cB * cB)) * np.exp(np.minimum(T / tau, 340.0))
     lo = np.zeros(T.shape)
     hi = np.log1p(y_max / cA)
     found = sign(lo) > 0
+    beyond = sign(hi) > 0
     for _ in range(80):  # 2^-80 of the bracket: below double precision
         mid = 0.5 * (lo + hi)
         up = sign(mid) > 0
         lo, hi = np.where(up, mid, lo), np.where(up, hi, mid)
-    return np.where(found, -cA * np.expm1(0.5 * (lo + hi)), np.nan)
+    root = np.where(beyond, -np.inf, -cA * np.expm1(0.5 * (lo + hi)))
+    return np.where(found, root, np.nan)
 
 
 def boundaries(model: Model, t, v0, t0=0.0):
@@ -475,7 +484,10 @@ def boundaries(model: Model, t, v0, t0=0.0):
             E, Ei = np.exp(tt), np.exp(-tt)
             # eq. dpm, lower root, written without cancellation for large t
             root = np.sqrt(np.maximum((y0 * y0 - c0 * c0) * -np.expm1(-2.0 * tt), 0.0))
-            w_mag = (y0 * y0 * Ei + c0 * c0 * (E - Ei)) / (y0 + root) - c0
+            if y0 > 0:
+                w_mag = (y0 * y0 * Ei + c0 * c0 * (E - Ei)) / (y0 + root) - c0
+            else:  # v0 = 0 with a = +-Delta: the indirect region on that side is {0}
+                w_mag = np.zeros(T.shape)
             w = np.where(after, s0 * fr.flip * w_mag, np.nan)
             ratio = c0 / y0 if y0 > 0 else 1.0
             u_mag = c1 * (E * ratio - 1.0)  # eq. vc_b

@@ -39,7 +39,7 @@ def ou_action(y0, y1, T, tau):
     """
     T = np.asarray(T, dtype=float)
     e = _e(T, tau)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         return (y1 - y0 * e) ** 2 / (2.0 * tau * -np.expm1(-2.0 * T / tau))
 
 
@@ -68,21 +68,23 @@ def bridge(y0, y1, T, tau, s):
 def bridge_min(y0, y1, T, tau):
     """Minimum of the basic solution over ``[0, T]`` (vectorised).
 
-    ``y = P e^{s/tau} + Q e^{-s/tau}`` with ``P = (y1 - y0 e) e/(1 - e^2)`` (times ``e^{-T/tau}``
-    scaling absorbed) and ``Q = (y0 - y1 e)/(1 - e^2)``; an interior minimum exists iff
+    ``y = P e^{s/tau} + Q e^{-s/tau}`` with ``P = (y1 - y0 e) e/(1 - e^2)`` and
+    ``Q = (y0 - y1 e)/(1 - e^2)``, ``e = e^{-T/tau}``; an interior minimum exists iff
     ``P, Q > 0`` and ``0 < s* < T`` with ``e^{2 s*/tau} = Q/P``, and equals ``2 sqrt(P Q)``.
+    Written with ``sqrt(e) = e^{-T/(2 tau)}`` and logarithms so that nothing underflows to a
+    wrong verdict when ``e`` itself is below the double range (``T > 745 tau``).
     """
     y0, y1, T = np.broadcast_arrays(np.asarray(y0, float), np.asarray(y1, float),
                                     np.asarray(T, float))
     e = _e(T, tau)
     one = -np.expm1(-2.0 * T / tau)
-    p = (y1 - y0 * e) * e / one
-    q = (y0 - y1 * e) / one
+    p_ = y1 - y0 * e  # P up to the positive factor e/(1 - e^2)
+    q_ = y0 - y1 * e  # Q up to the positive factor 1/(1 - e^2)
     ends = np.minimum(y0, y1)
     with np.errstate(divide="ignore", invalid="ignore"):
-        s_star = 0.5 * tau * (np.log(q) - np.log(p))
-        interior = (p > 0) & (q > 0) & (s_star > 0) & (s_star < T)
-        inner = 2.0 * np.sqrt(np.where(interior, p * q, 0.0))
+        s_star = 0.5 * tau * (np.log(q_) - np.log(p_) + T / tau)
+        interior = (p_ > 0) & (q_ > 0) & (s_star > 0) & (s_star < T)
+        inner = 2.0 * np.sqrt(np.where(interior, p_ * q_, 0.0)) * np.exp(-0.5 * T / tau) / one
     return np.where(interior, np.minimum(inner, ends), ends)
 
 
