@@ -215,8 +215,8 @@ def fig7_work_paths(axes=None, tau_m=1.0, mass=1.0, delta=1.0, a=0.5,
             p = work_optimal_path(m, w, tau, v0, v, n=600)
             ax.plot(p.s, p.v, color=c, lw=1.8,
                     label=f"$v_0$={v0:g}, v={v:g} ({p.kind}), A/$\\tau$={p.action / tau:.2f}")
-        ax.annotate(f"I(w) = {rate_function(m, w):.2f} (eq. Iw)", (0.02, 0.96),
-                    xycoords="axes fraction", va="top", fontsize=8)
+        ax.annotate(f"I(w) = {rate_function(m, w):.2f} (eq. Iw)", (0.3, 0.3),
+                    xycoords="axes fraction", fontsize=9)
         ax.axhline(w / (mass * a), color="k", ls="--", lw=1, label=f"$\\tilde v_w$ = {w / (mass * a):g}")
         _zero_line(ax)
         ax.set_title(f"Fig. 7({tag}): work-optimal paths, w={w:g}, $\\tau$={tau:g} "
