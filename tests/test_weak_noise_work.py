@@ -232,3 +232,20 @@ def test_small_work_rates_share_time_between_sticking_and_sliding():
     envelope = (w / FIG8.force) * (FIG8.delta - FIG8.a) / FIG8.tau_m
     assert slope == pytest.approx(envelope, rel=1e-3)
     assert slope < rate_function(FIG8, w)
+
+
+@pytest.mark.parametrize("params,w", [
+    (dict(tau_m=1.0, delta=1.0, a=0.5), -0.5),   # stick, time-sharing with v = 0 (free)
+    (dict(tau_m=1.0, delta=0.5, a=1.0), -0.5),   # slip, time-sharing with a held v = 0
+    (dict(tau_m=1.0, delta=1.0, a=0.5), 2.0),    # one half plane, eq. Iw itself
+])
+def test_long_time_limit_agrees_with_the_convex_envelope_of_work_statistics(params, w):
+    """Independent route (another module, derived from the envelope of the holding cost):
+    fit A(tau) = I tau + C + D/tau at tau = 20, 40, 80 and compare I."""
+    from analogue.theory.work_statistics import weak_noise_limit_rate_function
+
+    m = Model(gamma=10.0, **params)
+    taus = np.array([20.0, 40.0, 80.0])
+    A = np.array([work_optimal_path(m, w, t, 1.0, 1.0, n=10).action for t in taus])
+    I = np.linalg.solve(np.stack([taus, np.ones(3), 1 / taus], axis=1), A)[0]
+    assert I == pytest.approx(weak_noise_limit_rate_function(m, w), rel=2e-4)
