@@ -354,3 +354,49 @@ def test_bad_input_raises_value_error_naming_parameter():
         wn.boundaries(STICK, np.array([1.0, -1.0]), 0.5)
     with pytest.raises(ValueError, match="sign must be"):
         wn.Lambda(0, 0.1, 1.0, 0.5, 0.0, STICK)
+
+
+def test_propagator_piecewise_form_sol3_and_stationary_switching_times():
+    """eq. sol3 (a > Delta, v0 < 0): Lambda_- below w_cr, the three-piece eq. Adc between w_cr
+    and 0, the direct crossing eq. Adirx above 0.  The switching times from optimal_path make
+    eqs. Adc / Adirx stationary (finite differences), independently of how they were found."""
+    m, v0, t = SLIP, -1.0, 2.0
+    v = np.linspace(-3.0, 3.0, 241)
+    f = wn.propagator(m, v, t, v0)
+    x = wn.boundaries(m, t, v0)["w_cr"]
+    L = wn.Lambda
+
+    def adc(y, t1, t2):
+        return L(-1, 0.0, t1, v0, 0.0, m) + L(1, 0.0, t2, 0.0, t1, m) + L(-1, y, t, 0.0, t2, m)
+
+    def adirx(y, tx):
+        return L(-1, 0.0, tx, v0, 0.0, m) + L(1, y, t, 0.0, tx, m)
+
+    def stationary(g, d):
+        # at a stationary point the central difference (O(d^2)) is much smaller than the
+        # one-sided one (O(d)); elsewhere both are the derivative
+        central = (g(d) - g(-d)) / (2 * d)
+        one_sided = (g(d) - g(0.0)) / d
+        return abs(central) <= 0.01 * abs(one_sided) + 1e-12
+
+    acts = np.empty_like(v)
+    for i, y in enumerate(v):
+        if y <= x:
+            acts[i] = L(-1, y, t, v0, 0.0, m)
+        elif y < 0:
+            p = wn.optimal_path(m, y, t, v0, n=2)
+            assert p.kind == "twice-crossing" and 0 < p.t_1 < p.t_2 < t
+            acts[i] = adc(y, p.t_1, p.t_2)
+            d = 1e-3 * min(p.t_1, p.t_2 - p.t_1, t - p.t_2)
+            assert stationary(lambda e: adc(y, p.t_1 + e, p.t_2), d)
+            assert stationary(lambda e: adc(y, p.t_1, p.t_2 + e), d)
+            assert not stationary(lambda e: adc(y, 0.9 * p.t_1 + e, p.t_2), d)  # the test bites
+        else:
+            tx = wn.crossing_time(m, y, t, v0) if y > 0 else wn.optimal_path(m, y, t, v0).t_cross
+            if math.isnan(tx):  # y = 0: the lower piece has zero length
+                acts[i] = wn.action(m, y, t, v0)
+                continue
+            acts[i] = adirx(y, tx)
+            assert stationary(lambda e: adirx(y, tx + e), 1e-3 * min(tx, t - tx))
+    ref = np.exp(-m.gamma * (acts - acts.min()))
+    assert np.allclose(f, ref / trapezoid(ref, v), rtol=1e-8, atol=1e-300)
