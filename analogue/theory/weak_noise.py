@@ -206,7 +206,8 @@ def _indirect(fr: _Frame, sigma0, sigma1, v0, v, T):
     ta = fr.stick_time(sigma0, abs(v0))
     tb = T - fr.stick_time(sigma1, np.abs(v))
     ok = ta <= tb + 1e-12 * T
-    return np.where(ok, fr.potential(v), np.inf), np.where(ok, ta, np.nan), np.where(ok, tb, np.nan)
+    act = np.where(ok, fr.potential(v), np.inf)
+    return act, np.where(ok, ta, np.nan), np.where(ok, tb, np.nan)
 
 
 def _twice(fr: _Frame, sigma, v0, v, T):
@@ -391,7 +392,8 @@ def optimal_path(model: Model, v, t, v0, t0=0.0, n=400) -> OptimalPath:
         inside = (s >= start) & (s <= end)
         if end <= start:
             return inside, np.zeros_like(s)
-        y = bridge(speed0 + c, speed1 + c, end - start, fr.tau, np.clip(s - start, 0.0, end - start))
+        dur = end - start
+        y = bridge(speed0 + c, speed1 + c, dur, fr.tau, np.clip(s - start, 0.0, dur))
         return inside, sigma * np.maximum(y - c, 0.0)
 
     path = np.zeros_like(s)
