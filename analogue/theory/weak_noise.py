@@ -458,7 +458,9 @@ def boundaries(model: Model, t, v0, t0=0.0):
       indirect crossing paths: between u and 0 the indirect crossing path wins.  Only for
       ``|a| <= Delta`` and ``t >= t_a``.
     * ``"w_cr"``: eq. cond3 (numerical), for ``|a| > Delta`` and v0 on the side opposite to the
-      attractor: between w_cr and 0 the twice-crossing path beats the direct one.
+      attractor: between w_cr and 0 the twice-crossing path beats the direct one.  It grows
+      like ``e^{t/tau_m}``; once the two actions (~ v^2) agree to rounding the root is found
+      to that precision, and beyond ``|v| ~ 1e150`` (t > ~340 tau_m) it is ``-inf``.
 
     NaN where a boundary does not apply.  ``v0 = 0`` is taken as the limit ``v0 -> 0+`` (then
     w and u are the upper and lower edges of the indirect region).  Each formula agrees with
