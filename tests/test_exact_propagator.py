@@ -95,6 +95,11 @@ def test_routes_agree():
     ph = propagate(m, g, p0, t, method="hybrid")
     assert np.abs(pe - px).max() < 1e-8 * px.max()
     assert np.abs(ph - px).max() < 1e-10 * px.max()
+    # unsorted times give the same rows
+    order = [2, 0, 1]
+    for method in ("eigen", "expm", "hybrid"):
+        shuffled = propagate(m, g, p0, t[order], method=method)
+        assert np.abs(shuffled - pe[order]).max() < 1e-8 * px.max()
 
 
 def test_reflection_symmetry_and_shapes():

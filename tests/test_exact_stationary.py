@@ -235,3 +235,20 @@ def test_bad_input_names_the_parameter():
         half_line_moments(m, "bogus")
     with pytest.raises(ValueError, match="epsilon"):
         half_line_moments(m.replace(epsilon=0.1), "closed")
+
+
+def test_partial_spectrum_branch_matches_full(monkeypatch):
+    """Large grids (small epsilon) use only the slowest modes plus a bounded remainder; on a
+    normal grid, forcing that branch must reproduce the full spectral sum."""
+    from analogue.theory import stationary
+    from analogue.theory.exact_grid import resolved_grid
+    m = Model(1.0, 0.7, 0.2, 10.0, epsilon=0.05)
+    g = resolved_grid(m)
+    lags = np.array([0.0, 0.05, 0.3, 1.0])
+    full = stationary._autocorrelation_on_grid(m, g, lags)
+    monkeypatch.setattr(stationary, "_FULL_SPECTRUM_NODES", 100)
+    monkeypatch.setattr(stationary, "_PARTIAL_MODES", 150)
+    part = stationary._autocorrelation_on_grid(m, g, lags)
+    assert part == pytest.approx(full, rel=1e-9)
+    monkeypatch.setattr(stationary, "_PARTIAL_MODES", 5)  # forces the expm fallback at small lags
+    assert stationary._autocorrelation_on_grid(m, g, lags) == pytest.approx(full, rel=1e-8)

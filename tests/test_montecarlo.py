@@ -25,6 +25,8 @@ def test_same_seed_identical_different_seed_different():
     assert not np.array_equal(e1.v, e3.v)
     assert e1.meta["source"] == "sde" and e1.meta["seed"] == 7 and e1.meta["dt"] == 0.005
     assert e1.meta["scheme"] == "exponential" and e1.meta["model"] == m.as_dict()
+    em = simulate_sde(m, seed=7, scheme="euler-maruyama", **kw)
+    assert em.meta["scheme"] == "euler" and np.array_equal(em.v, simulate_sde(m, seed=7, scheme="euler", **kw).v)
 
 
 @pytest.mark.parametrize("scheme", ["exponential", "euler"])

@@ -179,7 +179,8 @@ def _halves_quad(model: Model) -> _Halves:
     for side, sgn in (("p", 1.0), ("m", -1.0)):
         # Most probable point of this half line: the mode if it lies there, else v = 0.
         r = c if sgn * c > 0 else 0.0
-        slope = abs(float(-model.drift(r))) if r == 0.0 else 0.0
+        # one-sided |U'(0)| on this half line (the sgn law has a kink there)
+        slope = abs((sgn * model.delta if eps == 0 else 0.0) - model.a) if r == 0.0 else 0.0
         scales = [width] + ([eps] if eps > 0 else []) + ([1.0 / (g * slope)] if slope > 0 else [])
         small = min(scales)
         # U'' >= 1/tau_m and r minimises U on the half line => integrand <= exp(-(v-r)^2/(2 s^2)).
@@ -272,32 +273,49 @@ def diffusion_coefficient(model: Model, h: float | None = None, richardson: bool
     return (4.0 * d_fine - _diffusion_on_grid(model, coarse)) / 3.0
 
 
+_FULL_SPECTRUM_NODES = 6000
+_PARTIAL_MODES = 300
+
+
 def _autocorrelation_on_grid(model: Model, grid: Grid, lags: np.ndarray) -> np.ndarray:
     diag, off, lp, pi = _grid_pieces(model, grid)
     v = grid.v
     y = (v - np.dot(v, pi)) * np.sqrt(pi)
-    if grid.n <= 6000:
+    total = float(y @ y)  # C(0): the grid variance
+    if grid.n <= _FULL_SPECTRUM_NODES:
         lam, q = eigh_tridiagonal(diag, off)
         lam = np.minimum(lam, 0.0)
         w = (q.T @ y) ** 2
         return np.exp(np.outer(lags, lam)) @ w
-    # Large grids: propagate dv*pi with expm_multiply and project on dv.
-    gen = generator(model, grid).tocsc()
-    order = np.argsort(lags)
-    out = np.empty(lags.size)
-    p, t_prev = (v - np.dot(v, pi)) * pi, 0.0
-    for k in order:
-        if lags[k] > t_prev:
-            p = expm_multiply(gen * (lags[k] - t_prev), p)
-            t_prev = lags[k]
-        out[k] = np.dot(v - np.dot(v, pi), p)
+    # Large grids (small epsilon): only the slowest modes.  The weights are >= 0 and sum to
+    # C(0), so the omitted modes contribute between 0 and rest * e^{lambda_cut t}; take the
+    # midpoint, and fall back to expm_multiply where that bound is not negligible.
+    k = min(grid.n, _PARTIAL_MODES)
+    lam, q = eigh_tridiagonal(diag, off, select="i", select_range=(grid.n - k, grid.n - 1),
+                              lapack_driver="stemr")
+    lam = np.minimum(lam, 0.0)
+    w = (q.T @ y) ** 2
+    rest = max(total - float(w.sum()), 0.0)
+    half_bound = 0.5 * rest * np.exp(lam.min() * lags)
+    out = np.exp(np.outer(lags, lam)) @ w + half_bound
+    out[lags == 0] = total
+    todo = np.flatnonzero((half_bound > 1e-9 * total) & (lags > 0))
+    if todo.size:
+        gen = generator(model, grid).tocsc()
+        dv = v - np.dot(v, pi)
+        for i in todo:
+            out[i] = float(dv @ expm_multiply(gen * lags[i], dv * pi))
     return out
 
 
 def autocorrelation(model: Model, lags, h: float | None = None, richardson: bool = True) -> np.ndarray:
     """Connected stationary velocity autocorrelation ``C(t) = <v(0) v(t)> - <v>^2`` at ``|lags|``
     (C is even in the lag; C(0) is the variance).  Spectral sum on the FP grid, Richardson
-    extrapolated over (h, h/2) unless ``richardson=False``."""
+    extrapolated over (h, h/2) unless ``richardson=False``.  Accuracy at the default grid:
+    ~1e-9 relative for Delta = 0 (OU closed form), C(0) equals the quadrature variance to
+    < 2e-6 relative (tests).  For grids over 6000 nodes (small epsilon) only the 300 slowest
+    modes are computed; the rest of the spectral weight (known: the weights sum to C(0)) is
+    bounded and, for lags where that bound exceeds 1e-9 C(0), ``expm_multiply`` is used."""
     _check_model(model)
     _check_h(h)
     try:
