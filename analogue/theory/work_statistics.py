@@ -2,14 +2,17 @@
 stationary state: scaled cumulant generating function, rate function, finite-tau density, and
 the weak-noise limit that settles the paper's open question about the jump of I(w) at w = 0.
 
-Numerics.  The Fokker-Planck operator is discretised by the exponentially fitted
-(Scharfetter-Gummel) scheme of :mod:`analogue.theory.fokker_planck`; its symmetrised form S_0
-has the exact stationary law as ground state.  The tilted operator ``S_k = S_0 + k F diag(v)``
-generates ``E exp(k W)``.  Away from its stationary region the scheme resolves the drift only
-when ``x = gamma h |U'|`` is small (its effective Schroedinger potential grows like |x|/h
-instead of gamma U'^2/4 for large x), so the spacing is chosen from the largest |U'| in the
-velocity window the tilted eigenvector can visit, and the O(h^2) error is removed by Richardson
-extrapolation between h and h/2 (the h/2 grid contains the h grid).
+Numerics.  The symmetrised tilted generator ``S_k = Pi^{-1/2} (L + k F v) Pi^{1/2}`` is the
+Schroedinger operator ``(1/gamma) d^2/dv^2 - gamma U'^2/4 + U''/2 + k F v``, discretised on a
+uniform grid with v = 0 on a node (:func:`tilted_operator`): pointwise potential away from the
+kink, exact discrete ground-state transform near it (so the delta function in U'' of the sgn
+law and the stuck state are exact).  The exponentially fitted Scharfetter-Gummel form of
+:mod:`analogue.theory.fokker_planck` was tried first: it resolves a tilted ground state at
+velocity v only if ``gamma h |U'(v)| << 1`` (its effective potential grows like |U'|/h instead
+of gamma U'^2/4), which at gamma = 100 already gave eigenvalue errors of order 1 for moderate
+tilts and picked the wrong (sliding instead of stuck) state near the time-sharing crossover.
+The O(h^2) error is removed by Richardson extrapolation between h and h/2 (the h/2 grid
+contains the h grid).
 
 Weak-noise limit (answer to the open question of Section V).  Write the symmetrised generator as
 a Schroedinger operator, ``S_k = (1/gamma) d^2/dv^2 - gamma U'^2/4 + U''/2 + k F v``.  With
@@ -47,13 +50,13 @@ import numpy as np
 from scipy import integrate, linalg, optimize
 
 from ..model import Model
-from .fokker_planck import Grid, symmetric_generator
+from .fokker_planck import Grid
 
 __all__ = ["scgf", "scgf_derivative", "rate_function", "work_pdf", "work_rate_mean",
-           "paper_rate_function", "weak_noise_limit_rate_function", "tilted_grid_spacing"]
+           "paper_rate_function", "weak_noise_limit_rate_function", "tilted_grid_spacing",
+           "tilted_operator"]
 
 _TAIL = 40.0           # ground states are resolved down to exp(-TAIL) in probability
-_X_MAX = 0.5           # largest gamma h |U'| in the window the eigenvector can visit
 _PPW = 20.0            # minimum nodes per stationary width sqrt(tau_m/gamma)
 _MAX_NODES = 2_000_000
 
@@ -96,24 +99,52 @@ def _tilt_centres(model: Model, k) -> np.ndarray:
     return np.concatenate([base - tm * model.delta, base + tm * model.delta, [0.0, model.attractor]])
 
 
-def tilted_grid_spacing(model: Model, velocities) -> float:
-    """Node spacing h resolving tilted ground states centred anywhere in ``velocities``.
+def tilted_grid_spacing(model: Model, velocities=()) -> float:
+    """Node spacing h for the tilted operator (see :func:`tilted_operator`).
 
-    Requires ``gamma h |U'| <= 0.5`` over the hull of the velocities (plus 4 widths), at least
-    20 nodes per stationary width ``sqrt(tau_m/gamma)`` and ``h <= epsilon/8``.
+    At least 20 nodes per stationary width ``sqrt(tau_m/gamma)`` (the width of every tilted
+    ground state away from v = 0), ``gamma h (Delta + |a|) <= 0.1`` so that the stuck state at
+    v = 0 (decay lengths ``2/(gamma |Delta -+ a|)``) is resolved, and ``h <= epsilon/8``.
+    ``velocities`` is accepted for API stability; the spacing does not depend on the tilt.
     """
     model = _check_model(model)
-    vel = _finite_array("velocities", velocities)
-    width = model.velocity_scale
-    lo = min(float(vel.min(initial=0.0)), 0.0) - 4 * width
-    hi = max(float(vel.max(initial=0.0)), 0.0) + 4 * width
-    umax = float(np.max(np.abs(model.drift(np.array([lo, hi])))))
-    h = width / _PPW
-    if umax > 0:
-        h = min(h, _X_MAX / (model.gamma * umax))
+    _finite_array("velocities", velocities)
+    h = model.velocity_scale / _PPW
+    if model.delta > 0:
+        h = min(h, 0.1 / (model.gamma * (model.delta + abs(model.a))))
     if model.epsilon > 0:
         h = min(h, model.epsilon / 8.0)
     return h
+
+
+def tilted_operator(model: Model, grid: Grid, k: float = 0.0):
+    """``(diag, off)`` of the symmetric tridiagonal discretisation of the tilted generator
+    ``S_k = (1/gamma) d^2/dv^2 - V(v) + k F v``, ``V = gamma U'^2/4 - U''/2`` (ground-state
+    transform of the Fokker-Planck operator, detailed balance).
+
+    Far from v = 0, V is evaluated pointwise (central differences: O(h^2) relative to the
+    ground-state width, whatever the tilt; the Scharfetter-Gummel form would need
+    ``gamma h |U'| << 1``, prohibitive for large tilts).  Within ``|v| <= tau_m (Delta + |a|)``
+    V is the exact discrete ground-state transform of ``exp(-gamma U/2)``,
+    ``V_i = (1/(gamma h^2)) sum_{+-} (exp(-gamma (U_{i+-1} - U_i)/2) - 1)``, which carries the
+    delta function of ``U''`` at the kink of the sgn law (eq. U_pot) exactly: the stationary
+    state and the stuck state are exact there.
+    """
+    v = grid.v
+    h, g, tm = grid.h, model.gamma, model.tau_m
+    up = -model.drift(v)
+    if model.epsilon > 0:
+        upp = 1.0 / tm + model.delta / model.epsilon / np.cosh(np.clip(v / model.epsilon, -300, 300)) ** 2
+    else:
+        upp = np.full_like(v, 1.0 / tm)
+    V = 0.25 * g * up * up - 0.5 * upp
+    if model.delta > 0:
+        u = g * model.potential(v)
+        near = np.flatnonzero(np.abs(v) <= tm * (model.delta + abs(model.a)))
+        near = near[(near > 0) & (near < grid.n - 1)]
+        V[near] = (np.expm1(-0.5 * (u[near + 1] - u[near])) + np.expm1(-0.5 * (u[near - 1] - u[near]))) / (g * h * h)
+    c = 1.0 / (g * h * h)
+    return -2.0 * c - V + k * model.force * v, np.full(grid.n - 1, c)
 
 
 def _grid_for(model: Model, k: float, h: float, extra=()) -> Grid:
@@ -130,9 +161,9 @@ def _grid_for(model: Model, k: float, h: float, extra=()) -> Grid:
 # ------------------------------------------------------------------ principal eigenpair
 def _principal(model: Model, k: float, grid: Grid):
     """Principal eigenvalue and Hellmann-Feynman derivative ``F <phi| v |phi>``."""
-    d, e, _ = symmetric_generator(model, grid)
+    d, e = tilted_operator(model, grid, k)
     v = grid.v
-    lam, vec = linalg.eigh_tridiagonal(d + k * model.force * v, e, select="i",
+    lam, vec = linalg.eigh_tridiagonal(d, e, select="i",
                                        select_range=(grid.n - 1, grid.n - 1))
     phi = vec[:, 0]
     return float(lam[0]), model.force * float(np.dot(phi * phi, v))
@@ -147,7 +178,8 @@ def _scgf_pair(model: Model, k: float, h: float, check: bool = True):
     lam = (4.0 * l2 - l1) / 3.0
     der = (4.0 * d2 - d1) / 3.0
     if check:
-        scale = max(1.0, abs(lam))
+        # natural eigenvalue scale: the Schroedinger potential gamma U'^2/4 near the attractor
+        scale = max(1.0, abs(lam), 1e-2 * model.gamma * (model.delta + abs(model.a)) ** 2)
         if abs(l2 - l1) > 0.05 * scale:
             warnings.warn(f"scgf at k={k:g} not converged in h (h={h:g}: {l1:g}, h/2: {l2:g}); "
                           "pass a smaller h", RuntimeWarning, stacklevel=3)
@@ -216,7 +248,8 @@ def _legendre_root(model: Model, w: float, h: float, mean: float):
     else:  # pragma: no cover - lambda' is unbounded, so this cannot happen on a valid grid
         raise RuntimeError(f"could not bracket the Legendre root for w={w:g}")
     a, b = (lo, hi) if lo < hi else (hi, lo)
-    k = optimize.brentq(f, a, b, xtol=1e-13 * max(1.0, abs(b)), rtol=1e-15, maxiter=200)
+    # I = k w - lambda(k) is stationary in k at the root: k to 1e-9 gives I to ~1e-18.
+    k = optimize.brentq(f, a, b, xtol=1e-9 * max(1.0, abs(b)), rtol=1e-12, maxiter=200)
     return k, _scgf_pair(model, k, h)[0]
 
 
@@ -287,7 +320,7 @@ def weak_noise_limit_rate_function(model: Model, w):
 
 
 # ------------------------------------------------------------------ finite-tau density
-def work_pdf(model: Model, w, tau, *, h: float | None = None, modes: int = 64):
+def work_pdf(model: Model, w, tau, *, h: float | None = None, modes: int = 48):
     """Exact density of the work rate ``w = W_tau/tau`` at finite tau in the stationary state.
 
     ``G(k) = E e^{kW} = <sqrt(pi)| exp(tau S_k) |sqrt(pi)>`` (sqrt(pi) the normalised discrete
@@ -322,15 +355,16 @@ class _Reduced:
     """``S_k`` restricted to the top eigenvectors of ``S_{k0}`` on one grid."""
 
     def __init__(self, model: Model, k0: float, grid: Grid, modes: int):
-        d, e, log_pi = symmetric_generator(model, grid)
+        d0, e = tilted_operator(model, grid, 0.0)
         v = grid.v
         n = grid.n
         m = min(modes, n)
-        mu, phi = linalg.eigh_tridiagonal(d + k0 * model.force * v, e, select="i",
+        # Discrete ground state of S_0 (sqrt(pi) up to O(h^2)); its eigenvalue (0 up to O(h^2))
+        # is subtracted so that G(0) = 1 exactly.
+        lam0, s = linalg.eigh_tridiagonal(d0, e, select="i", select_range=(n - 1, n - 1))
+        s = s[:, 0]
+        mu, phi = linalg.eigh_tridiagonal(d0 - lam0[0] + k0 * model.force * v, e, select="i",
                                           select_range=(n - m, n - 1))
-        # Normalised discrete ground state of S_0 (exactly sqrt(pi) of the SG scheme).
-        s = np.exp(0.5 * (log_pi - log_pi.max()))
-        s /= np.linalg.norm(s)
         self.c = phi.T @ s
         self.captured = float(self.c @ self.c)
         self.mu = mu
@@ -408,11 +442,11 @@ def _log_work_density(model, w, tau, grid, modes, k0):
     chunks = []
     start = 0
     while True:
-        y = dy * np.arange(start, start + 32)
+        y = dy * np.arange(start, start + 16)
         f = np.exp(red.log_g_complex(ks + 1j * y, tau, shift) - 1j * y * W + tau * shift - K)
         chunks.append(f)
-        start += 32
-        if np.max(np.abs(f[-8:])) < 1e-13 or y[-1] > 40.0 * sy:
+        start += 16
+        if np.max(np.abs(f[-4:])) < 1e-13 or y[-1] > 40.0 * sy:
             break
     f = np.concatenate(chunks)
     integral = dy * (0.5 * f[0].real + f[1:].real.sum())
