@@ -172,7 +172,7 @@ def _halves_sgn(model: Model) -> _Halves:
 def _halves_quad(model: Model) -> _Halves:
     """Quadrature on each half line; valid for both laws (used for epsilon > 0, and as an
     independent check of the closed forms for epsilon = 0)."""
-    g, tau, eps = model.gamma, model.tau_m, model.epsilon
+    g, eps = model.gamma, model.epsilon
     width = model.velocity_scale
     c = model.potential_minimum()
     out = {}
