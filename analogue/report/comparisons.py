@@ -13,13 +13,19 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..circuit.mapping import map_model
+from ..theory.exact import sample_stationary
 from .budget import SE_MULTIPLIER, held_noise_pair
 from .metrics import Budget, Comparison, compare
 from .observables import (exact_stationary, exact_transition, jackknife, jackknife_difference,
                           stationary_values, subset, transition_values, weak_noise_transition)
 from .runs import ExperimentRuns
 
-__all__ = ["ExperimentAnalysis", "analyse"]
+__all__ = ["ExperimentAnalysis", "analyse", "MC_REPLICAS", "MC_STATIONARY_REPLICAS"]
+
+# Held/white Monte Carlo pairs are cheap (numpy); enough replicas that the bandwidth estimate
+# is not dominated by its own noise (threshold observables change by whole paths).
+MC_REPLICAS = 1024
+MC_STATIONARY_REPLICAS = 256
 
 
 @dataclass
@@ -58,6 +64,8 @@ def analyse(runs: ExperimentRuns, *, progress=None) -> ExperimentAnalysis:
     model_eff = mapping.model_effective
     noise_dt = mapping.noise_dt
     res = ExperimentAnalysis(runs)
+    # one Fokker-Planck spacing for the ideal and the smoothed model (see exact_transition)
+    h = model_eff.epsilon / 2 if model_eff.epsilon > 0 else None
     tick = progress or (lambda *_: None)
 
     # ---------------------------------------------------------------- transition runs
@@ -69,9 +77,9 @@ def analyse(runs: ExperimentRuns, *, progress=None) -> ExperimentAnalysis:
         circ = jackknife(fn, ens)
         n = ens.replicas
         circ = {k: (v, _prob_floor(k, v, se, n)) for k, (v, se) in circ.items()}
-        ex = exact_transition(model, v0, times)
-        ex_eff = exact_transition(model_eff, v0, times)
-        held, white = held_noise_pair(model_eff, v0=v0, t_end=max(times), replicas=st.check_replicas,
+        ex = exact_transition(model, v0, times, h=h)
+        ex_eff = exact_transition(model_eff, v0, times, h=h)
+        held, white = held_noise_pair(model_eff, v0=v0, t_end=max(times), replicas=MC_REPLICAS,
                                       seed=exp.seed + 17 * i, noise_dt=noise_dt,
                                       sample_dt=exp.sample_dt)
         band = jackknife_difference(fn, held, white)
@@ -105,9 +113,9 @@ def analyse(runs: ExperimentRuns, *, progress=None) -> ExperimentAnalysis:
     fn = lambda e: stationary_values(e, burn_in=st.stationary_burn_in, threshold=thr,
                                      force=model.force, taus=taus)
     circ = jackknife(fn, ens)
-    ex = exact_stationary(model, threshold=thr, taus=taus)
-    ex_eff = exact_stationary(model_eff, threshold=thr, taus=taus)
-    v0_mc = ens.v[: st.check_replicas, 0]
+    ex = exact_stationary(model, threshold=thr, taus=taus, h=h)
+    ex_eff = exact_stationary(model_eff, threshold=thr, taus=taus, h=h)
+    v0_mc = sample_stationary(model_eff, MC_STATIONARY_REPLICAS, exp.seed + 103)
     tick(f"{exp.name}: held-noise Monte Carlo pair")
     held, white = held_noise_pair(model_eff, v0=v0_mc, t_end=st.stationary_t_end,
                                   replicas=v0_mc.size, seed=exp.seed + 101, noise_dt=noise_dt,

@@ -118,11 +118,14 @@ def _moments(v, f):
     return mean, var, neg
 
 
-def exact_transition(model: Model, v0: float, times) -> dict:
-    """Exact finite-noise mean, variance and P(v<0) of f(v, t | v0) (Fokker-Planck)."""
+def exact_transition(model: Model, v0: float, times, h: float | None = None) -> dict:
+    """Exact finite-noise mean, variance and P(v<0) of f(v, t | v0) (Fokker-Planck).
+
+    ``h`` fixes the Fokker-Planck grid spacing: a difference between two models (the smoothing
+    bias) is computed on one common grid so that discretisation errors cancel."""
     from ..theory import exact
     v = velocity_grid(model, [v0])
-    f = np.atleast_2d(exact.propagator(model, v, np.asarray(times, dtype=float), v0))
+    f = np.atleast_2d(exact.propagator(model, v, np.asarray(times, dtype=float), v0, h=h))
     out = {}
     for t, row in zip(times, f):
         m, var, neg = _moments(v, row)
@@ -145,17 +148,17 @@ def weak_noise_transition(model: Model, v0: float, times) -> dict:
     return out
 
 
-def work_variance_exact(model: Model, tau: float, n: int = 801) -> float:
+def work_variance_exact(model: Model, tau: float, n: int = 801, h: float | None = None) -> float:
     """Var(w) = (F/tau)^2 * 2 int_0^tau (tau - s) C(s) ds from the exact autocorrelation C
     (Green-Kubo route, independent of the work density)."""
     from ..theory import exact
     s = np.linspace(0.0, tau, n)
-    c = np.asarray(exact.autocorrelation(model, s), dtype=float)
+    c = np.asarray(exact.autocorrelation(model, s, h=h), dtype=float)
     var_int = 2.0 * integrate.simpson((tau - s) * c, x=s)
     return float((model.force / tau) ** 2 * var_int)
 
 
-def exact_stationary(model: Model, *, threshold: float, taus=()) -> dict:
+def exact_stationary(model: Model, *, threshold: float, taus=(), h: float | None = None) -> dict:
     from ..estimators import stick_fraction_theory
     from ..theory import exact
     m = exact.stationary_moments(model)
@@ -168,5 +171,5 @@ def exact_stationary(model: Model, *, threshold: float, taus=()) -> dict:
     }
     for tau in taus:
         out[sname("mean w", tau)] = model.force * m.mean
-        out[sname("var w", tau)] = work_variance_exact(model, tau)
+        out[sname("var w", tau)] = work_variance_exact(model, tau, h=h)
     return out

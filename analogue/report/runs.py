@@ -73,14 +73,11 @@ class ExperimentRuns:
         }
 
 
-def _tight(spec):
+def _tight(spec, mapping):
     """The same circuit, integrated 100x more tightly with a quarter of the step."""
-    max_step = spec.max_step if spec.max_step is not None else spec.noise_dt
-    changes = {"reltol": spec.reltol / 100, "abstol": spec.abstol / 100,
-               "vntol": spec.vntol / 100}
-    if max_step is not None:
-        changes["max_step"] = max_step / 4
-    return spec.replace(**changes)
+    max_step = spec.max_step if spec.max_step is not None else mapping.noise_dt
+    return spec.replace(reltol=spec.reltol / 100, abstol=spec.abstol / 100,
+                        vntol=mapping.vntol / 100, max_step=max_step / 4)
 
 
 def _check_coupled(nominal: Ensemble, check: Ensemble, what: str) -> None:
@@ -104,7 +101,8 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
     settings = (settings or report_settings(exp)).for_options(opts)
     kw = opts.simulate_kwargs()
     model, spec = exp.model, exp.spec
-    model_eff = map_model(model, spec).model_effective
+    mapping = map_model(model, spec)
+    model_eff = mapping.model_effective
     replicas = opts.scaled(exp.replicas)
     seeds = {"transition": exp.seed, "stationary": exp.seed + 1000, "noise_free": exp.seed + 2000}
 
@@ -125,7 +123,7 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
                           seed=seeds["noise_free"], sample_dt=exp.sample_dt,
                           circuit=spec.replace(**NOISE_FREE_SPEC), **kw)
 
-    tight = _tight(spec)
+    tight = _tight(spec, mapping)
     v00 = exp.v0[0]
     n0 = first_deck_size(replicas)
     check_transition = simulate(model, v0=v00, t_end=exp.t_end, replicas=n0, seed=exp.seed,
