@@ -22,7 +22,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import sparse
 from scipy.linalg import eigh_tridiagonal
 from scipy.special import logsumexp
 from scipy.sparse.linalg import expm_multiply
