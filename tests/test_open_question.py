@@ -101,8 +101,9 @@ def test_exact_rate_approaches_limit_not_paper(stick_rates):
     lim = ws.weak_noise_limit_rate_function(model, w)
     paper = ws.paper_rate_function(model, w)
     e10, e100 = np.abs(rates[10.0] - lim), np.abs(rates[100.0] - lim)
-    # measured exponents: about gamma^-0.6 at w = 0 (stuck state), gamma^-1 elsewhere
-    assert np.all(e100 < 0.5 * e10)
+    # uniform distance (pointwise it may vanish by accident where I_gamma crosses the limit);
+    # measured: 0.060 -> 0.0149 -> 0.0039 for gamma = 10, 100, 1000 (w in [-1, 1])
+    assert np.max(e100) < 0.5 * np.max(e10)
     assert np.max(e100) < 0.02
     # the distance to eq. Iw next to w = 0 does not shrink: it tends to |I_lim - I_paper|
     near = np.abs(w) == 0.05

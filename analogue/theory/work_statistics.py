@@ -99,16 +99,16 @@ def _tilt_centres(model: Model, k) -> np.ndarray:
     return np.concatenate([base - tm * model.delta, base + tm * model.delta, [0.0, model.attractor]])
 
 
-def tilted_grid_spacing(model: Model, velocities=()) -> float:
+def tilted_grid_spacing(model: Model) -> float:
     """Node spacing h for the tilted operator (see :func:`tilted_operator`).
 
     At least 20 nodes per stationary width ``sqrt(tau_m/gamma)`` (the width of every tilted
     ground state away from v = 0), ``gamma h (Delta + |a|) <= 0.1`` so that the stuck state at
     v = 0 (decay lengths ``2/(gamma |Delta -+ a|)``) is resolved, and ``h <= epsilon/8``.
-    ``velocities`` is accepted for API stability; the spacing does not depend on the tilt.
+    The spacing does not depend on the tilt (the grid's extent does, see ``_grid_for``), so
+    every k of a root search sees the same discretisation.
     """
     model = _check_model(model)
-    _finite_array("velocities", velocities)
     h = model.velocity_scale / _PPW
     if model.delta > 0:
         h = min(h, 0.1 / (model.gamma * (model.delta + abs(model.a))))
@@ -208,7 +208,7 @@ def _scgf_and_derivative(model, k, h):
     model = _check_model(model)
     k = _finite_array("k", k)
     if h is None:
-        h = tilted_grid_spacing(model, _tilt_centres(model, k))
+        h = tilted_grid_spacing(model)
     out = np.array([_scgf_pair(model, float(kk), h) for kk in k.ravel()]).reshape(k.shape + (2,))
     return out[..., 0], out[..., 1]
 
@@ -265,9 +265,7 @@ def rate_function(model: Model, w, *, h: float | None = None):
     _force(model)
     w = _finite_array("w", w)
     if h is None:
-        h = tilted_grid_spacing(model, np.concatenate([w.ravel() / model.force, _tilt_centres(model, 0.0),
-                                                       [-model.tau_m * (model.delta + abs(model.a)),
-                                                        model.tau_m * (model.delta + abs(model.a))]]))
+        h = tilted_grid_spacing(model)
     mean = float(_scgf_pair(model, 0.0, h)[1])
     out = np.empty(w.size)
     for i, wi in enumerate(w.ravel()):
@@ -331,7 +329,14 @@ def work_pdf(model: Model, w, tau, *, h: float | None = None, modes: int = 48):
     for this analytic integrand.  ``exp(tau S_k)`` is evaluated in the span of the top
     ``modes`` eigenvectors of ``S_{k0}`` (k0 the SCGF's Legendre point for w), where
     ``S_k = diag(mu) + (k - k0) B`` is a small dense complex-symmetric matrix.  Returns the
-    density of w (``tau`` times the density of W).
+    density of w (``tau`` times the density of W).  The O(h^2) grid error of ln p (which the
+    eigenvalue error enters times tau) is removed by Richardson extrapolation.
+
+    Accuracy measured against the Delta = 0 closed form (gamma = 10): relative 3e-5 at
+    tau = 0.5 and 1e-8 at tau >= 2 down to densities 1e-27; short windows need more modes
+    (at tau = 0.5, 32 modes give 1e-2).  Densities far below 1e-8 at tau < tau_m are not
+    guaranteed.  Cost: two tridiagonal eigen-solves of ``modes`` vectors plus ~16-32 dense
+    complex ``modes x modes`` eigen-decompositions per w and grid.
     """
     model = _check_model(model)
     F = _force(model)
@@ -343,7 +348,7 @@ def work_pdf(model: Model, w, tau, *, h: float | None = None, modes: int = 48):
     if modes < 4:
         raise ValueError(f"modes must be >= 4, got {modes}")
     if h is None:
-        h = tilted_grid_spacing(model, np.concatenate([w.ravel() / F, _tilt_centres(model, 0.0)]))
+        h = tilted_grid_spacing(model)
     mean = float(_scgf_pair(model, 0.0, h, check=False)[1])
     out = np.empty(w.size)
     for i, wi in enumerate(w.ravel()):
