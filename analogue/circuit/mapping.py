@@ -23,6 +23,14 @@ velocity, the held noise lowers the time-averaged stationary variance of an OU p
 relative amount ``TS/(3 tau_m)`` to first order (``bias["noise"]``, with tau_m replaced by the
 faster relaxation time ``gamma std^2`` of the stick peak when that is shorter).
 
+Delta = 0 (no dry friction: the Ornstein-Uhlenbeck process) is built without any Coulomb
+element, whatever ``spec.coulomb`` and ``spec.diode`` say: what an experimentalist does is
+take the bridge out, and a bridge around a zero current source is not "no friction" anyway
+(its diodes' reverse currents leave a friction amplitude of 2 IS and their parallel resistors
+a viscous conductance).  The deck is then the RC circuit with force and noise sources only;
+``kappa`` is ``volts_per_velocity`` or 1 V, ``epsilon = 0`` (the model is exact), and the
+mapping's table says so in its row ``coulomb_elements`` (0).
+
 Bias estimates (``CircuitMapping.bias``; the two enforced ones are refused above
 ``bias_tolerance`` unless ``allow_bias``):
 
@@ -45,7 +53,7 @@ from scipy import special
 
 from ..model import Model
 from . import validation as val
-from .parts import DiodePart, get_part, ideal_diode, thermal_voltage, PARTS
+from .parts import IDEAL_IS, DiodePart, get_part, ideal_diode, thermal_voltage, PARTS
 
 __all__ = ["CircuitSpec", "CircuitMapping", "map_model", "COULOMB_KINDS", "DIODES"]
 
@@ -149,6 +157,8 @@ class CircuitMapping:
     The noise is a voltage ``trrandom`` source on node ``nz`` of standard deviation
     ``noise_stddev`` (V, equal to the held noise in model units) and hold time ``noise_ts``
     (s), converted to a current by a VCCS of transconductance ``noise_gain`` (S).
+    ``coulomb_element`` is None when Delta = 0: the circuit then has no Coulomb element (and
+    ``part``, ``emission`` are None, ``i_delta = 0``, ``eps_volts = epsilon = 0``).
     """
 
     model: Model
@@ -177,6 +187,12 @@ class CircuitMapping:
     bias: dict = field(default_factory=dict)
 
     # ---------------------------------------------------------------- derived
+    @property
+    def coulomb_element(self) -> str | None:
+        """The dry-friction element in the deck: ``spec.coulomb``, or None for Delta = 0
+        (no element at all: the circuit is the Ornstein-Uhlenbeck RC circuit)."""
+        return self.spec.coulomb if self.model.delta > 0 else None
+
     @property
     def smoothing_fraction(self) -> float:
         """epsilon / sqrt(tau_m/gamma) actually realised (0 for the sgn B-source)."""
@@ -244,6 +260,9 @@ class CircuitMapping:
             ("I_Delta", self.i_delta, "A", "Coulomb current source"),
             ("I_Delta_total", self.i_delta_total, "A", "friction amplitude incl. 2 IS; Delta = theta I/(C kappa)"),
             ("I_F", self.i_force, "A", "force current source; a = theta I_F/(C kappa)"),
+            ("coulomb_elements", 0.0 if self.coulomb_element is None else 1.0, "1",
+             "Coulomb elements per replica (0: Delta = 0, no bridge or B-source; the circuit is "
+             "the Ornstein-Uhlenbeck RC circuit)"),
             ("noise_stddev", self.noise_stddev, "V", "trrandom standard deviation (node nz)"),
             ("noise_TS", self.noise_ts, "s", "trrandom hold time"),
             ("noise_gain", self.noise_gain, "S", "VCCS noise volts -> current"),
@@ -258,7 +277,7 @@ class CircuitMapping:
             ("vntol", self.vntol, "V", "ngspice voltage tolerance"),
         ]
         if self.emission is not None:
-            rows.insert(9, ("N", self.emission, "1", "diode emission coefficient"))
+            rows.insert(10, ("N", self.emission, "1", "diode emission coefficient"))
         for key, value in self.bias.items():
             rows.append((f"bias_{key}", value, "1", "estimated relative bias"))
         return rows
@@ -281,7 +300,9 @@ def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
     vs = model.velocity_scale
     eps_target = spec.smoothing * vs
     vt = thermal_voltage()
-    real = spec.coulomb == "diode-bridge" and spec.diode != "ideal"
+    # Delta = 0: no Coulomb element at all (module docstring), so no part and no smoothing.
+    element = spec.coulomb if model.delta > 0 else None
+    real = element == "diode-bridge" and spec.diode != "ideal"
     part = get_part(spec.diode) if real else None
 
     # --- kappa (volts per unit velocity) and the tanh width
@@ -289,11 +310,14 @@ def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
         kappa = spec.volts_per_velocity
     elif real:
         # eps_V = 2 N V_T + RS (I0 + 2 IS) with I0 ~ Delta C kappa/theta; solve eps_V = kappa eps.
-        room = eps_target - part.RS * model.delta * cap / theta
+        rs_width = part.RS * model.delta * cap / theta
+        room = eps_target - rs_width
         if not room > 0:
             raise ValueError(f"smoothing={spec.smoothing} is unreachable with {part.name}: its series "
-                             f"resistance alone gives a width of {part.RS * model.delta * cap / theta:.3g} "
-                             f"velocity units; raise smoothing or lower capacitance/time_scale")
+                             f"resistance alone gives a width of {rs_width:.3g} velocity units "
+                             f"(RS Delta C/theta), above the requested {eps_target:.3g}; lower "
+                             f"the ratio capacitance/time_scale by more than a factor "
+                             f"{rs_width / eps_target:.3g}, raise smoothing, or use diode='ideal'")
         kappa = 2.0 * part.N * vt / room
     else:
         kappa = 1.0
@@ -301,21 +325,27 @@ def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
     i_delta_total = model.delta * ck / theta
     i_force = model.a * ck / theta
 
-    if spec.coulomb == "diode-bridge":
+    if element is None:
+        i_delta, emission, eps_volts = 0.0, None, 0.0
+    elif element == "diode-bridge":
         if real:
             i_delta = i_delta_total - 2.0 * part.IS
-            if not i_delta > 0 and model.delta > 0:
-                raise ValueError(f"Delta={model.delta} needs I_Delta={i_delta_total:.3g} A, below the "
+            if not i_delta > 0:
+                raise ValueError(f"Delta={model.delta} needs I_Delta={i_delta_total:.3g} A, not above the "
                                  f"reverse current 2 IS={2 * part.IS:.3g} A of {part.name}; raise "
-                                 f"capacitance or volts_per_velocity")
+                                 f"capacitance or volts_per_velocity, lower time_scale, use "
+                                 f"diode='ideal', or set Delta=0 (no friction element)")
             emission = part.N
             eps_volts = part.smoothing_volts(i_delta)
         else:
-            i_delta = i_delta_total - 2.0 * 1e-14
-            emission = eps_target * kappa / (2.0 * vt)
-            part = ideal_diode(emission)
+            # The ideal diode's IS is ours to choose: keep 2 IS a negligible part of the
+            # amplitude (so the source current stays positive) even for tiny Delta.
+            part = ideal_diode(eps_target * kappa / (2.0 * vt),
+                               saturation_current=min(IDEAL_IS, 1e-6 * i_delta_total))
+            emission = part.N
+            i_delta = i_delta_total - 2.0 * part.IS
             eps_volts = 2.0 * emission * vt
-    elif spec.coulomb == "behavioural":
+    elif element == "behavioural":
         i_delta, emission, eps_volts = i_delta_total, None, eps_target * kappa
     else:
         i_delta, emission, eps_volts = i_delta_total, None, 0.0
@@ -327,8 +357,9 @@ def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
     g_extra = 2.0 / part.rp if (part is not None and part.rp) else 0.0
     g_r = 1.0 / r_total - g_extra
     if not g_r > 0:
-        raise ValueError(f"tau_m={model.tau_m} needs R={r_total:.3g} ohm, beyond the leakage of "
-                         f"{part.name}; lower capacitance or time_scale")
+        raise ValueError(f"tau_m={model.tau_m} needs R_total={r_total:.3g} ohm (tau_m theta/C), not below "
+                         f"the {part.name} bridge's leakage resistance rp/2={part.rp / 2:.3g} ohm; raise "
+                         f"capacitance or lower time_scale")
     resistance = 1.0 / g_r
 
     # --- noise: node nz carries the held noise in model units (std sqrt(2/(gamma dt)) so that
@@ -373,7 +404,7 @@ def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
         model=model, spec=spec, theta=theta, capacitance=cap, kappa=kappa,
         resistance=resistance, r_total=r_total, i_delta=i_delta, i_delta_total=i_delta_total,
         i_force=i_force, noise_stddev=noise_stddev, noise_ts=noise_ts, noise_gain=noise_gain,
-        noise_D=noise_D, part=part if spec.coulomb == "diode-bridge" else None, emission=emission,
+        noise_D=noise_D, part=part if element == "diode-bridge" else None, emission=emission,
         eps_volts=eps_volts, epsilon=epsilon, cap_x=cap_x, g_x=g_x,
         x_volts_per_unit=x_volts_per_unit, voltage_swing=voltage_swing,
         model_effective=model_eff, bias=bias)
@@ -473,7 +504,7 @@ def _check_bias(m: CircuitMapping) -> None:
     if spec.allow_bias:
         return
     tol = spec.bias_tolerance
-    if spec.coulomb == "behavioural-sgn":
+    if m.coulomb_element == "behavioural-sgn":
         pass  # exact sgn: no smoothing bias (it is there for comparison only)
     elif m.bias["smoothing"] > tol:
         raise ValueError(

@@ -5,7 +5,8 @@ One replica ``i`` (subcircuit ``replica``, pins ``v<i> x<i> nz<i>``):
 - node ``v<i>`` (voltage = kappa * velocity): ``C`` and ``R`` to ground, the force current
   ``I_F`` into the node, the noise current ``noise_gain * V(nz<i>)`` into the node, and the
   Coulomb element from ``v<i>`` to ground (subcircuit ``bridge``: four diodes around the
-  current source ``I_Delta``, or a B-source ``I_Delta tanh(V/eps_V)`` / ``I_Delta sgn(V)``);
+  current source ``I_Delta``, or a B-source ``I_Delta tanh(V/eps_V)`` / ``I_Delta sgn(V)``;
+  none at all for Delta = 0, see :mod:`analogue.circuit.mapping`);
 - node ``nz<i>``: a ``trrandom`` Gaussian voltage, held for ``TS``, equal to the velocity noise
   in model units (saved: the raw file then holds the very noise that drove the replica, so an
   SDE integrator can be fed the same sequence; it costs one node and no extra breakpoints);
@@ -90,12 +91,13 @@ def replica_subcircuit(mapping: CircuitMapping) -> SubCircuit:
     sub.VCCS("noise", sub.gnd, "v", "nz", sub.gnd, _n(m.noise_gain, "noise_gain"))
     sub.V("noise", "nz", sub.gnd,
           f"dc 0 trrandom(2 {_n(m.noise_ts, 'noise_ts')} 0 {_n(m.noise_stddev, 'noise_stddev')} 0)")
-    if spec.coulomb == "diode-bridge":
+    element = m.coulomb_element
+    if element == "diode-bridge":
         sub.X("coulomb", "bridge", "v")
-    elif spec.coulomb == "behavioural":
+    elif element == "behavioural":
         sub.BehavioralSource("coulomb", "v", sub.gnd, current_expression=(
             f"{_n(m.i_delta, 'I_Delta')}*tanh(V(v)/{_n(m.eps_volts, 'eps_V')})"))
-    else:
+    elif element == "behavioural-sgn":
         sub.BehavioralSource("coulomb", "v", sub.gnd,
                              current_expression=f"{_n(m.i_delta, 'I_Delta')}*sgn(V(v))")
     sub.VCCS("x", sub.gnd, "x", "v", sub.gnd, _n(m.g_x, "g_x"))
@@ -141,15 +143,19 @@ def build_deck(mapping: CircuitMapping, *, replicas: int, v0, t_end: float, seed
     if part is not None and not part.ideal:
         vmax = mapping.kappa * float(np.max(np.abs(v0)))
         if vmax >= part.max_reverse_voltage:
-            raise ValueError(f"v0: |v0| up to {np.max(np.abs(v0)):.3g} means {vmax:.3g} V, at or above the "
-                             f"{part.name} reverse-voltage rating {part.max_reverse_voltage:.3g} V")
+            raise ValueError(f"v0: |v0| up to {np.max(np.abs(v0)):.3g} means {vmax:.3g} V (volts_per_velocity="
+                             f"{mapping.kappa:.3g} V), at or above the {part.name} reverse-voltage rating "
+                             f"{part.max_reverse_voltage:.3g} V; keep |v0| below "
+                             f"{part.max_reverse_voltage / mapping.kappa:.3g}, raise smoothing (a real "
+                             f"diode's kappa is 2 N V_T/(smoothing sqrt(tau_m/gamma))) or use diode='ideal'")
 
     spec, theta = mapping.spec, mapping.theta
     max_step = spec.max_step if spec.max_step is not None else mapping.noise_dt
     max_step = min(max_step, t_end)
 
     circuit = Circuit(title)
-    if spec.coulomb == "diode-bridge":
+    bridge = mapping.coulomb_element == "diode-bridge"
+    if bridge:
         circuit.model(_MODEL_NAME, "D", **{k: _n(v, k) for k, v in part.model})
         circuit.subcircuit(bridge_subcircuit(mapping))
     circuit.subcircuit(replica_subcircuit(mapping))
@@ -159,7 +165,7 @@ def build_deck(mapping: CircuitMapping, *, replicas: int, v0, t_end: float, seed
     lines = [str(circuit).rstrip("\n")]
     volts = mapping.kappa * v0
     ic = [f"v(v{i})={_n(volts[i], 'v0')} v(x{i})=0" for i in range(replicas)]
-    if spec.coulomb == "diode-bridge":
+    if bridge:
         # uic skips the operating point, so the bridge's inner nodes need consistent starting
         # values too (else D1 starts forward biased by the whole of V and the first step fails).
         vp, vn = bridge_node_voltages(part, mapping.i_delta, volts)
@@ -189,13 +195,16 @@ def bridge_dc_deck(mapping: CircuitMapping, v_max: float, points: int = 201) -> 
         raise ValueError(f"mapping must be a CircuitMapping, got {type(mapping).__name__}")
     v_max = val.positive(v_max, "v_max")
     points = _check_int(points, "points", 3, 100_001)
-    spec = mapping.spec
+    element = mapping.coulomb_element
+    if element is None:
+        raise ValueError("mapping has no Coulomb element to sweep (Delta = 0: the circuit is built "
+                         "without one); map a model with Delta > 0")
     circuit = Circuit("bridgedc")
-    if spec.coulomb == "diode-bridge":
+    if element == "diode-bridge":
         circuit.model(_MODEL_NAME, "D", **{k: _n(v, k) for k, v in mapping.part.model})
         circuit.subcircuit(bridge_subcircuit(mapping))
         circuit.X("coulomb", "bridge", "t")
-    elif spec.coulomb == "behavioural":
+    elif element == "behavioural":
         circuit.BehavioralSource("coulomb", "t", circuit.gnd, current_expression=(
             f"{_n(mapping.i_delta)}*tanh(V(t)/{_n(mapping.eps_volts)})"))
     else:

@@ -40,7 +40,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["DiodePart", "PARTS", "ideal_diode", "get_part", "thermal_voltage",
+__all__ = ["DiodePart", "PARTS", "IDEAL_IS", "ideal_diode", "get_part", "thermal_voltage",
            "bridge_current", "bridge_voltage", "REFERENCE_TEMPERATURE"]
 
 # ngspice's physical constants (src/include/ngspice/const.h, CODATA 2014) and its default
@@ -116,16 +116,19 @@ PARTS: dict[str, DiodePart] = {
         rp=3.6e7, max_forward_current=0.2, max_reverse_voltage=30.0),
 }
 
-_IDEAL_IS = 1e-14
+IDEAL_IS = 1e-14  # A: the ideal diode's default saturation current
 
 
-def ideal_diode(emission: float) -> DiodePart:
-    """A Shockley diode with ``RS = 0``, ``CJO = 0``, no breakdown and emission coefficient
-    ``N = emission`` (any N > 0: it only sets the tanh width ``2 N V_T``)."""
+def ideal_diode(emission: float, saturation_current: float = IDEAL_IS) -> DiodePart:
+    """A Shockley diode with ``RS = 0``, ``CJO = 0``, no breakdown, emission coefficient
+    ``N = emission`` (any N > 0: it only sets the tanh width ``2 N V_T``) and
+    ``IS = saturation_current`` (any IS > 0: the bridge amplitude is ``I0 + 2 IS``)."""
     if not (math.isfinite(emission) and emission > 0):
         raise ValueError(f"emission coefficient N must be finite and > 0, got {emission!r}")
+    if not (math.isfinite(saturation_current) and saturation_current > 0):
+        raise ValueError(f"saturation_current IS must be finite and > 0, got {saturation_current!r}")
     return DiodePart(name="ideal", source="ideal Shockley diode (RS=0, CJO=0, no breakdown)",
-                     model=(("IS", _IDEAL_IS), ("N", float(emission))), rp=None,
+                     model=(("IS", float(saturation_current)), ("N", float(emission))), rp=None,
                      max_forward_current=math.inf, max_reverse_voltage=math.inf)
 
 
@@ -135,6 +138,17 @@ def get_part(name: str) -> DiodePart:
         return PARTS[name]
     except (KeyError, TypeError):
         raise ValueError(f"diode must be one of {['ideal', *PARTS]}, got {name!r}") from None
+
+
+def _amplitude(part: DiodePart, i0: float) -> float:
+    """Friction amplitude ``I0 + 2 IS`` of a bridge; the Shockley law needs it > 0 (the diode
+    currents ``(I0 +- I)/2`` must stay above ``-IS``)."""
+    i0 = float(i0)
+    amp = i0 + 2.0 * part.IS
+    if not (math.isfinite(i0) and amp > 0):
+        raise ValueError(f"i0 (bridge current source) must be finite and > -2 IS = {-2.0 * part.IS:.3g} A "
+                         f"for {part.name}, got {i0!r}")
+    return amp
 
 
 def bridge_current(part: DiodePart, i0: float, volts, temperature: float = REFERENCE_TEMPERATURE):
@@ -147,7 +161,7 @@ def bridge_current(part: DiodePart, i0: float, volts, temperature: float = REFER
     parallel resistor ``rp`` and GMIN are not included.
     """
     v = np.asarray(volts, dtype=float)
-    amp = i0 + 2.0 * part.IS
+    amp = _amplitude(part, i0)
     width = 2.0 * part.N * thermal_voltage(temperature)
     if part.RS == 0:
         return amp * np.tanh(v / width)
@@ -164,7 +178,7 @@ def bridge_current(part: DiodePart, i0: float, volts, temperature: float = REFER
 def bridge_voltage(part: DiodePart, i0: float, current, temperature: float = REFERENCE_TEMPERATURE):
     """Inverse of :func:`bridge_current`: ``V = 2 N V_T atanh(I/(I0 + 2 IS)) + RS I``."""
     i = np.asarray(current, dtype=float)
-    amp = i0 + 2.0 * part.IS
+    amp = _amplitude(part, i0)
     width = 2.0 * part.N * thermal_voltage(temperature)
     with np.errstate(divide="ignore"):  # |I| = amplitude maps to |V| = inf, as it should
         return width * np.arctanh(np.clip(i / amp, -1.0, 1.0)) + part.RS * i
