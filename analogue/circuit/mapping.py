@@ -49,7 +49,7 @@ import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from scipy import special
+from scipy import optimize, special
 
 from ..model import Model
 from . import validation as val
@@ -60,10 +60,13 @@ __all__ = ["CircuitSpec", "CircuitMapping", "map_model", "COULOMB_KINDS", "DIODE
 COULOMB_KINDS = ("diode-bridge", "behavioural", "behavioural-sgn")
 DIODES = ("ideal", *PARTS)
 METHODS = ("gear", "trap")
-# How far past the potential minimum the velocity may wander (in units of sqrt(tau_m/gamma))
-# when checking voltage ratings: p_s is log-concave with width <= sqrt(tau_m/gamma), so beyond
-# 8 widths the probability is < 1e-14.
-SWING_WIDTHS = 8.0
+# How far the stationary velocity may wander when checking voltage ratings: to where
+# p_s ~ exp(-gamma U) (eq. p_stat) has fallen to exp(-SWING_LEVEL) ~ 1e-14 of its peak; p_s is
+# log-concave, so it keeps falling at least as fast beyond.  Since U'' >= 1/tau_m this is never
+# more than sqrt(2 SWING_LEVEL) = 8 widths sqrt(tau_m/gamma) from the minimum, and in the stick
+# regime at weak noise (where U rises linearly, with slope Delta - |a|) far less.
+SWING_LEVEL = 32.0
+SWING_WIDTHS = math.sqrt(2.0 * SWING_LEVEL)
 
 
 @dataclass(frozen=True)
@@ -375,10 +378,8 @@ def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
     x_volts_per_unit = 1.0
     g_x = cap_x * x_volts_per_unit / (kappa * theta)
 
-    centre = abs(model.potential_minimum()) if epsilon > 0 else abs(model.attractor)
-    voltage_swing = kappa * (centre + SWING_WIDTHS * vs)
-
     model_eff = model.replace(epsilon=epsilon)
+    voltage_swing = kappa * max(abs(b) for b in stationary_range(model_eff))
     std = stationary_std(model)
     # Relaxation time of the velocity: var = D t_rel for OU (t_rel = tau_m); in the stick
     # regime at weak noise the peak at v = 0 relaxes much faster, in ~ gamma std^2.
@@ -452,6 +453,26 @@ def stationary_std(model: Model) -> float:
     return math.sqrt(max(second - mean * mean, 0.0))
 
 
+def stationary_range(model: Model, level: float = SWING_LEVEL) -> tuple[float, float]:
+    """The interval where the stationary density (eq. p_stat) is within ``exp(-level)`` of its
+    peak: ``gamma (U(v) - U_min) <= level``.  U is convex with ``U'' >= 1/tau_m``, so the ends
+    lie within ``sqrt(2 tau_m level/gamma)`` of the minimum, which brackets the root search.
+    Returns ``(lo, hi)``."""
+    level = val.positive(level, "level")
+    v_min = model.potential_minimum()
+    u_min = float(model.potential(v_min))
+    # (1 + 1e-3): where U is exactly quadratic the bound is attained, and rounding must not
+    # put f(v_min +- reach) below zero.
+    reach = 1.001 * math.sqrt(2.0 * model.tau_m * level / model.gamma)
+
+    def f(v):
+        return model.gamma * (float(model.potential(v)) - u_min) - level
+
+    lo = optimize.brentq(f, v_min - reach, v_min, xtol=1e-12 * reach, rtol=1e-12)
+    hi = optimize.brentq(f, v_min, v_min + reach, xtol=1e-12 * reach, rtol=1e-12)
+    return lo, hi
+
+
 def central_bin_bias(model: Model, epsilon: float, std: float | None = None) -> float:
     """``|P_eps(B) / P_0(B) - 1|`` for the central bin ``B = {|v| < b/2}``, ``b = 0.1``
     stationary standard deviations, under the stationary law p_s ~ exp(-gamma U) (eq. p_stat)
@@ -490,9 +511,14 @@ def _check_part(m: CircuitMapping) -> None:
                          f"{part.max_forward_current:.3g} A; lower capacitance, volts_per_velocity "
                          f"or raise time_scale")
     if m.voltage_swing >= part.max_reverse_voltage:
-        raise ValueError(f"volts_per_velocity={m.kappa:.3g} V lets |V| reach {m.voltage_swing:.3g} V, "
-                         f"at or above the {part.name} reverse-voltage rating "
-                         f"{part.max_reverse_voltage:.3g} V; raise smoothing or choose another diode")
+        shrink = part.max_reverse_voltage / m.voltage_swing
+        if m.spec.volts_per_velocity is not None:
+            fix = f"lower volts_per_velocity below {m.kappa * shrink:.3g} V"
+        else:  # kappa = 2 N V_T/(smoothing sqrt(tau_m/gamma) - RS width): the swing ~ 1/smoothing
+            fix = f"raise smoothing above about {m.spec.smoothing / shrink:.3g}"
+        raise ValueError(f"volts_per_velocity={m.kappa:.3g} V lets the stationary |V| reach "
+                         f"{m.voltage_swing:.3g} V, at or above the {part.name} reverse-voltage rating "
+                         f"{part.max_reverse_voltage:.3g} V; {fix}, or use diode='ideal'")
     if m.smoothing_fraction > m.spec.smoothing * (1.0 + 1e-9) and not m.spec.allow_bias:
         raise ValueError(f"smoothing: {part.name} at volts_per_velocity={m.kappa:.3g} V gives a tanh width "
                          f"of {m.smoothing_fraction:.3g} sqrt(tau_m/gamma), coarser than the requested "
