@@ -227,3 +227,169 @@ def test_positive_part_moments_by_quadrature(alpha):
     # and the scale: N(-alpha s, s^2) gives s * mean, s^2 * var
     m2, v2 = _positive_part_moments(-alpha * 0.01, 0.01)
     assert m2 == pytest.approx(0.01 * mean, rel=1e-12) and v2 == pytest.approx(1e-4 * var, rel=1e-12)
+
+
+# ------------------------------------------------------------------ edge cases (issue 4)
+OU = Model(tau_m=1.0, delta=0.0, a=0.5, gamma=10.0)
+ALL_ELEMENTS = [CircuitSpec(), CircuitSpec(diode="1N4148"), CircuitSpec(diode="BAT54"),
+                CircuitSpec(coulomb="behavioural"), CircuitSpec(coulomb="behavioural-sgn")]
+EDGE_MODELS = [Model(1.0, 0.7, -0.2, 10.0), Model(1.0, 0.7, -1.2, 10.0), Model(1.0, 0.7, 0.0, 10.0),
+               Model(1.0, 0.7, 0.7, 10.0), Model(1.0, 0.7, -0.7, 10.0),
+               Model(5.0, 0.7, 0.2, 10.0, mass=3.0), Model(0.2, 0.7, 0.2, 10.0, mass=0.5),
+               Model(1.0, 0.7, 0.2, 0.01)]
+
+
+@pytest.mark.parametrize("spec", ALL_ELEMENTS)
+@pytest.mark.parametrize("model", [OU, OU.replace(a=-0.5), OU.replace(a=0.0, tau_m=3.0, mass=2.0)])
+def test_zero_delta_maps_to_rc_circuit_without_coulomb_element(model, spec):
+    """Delta = 0 (Ornstein-Uhlenbeck) is a legitimate model: no Coulomb element, no smoothing,
+    the exact model is realised, and the table says there is no element."""
+    m = map_model(model, spec)
+    assert m.coulomb_element is None and m.part is None and m.emission is None
+    assert m.i_delta == 0.0 and m.i_delta_total == 0.0
+    assert m.epsilon == 0.0 and m.eps_volts == 0.0 and m.smoothing_fraction == 0.0
+    assert m.model_effective == model
+    assert m.resistance == m.r_total  # no diode leakage to compensate
+    back = m.to_model()
+    for key in ("tau_m", "delta", "a", "gamma", "mass", "epsilon"):
+        assert getattr(back, key) == pytest.approx(getattr(model, key), rel=1e-12, abs=1e-15), key
+    rows = {r[0]: r for r in m.table()}
+    assert rows["coulomb_elements"][1] == 0.0 and "Delta = 0" in rows["coulomb_elements"][3]
+    assert all(math.isfinite(r[1]) for r in rows.values())
+    assert m.bias["smoothing"] == 0.0
+    # kappa is the user's or 1 V (the diode's choice of kappa does not apply without a diode)
+    assert m.kappa == (spec.volts_per_velocity or 1.0)
+    # a Delta > 0 model with the same spec does have its element
+    assert {r[0]: r[1] for r in map_model(STICK, spec).table()}["coulomb_elements"] == 1.0
+
+
+def test_zero_delta_rc_circuit_relaxes_like_ou():
+    """C dV/dt_c = -V/R + I_F in closed form, V = R I_F + (V0 - R I_F) e^{-t_c/(R C)}, against
+    the model's own deterministic OU motion through V = kappa v, t_c = theta t."""
+    for spec in ALL_ELEMENTS:
+        m = map_model(OU, spec)
+        v0, t = -1.3, np.linspace(0.0, 4.0, 9)
+        tc = t * m.theta
+        V = m.resistance * m.i_force + (v0 * m.kappa - m.resistance * m.i_force) * np.exp(
+            -tc / (m.resistance * m.capacitance))
+        np.testing.assert_allclose(V / m.kappa, OU.deterministic(v0, t), rtol=1e-12, atol=1e-14)
+
+
+@pytest.mark.parametrize("spec", ALL_ELEMENTS)
+@pytest.mark.parametrize("model", EDGE_MODELS)
+def test_edge_models_round_trip_with_signed_force(model, spec):
+    """a < 0, a = 0, a = +-Delta, mass and tau_m != 1, very weak noise: the mapping inverts,
+    the force current has the sign of a (I_F = a C kappa/theta) and the friction source is
+    positive."""
+    m = map_model(model, spec)
+    back = m.to_model()
+    for key in ("tau_m", "delta", "a", "gamma", "mass", "epsilon"):
+        assert getattr(back, key) == pytest.approx(getattr(m.model_effective, key), rel=1e-12, abs=1e-15)
+    assert m.i_force == pytest.approx(model.a * m.capacitance * m.kappa / m.theta, rel=1e-12, abs=0)
+    assert np.sign(m.i_force) == np.sign(model.a)
+    assert m.i_delta > 0 and m.coulomb_element == spec.coulomb
+    assert math.isfinite(m.voltage_swing) and m.voltage_swing > 0
+
+
+def test_tiny_delta_keeps_ideal_bridge_source_positive():
+    """Delta so small that I_Delta < 2e-14 A: the ideal diode's IS shrinks with it, so the
+    bridge source stays positive, the amplitude is still I_Delta_total and the .ic voltages of
+    the inner nodes are finite (they were inf when the source went negative)."""
+    from analogue.circuit.parts import bridge_node_voltages
+    model = Model(1.0, 1e-12, 0.2, 10.0)
+    m = map_model(model)
+    assert 0 < m.i_delta < m.i_delta_total
+    assert m.i_delta + 2 * m.part.IS == pytest.approx(m.i_delta_total, rel=1e-12)
+    assert m.part.IS <= 1e-6 * m.i_delta_total
+    vp, vn = bridge_node_voltages(m.part, m.i_delta, np.array([-3.0, 0.0, 1e-3, 3.0]))
+    assert np.all(np.isfinite(vp)) and np.all(np.isfinite(vn))
+    # above ~1e-8 A the ideal diode keeps the standard IS = 1e-14 A
+    assert map_model(STICK).part.IS == 1e-14
+
+
+def test_bridge_law_refuses_source_below_minus_two_is():
+    from analogue.circuit.parts import bridge_node_voltages, bridge_voltage
+    part = ideal_diode(0.3)
+    for f in (bridge_current, bridge_voltage, bridge_node_voltages):
+        with pytest.raises(ValueError, match="i0"):
+            f(part, -2.0 * part.IS, np.array([0.1]))
+        with pytest.raises(ValueError, match="i0"):
+            f(part, float("nan"), np.array([0.1]))
+    with pytest.raises(ValueError, match="saturation_current"):
+        ideal_diode(0.3, saturation_current=0.0)
+    # a slightly negative source is still a valid Shockley bridge: amplitude I0 + 2 IS
+    i = bridge_current(part, -part.IS, np.array([1.0]))
+    assert i[0] == pytest.approx(part.IS, rel=1e-12)
+
+
+def test_stationary_range_by_grid():
+    """The rating swing: the ends of {gamma (U - U_min) <= 32} against a fine grid, inside the
+    bound sqrt(64 tau_m/gamma) around the minimum, and far inside it in the stick regime at
+    weak noise (U rises linearly there)."""
+    from analogue.circuit.mapping import stationary_range
+    for model in (STICK, SLIP, OU, Model(1.0, 0.7, -0.2, 1e3), Model(1.0, 0.7, 0.2, 1e3, epsilon=1e-4)):
+        lo, hi = stationary_range(model)
+        c = model.potential_minimum()
+        w = 8.0 * model.velocity_scale
+        v = np.linspace(c - 1.01 * w, c + 1.01 * w, 2_000_001)
+        inside = v[model.gamma * (model.potential(v) - model.potential(c)) <= 32.0]
+        step = v[1] - v[0]
+        assert lo == pytest.approx(inside[0], abs=step) and hi == pytest.approx(inside[-1], abs=step)
+        assert c - w * (1 + 1e-9) <= lo < c < hi <= c + w * (1 + 1e-9)
+    lo, hi = stationary_range(Model(1.0, 0.7, 0.2, 1e3))
+    assert hi - lo < 0.4 * 16 * math.sqrt(1e-3)
+    m = map_model(SLIP)
+    assert m.voltage_swing == pytest.approx(m.kappa * max(abs(b) for b in stationary_range(m.model_effective)))
+
+
+def test_real_diode_reaches_weak_noise_stick_regime():
+    """gamma = 1e3 in the stick regime with a 1N4148: fine smoothing needs a large kappa, which
+    the stationary swing (not a flat 8 widths) admits under the 100 V rating."""
+    m = map_model(Model(1.0, 0.7, 0.2, 1e3), CircuitSpec(diode="1N4148", smoothing=0.005, noise_dt=5e-4))
+    assert m.voltage_swing < 100.0 < m.kappa * 8.0 * m.model.velocity_scale
+    assert m.bias["smoothing"] <= 0.05 and m.bias["noise"] <= 0.05
+
+
+# Each refusal names the parameter and a fix; following the fix must get past that refusal.
+def test_refusals_give_working_fixes():
+    import re as _re
+    weak = Model(1.0, 0.7, 0.2, 1e3)
+    # smoothing bias at weak noise -> lower smoothing below the stated value
+    with pytest.raises(ValueError, match="smoothing.*lower smoothing below about") as exc:
+        map_model(weak, CircuitSpec(noise_dt=5e-4))
+    s_fix = float(_re.search(r"below about ([0-9.e+-]+)", str(exc.value)).group(1))
+    assert map_model(weak, CircuitSpec(noise_dt=5e-4, smoothing=0.9 * s_fix)).bias["smoothing"] <= 0.05
+    # held-noise bias -> lower noise_dt below the stated value
+    with pytest.raises(ValueError, match="noise_dt.*lower noise_dt below") as exc:
+        map_model(weak, CircuitSpec(smoothing=0.005))
+    n_fix = float(_re.search(r"lower noise_dt below ([0-9.e+-]+)", str(exc.value)).group(1))
+    map_model(weak, CircuitSpec(smoothing=0.005, noise_dt=0.9 * n_fix))
+    # reverse-voltage rating with automatic kappa -> raise smoothing above the stated value
+    with pytest.raises(ValueError, match="reverse-voltage.*raise smoothing above about") as exc:
+        map_model(weak, CircuitSpec(diode="1N4148", smoothing=0.002, noise_dt=5e-5, capacitance=1e-8))
+    s_fix = float(_re.search(r"above about ([0-9.e+-]+)", str(exc.value)).group(1))
+    map_model(weak, CircuitSpec(diode="1N4148", smoothing=1.1 * s_fix, noise_dt=5e-5, capacitance=1e-8))
+    # ... with a given kappa -> lower volts_per_velocity
+    spec = CircuitSpec(diode="BAT54", volts_per_velocity=1e3, noise_dt=5e-4, smoothing=0.005, allow_bias=True)
+    with pytest.raises(ValueError, match="lower volts_per_velocity below") as exc:
+        map_model(weak, spec)
+    k_fix = float(_re.search(r"below ([0-9.e+-]+) V", str(exc.value)).group(1))
+    assert map_model(weak, spec.replace(volts_per_velocity=0.9 * k_fix)).voltage_swing < 30.0
+    # series resistance too wide for the smoothing -> lower capacitance/time_scale by the factor
+    big = Model(1.0, 100.0, 0.0, 10.0)
+    with pytest.raises(ValueError, match="smoothing.*unreachable.*capacitance/time_scale by more than a factor") as exc:
+        map_model(big, CircuitSpec(diode="BAT54", allow_bias=True))
+    f_fix = float(_re.search(r"a factor ([0-9.e+-]+)", str(exc.value)).group(1))
+    m = map_model(big, CircuitSpec(diode="BAT54", allow_bias=True, capacitance=1e-7 / (1.2 * f_fix)))
+    assert m.smoothing_fraction == pytest.approx(0.02, rel=1e-9)
+    # leakage of the parallel resistors beyond tau_m -> raise capacitance (or lower time_scale)
+    slow = Model(3000.0, 0.7, 0.2, 10.0)
+    with pytest.raises(ValueError, match="tau_m.*raise capacitance or lower time_scale"):
+        map_model(slow, CircuitSpec(diode="BAT54", allow_bias=True))
+    m = map_model(slow, CircuitSpec(diode="BAT54", allow_bias=True, time_scale=1e-4))
+    assert 1.0 / m.resistance + 2.0 / m.part.rp == pytest.approx(1.0 / m.r_total, rel=1e-12)
+    # friction current below the diodes' reverse current -> raise capacitance
+    small = Model(1.0, 1e-5, 0.0, 10.0)
+    with pytest.raises(ValueError, match="Delta.*reverse current.*raise capacitance"):
+        map_model(small, CircuitSpec(diode="BAT54"))
+    assert map_model(small, CircuitSpec(diode="BAT54", capacitance=1e-3, allow_bias=True)).i_delta > 0
