@@ -222,3 +222,76 @@ def test_noise_is_reproducible_gaussian_and_independent(tmp_path):
     assert np.max(np.abs(off)) < 4.5 / np.sqrt(n)  # 28 pairs: 4.5 sigma keeps the family-wise rate small
     lag1 = np.mean(held[:, 1:] * held[:, :-1]) / held.var()
     assert abs(lag1) < 4 / np.sqrt(replicas * (n - 1))
+
+
+# ------------------------------------------------------------------ edge cases (issue 4)
+OU = Model(tau_m=1.0, delta=0.0, a=0.5, gamma=10.0)
+ELEMENTS = [CircuitSpec(), CircuitSpec(diode="1N4148"), CircuitSpec(diode="BAT54"),
+            CircuitSpec(coulomb="behavioural"), CircuitSpec(coulomb="behavioural-sgn")]
+
+
+@pytest.mark.parametrize("spec", ELEMENTS)
+def test_zero_delta_deck_has_no_coulomb_element(spec):
+    """Delta = 0: the deck builds (it used to fail on an infinite .ic value of the bridge's
+    inner nodes) and holds only C, R, the force and noise sources and the integrator; with no
+    diodes there is no reverse-voltage limit on v0 either."""
+    m = map_model(OU, spec)
+    d = build_deck(m, replicas=3, v0=np.array([-50.0, 0.0, 50.0]), t_end=1.0, seed=3, sample_dt=0.01)
+    text = d.text.lower()
+    assert "coulomb" not in text and ".model" not in text and "bridge" not in text
+    assert not re.search(r"^\s*[db]\w*\s", text, re.M)  # no diode, no B-source
+    ic = [l for l in d.text.splitlines() if l.lower().startswith(".ic")][0]
+    assert ic.split()[1:] == ["v(v0)=-50", "v(x0)=0", "v(v1)=0", "v(x1)=0", "v(v2)=50", "v(x2)=0"]
+    replica = d.text[d.text.lower().index(".subckt replica"):d.text.lower().index(".ends replica")]
+    kinds = sorted(l.split()[0][0].lower() for l in replica.splitlines()[1:] if l.strip())
+    assert kinds == ["c", "c", "g", "g", "i", "r", "v"]
+    from analogue.circuit.netlist import bridge_dc_deck
+    with pytest.raises(ValueError, match="Delta = 0"):
+        bridge_dc_deck(m, 0.1)
+
+
+@pytest.mark.parametrize("spec", ELEMENTS)
+@pytest.mark.parametrize("model", [Model(1.0, 0.7, -1.2, 10.0), Model(1.0, 0.7, 0.7, 10.0),
+                                   Model(2.0, 0.7, 0.0, 10.0, mass=3.0)])
+def test_edge_decks_are_finite_and_signed(model, spec):
+    """Negative force, a = Delta, a = 0 with tau_m, mass != 1: every number in the deck is
+    finite and the force source carries the sign of a."""
+    m = map_model(model, spec)
+    d = build_deck(m, replicas=2, v0=np.array([-1.0, 1.0]), t_end=1.0, seed=1, sample_dt=0.01)
+    assert "inf" not in d.text.lower() and "nan" not in d.text.lower()
+    force = [l for l in d.text.splitlines() if l.lower().startswith("iforce")][0]
+    assert float(force.split()[-1]) == pytest.approx(m.i_force, rel=1e-14)
+    assert np.sign(float(force.split()[-1])) == np.sign(model.a)
+
+
+def test_v0_rating_refusal_states_the_limit():
+    spec = CircuitSpec(diode="BAT54")
+    m = map_model(STICK, spec)
+    with pytest.raises(ValueError, match=r"v0.*reverse-voltage.*keep \|v0\| below") as exc:
+        deck_for(spec, v0=np.array([0.0, 1.0, 5.0]))
+    limit = float(re.search(r"below ([0-9.e+-]+)", str(exc.value)).group(1))
+    assert limit == pytest.approx(30.0 / m.kappa, rel=1e-2)
+    deck_for(spec, v0=np.array([0.0, -0.99 * limit, 0.99 * limit]))
+
+
+@pytest.mark.parametrize("model, spec", [
+    (OU, CircuitSpec(reltol=1e-6)),                        # Delta = 0 through the default bridge spec
+    (Model(1.0, 0.7, -1.2, 10.0), CircuitSpec(reltol=1e-6)),  # negative force, slip to v < 0
+])
+def test_edge_circuits_follow_model_pathwise(tmp_path, model, spec):
+    """ngspice runs of the edge cases against RK4 of the model driven by the recorded noise
+    (as test_circuit_follows_model_pathwise_with_recorded_noise; tolerance: solver error)."""
+    m = map_model(model, spec)
+    v0 = np.array([2.0, -2.0, 0.0])
+    t_end = 1.0
+    deck = build_deck(m, replicas=3, v0=v0, t_end=t_end, seed=11, sample_dt=0.01)
+    t, v, x, nz = run(deck, tmp_path)
+    h = m.noise_dt
+    n_holds = int(round(t_end / h))
+    held = held_values(t, nz, h, n_holds)
+    V, X = integrate_model(m.model_effective, v0, held, h)
+    grid = np.arange(1, n_holds + 1) * h
+    vc = np.array([np.interp(grid, t, row) for row in v])
+    xc = np.array([np.interp(grid, t, row) for row in x])
+    assert np.max(np.abs(vc - V[:, 1:])) < 2e-4
+    assert np.max(np.abs(xc - X[:, 1:])) < 2e-4
