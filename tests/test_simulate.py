@@ -207,6 +207,37 @@ def test_noise_free_circuit_follows_deterministic_motion(model, v0):
         assert abs(det[-1] - v_ss) < 0.06  # e^{-3}-close to v_ss = (a - Delta) tau_m
 
 
+# ------------------------------------------------------------- Delta = 0 through simulate
+def test_zero_delta_runs_as_ou_with_default_circuit():
+    """Delta = 0 with the default circuit spec (diode bridge) used to fail in build_deck; the
+    circuit is now the RC (Ornstein-Uhlenbeck) circuit without a Coulomb element.  From a fixed
+    v0 the ensemble mean follows the exact OU mean a tau + (v0 - a tau) e^{-t/tau} (held noise
+    has zero mean, so no bias) within 4 SE at each of six times, and the final variance the
+    exact (tau/gamma)(1 - e^{-2t/tau}) within 4 SE of the sample variance plus the documented
+    held-noise bias."""
+    m = Model(tau_m=1.0, delta=0.0, a=0.5, gamma=10.0)
+    R, T, v0 = 64, 3.0, 2.0
+    e = run(m, v0=v0, t_end=T, replicas=R, seed=5)
+    rows = {row[0]: row[1] for row in e.meta["circuit"]}
+    assert rows["coulomb_elements"] == 0.0 and rows["epsilon"] == 0.0
+    assert Model(**e.meta["model_effective"]) == m
+    tau, var0 = m.tau_m, m.tau_m / m.gamma
+    for t in (0.5, 1.0, 1.5, 2.0, 2.5, 3.0):
+        k = int(round(t / e.dt))
+        mean = m.a * tau + (v0 - m.a * tau) * math.exp(-t / tau)
+        se = e.v[:, k].std(ddof=1) / math.sqrt(R)
+        assert abs(e.v[:, k].mean() - mean) < 4 * se, (t, e.v[:, k].mean(), mean, se)
+        np.testing.assert_allclose(mean, m.deterministic(v0, t), rtol=1e-12)
+    var_t = var0 * (1 - math.exp(-2 * T / tau))
+    est = e.v[:, -1].var(ddof=1)
+    se = var_t * math.sqrt(2.0 / (R - 1))  # Gaussian sample variance
+    assert abs(est - var_t) < 4 * se + var_t * documented_bias(e), (est, var_t, se)
+    # the test can tell friction apart: with Delta = 0.7 the noise-free motion from v0 = 2
+    # has stuck at 0 by t = 3, more than 10 SE of the mean away from what the circuit does
+    se_mean = e.v[:, -1].std(ddof=1) / math.sqrt(R)
+    assert abs(e.v[:, -1].mean() - Model(1.0, 0.7, 0.5, 10.0).deterministic(v0, T)) > 10 * se_mean
+
+
 # --------------------------------------------------------------------- delivered noise (OU)
 @pytest.mark.slow
 def test_delivered_noise_intensity_delta_zero():
@@ -215,9 +246,8 @@ def test_delivered_noise_intensity_delta_zero():
     lag s, 2 (tau_m/gamma)(1 - e^{-s/tau_m}) ~ 2 D s with D = 1/gamma."""
     m = Model(tau_m=1.0, delta=0.0, a=0.0, gamma=10.0)
     R, T = 24, 50.0
-    # (the behavioural element: with Delta = 0 the bridge has no current to carry)
-    e = run(m, v0="stationary", t_end=T, replicas=R, seed=21, replicas_per_deck=12,
-            circuit={"coulomb": "behavioural"})
+    # (default circuit spec: with Delta = 0 the mapping omits the Coulomb element)
+    e = run(m, v0="stationary", t_end=T, replicas=R, seed=21, replicas_per_deck=12)
     var0 = m.tau_m / m.gamma
     # held noise, OU: the variance dips within each hold by 2 s/tau_m - 2 s^2/(h tau_m)
     # (s the time since the hold began), i.e. by h/(3 tau_m) on average: 1/300 by default
