@@ -393,3 +393,32 @@ def test_refusals_give_working_fixes():
     with pytest.raises(ValueError, match="Delta.*reverse current.*raise capacitance"):
         map_model(small, CircuitSpec(diode="BAT54"))
     assert map_model(small, CircuitSpec(diode="BAT54", capacitance=1e-3, allow_bias=True)).i_delta > 0
+
+
+def test_extreme_noise_strengths_map_without_overflow():
+    """gamma from 1e-4 to 1e16 in both regimes, with the biases allowed: no overflow warning
+    (the central-bin integrand used to overflow in the slip regime at weak noise), finite
+    biases and a swing inside the 8-width bound (where rounding swamps U - U_min the bound
+    itself is returned)."""
+    import warnings
+    from analogue.circuit.mapping import stationary_range
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for gamma in (1e-4, 1e12, 1e16):
+            for a in (0.2, 1.2, -1.2):
+                model = Model(1.0, 0.7, a, gamma)
+                m = map_model(model, CircuitSpec(coulomb="behavioural", allow_bias=True))
+                assert all(math.isfinite(b) for b in m.bias.values())
+                lo, hi = stationary_range(m.model_effective)
+                c, w = m.model_effective.potential_minimum(), 8.0 * 1.001 * model.velocity_scale
+                assert c - w * (1 + 1e-9) <= lo <= c <= hi <= c + w * (1 + 1e-9)
+
+
+def test_rating_refusal_when_the_motion_itself_is_too_large():
+    """A huge slip velocity v_ss: no smoothing < 1 helps; the message says so and names the
+    way out (a smaller volts_per_velocity with allow_bias), which works."""
+    model = Model(1.0, 0.7, 1e3, 10.0)
+    with pytest.raises(ValueError, match="smoothing would have to exceed 1.*volts_per_velocity"):
+        map_model(model, CircuitSpec(diode="BAT54"))
+    m = map_model(model, CircuitSpec(diode="BAT54", volts_per_velocity=0.02, allow_bias=True))
+    assert m.voltage_swing < 30.0

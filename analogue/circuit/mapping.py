@@ -468,9 +468,15 @@ def stationary_range(model: Model, level: float = SWING_LEVEL) -> tuple[float, f
     def f(v):
         return model.gamma * (float(model.potential(v)) - u_min) - level
 
-    lo = optimize.brentq(f, v_min - reach, v_min, xtol=1e-12 * reach, rtol=1e-12)
-    hi = optimize.brentq(f, v_min, v_min + reach, xtol=1e-12 * reach, rtol=1e-12)
-    return lo, hi
+    ends = []
+    for a, b in ((v_min - reach, v_min), (v_min, v_min + reach)):
+        fa, fb = f(a), f(b)
+        if fa * fb < 0:
+            ends.append(optimize.brentq(f, a, b, xtol=1e-12 * reach, rtol=1e-12))
+        else:
+            # only when U - U_min is lost to rounding (gamma ~ 1e16 and more): the bound itself
+            ends.append(a if fa >= 0 else b)
+    return ends[0], ends[1]
 
 
 def central_bin_bias(model: Model, epsilon: float, std: float | None = None) -> float:
@@ -497,7 +503,10 @@ def central_bin_bias(model: Model, epsilon: float, std: float | None = None) -> 
     R = float(np.trapezoid(p0 * (h(v) - 1.0), v))
     half = 0.5 * CENTRAL_BIN * std
     v = np.linspace(-half, half, 4001)  # v = 0 is a node, so the kink of p_0 is on the grid
-    g0 = np.exp(-model.gamma * exact.potential(v))  # U_0(0) = 0: bounded on the bin
+    u0 = exact.potential(v)
+    # shifted by the bin's lowest U: in the slip regime at weak noise gamma U_0 is far below 0
+    # on the bin and exp(-gamma U_0) overflows; the ratio of integrals is unchanged.
+    g0 = np.exp(-model.gamma * (u0 - u0.min()))
     ratio = float(np.trapezoid(g0 * h(v), v) / np.trapezoid(g0, v)) / (1.0 + R)
     return abs(ratio - 1.0)
 
@@ -514,8 +523,12 @@ def _check_part(m: CircuitMapping) -> None:
         shrink = part.max_reverse_voltage / m.voltage_swing
         if m.spec.volts_per_velocity is not None:
             fix = f"lower volts_per_velocity below {m.kappa * shrink:.3g} V"
-        else:  # kappa = 2 N V_T/(smoothing sqrt(tau_m/gamma) - RS width): the swing ~ 1/smoothing
+        elif m.spec.smoothing / shrink < 1.0:
+            # kappa = 2 N V_T/(smoothing sqrt(tau_m/gamma) - RS width): the swing ~ 1/smoothing
             fix = f"raise smoothing above about {m.spec.smoothing / shrink:.3g}"
+        else:  # the swing is the motion itself (a large v_ss), not the noise: no smoothing helps
+            fix = ("smoothing would have to exceed 1 (the swing is the motion, |v_ss| = "
+                   f"{abs(m.model.attractor):.3g}); pass a smaller volts_per_velocity with allow_bias")
         raise ValueError(f"volts_per_velocity={m.kappa:.3g} V lets the stationary |V| reach "
                          f"{m.voltage_swing:.3g} V, at or above the {part.name} reverse-voltage rating "
                          f"{part.max_reverse_voltage:.3g} V; {fix}, or use diode='ideal'")
