@@ -277,6 +277,7 @@ def test_v0_rating_refusal_states_the_limit():
 @pytest.mark.parametrize("model, spec", [
     (OU, CircuitSpec(reltol=1e-6)),                        # Delta = 0 through the default bridge spec
     (Model(1.0, 0.7, -1.2, 10.0), CircuitSpec(reltol=1e-6)),  # negative force, slip to v < 0
+    (Model(1.0, 1e-12, 0.5, 10.0), CircuitSpec(reltol=1e-6)),  # tiny Delta: ideal IS ~ 1e-22 A
 ])
 def test_edge_circuits_follow_model_pathwise(tmp_path, model, spec):
     """ngspice runs of the edge cases against RK4 of the model driven by the recorded noise

@@ -290,7 +290,8 @@ def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
     """Component values that make the circuit obey ``model`` (see the module docstring).
 
     The returned mapping's ``model_effective`` is ``model`` with the realised smoothing width
-    ``epsilon`` (0 for ``behavioural-sgn``).  Raises ValueError (naming the parameter and the
+    ``epsilon`` (0 for ``behavioural-sgn``, and for Delta = 0, which is built without a Coulomb
+    element: see the module docstring).  Raises ValueError (naming the parameter and the
     limit) when a real part could not do it (current, reverse voltage, smoothing too coarse)
     or when the estimated bias exceeds ``spec.bias_tolerance`` and ``allow_bias`` is False.
     """

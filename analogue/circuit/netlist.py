@@ -83,7 +83,7 @@ def bridge_subcircuit(mapping: CircuitMapping) -> SubCircuit:
 
 def replica_subcircuit(mapping: CircuitMapping) -> SubCircuit:
     """One replica: pins (v, x, nz)."""
-    m, spec = mapping, mapping.spec
+    m = mapping
     sub = SubCircuit("replica", "v", "x", "nz")
     sub.C("m", "v", sub.gnd, _n(m.capacitance, "C"))
     sub.R("visc", "v", sub.gnd, _n(m.resistance, "R"))
