@@ -107,11 +107,12 @@ def test_scgf_converged_in_grid_spacing():
     np.testing.assert_allclose(ws.scgf(FIG8, k), fine, rtol=1e-6, atol=1e-8)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model", [FIG8, SLIP])
 def test_rate_function_zero_at_mean_nonnegative_convex_and_legendre(model):
     mean = ws.work_rate_mean(model)
     assert float(ws.rate_function(model, mean)) == pytest.approx(0.0, abs=1e-12)
-    w = np.linspace(-1.0, 1.6, 14)
+    w = np.linspace(-1.0, 1.6, 11)
     I = ws.rate_function(model, w)
     assert np.all(I >= 0)
     assert np.all(np.diff(I, 2) > -1e-9)
@@ -137,6 +138,7 @@ def test_rate_function_zero_at_mean_nonnegative_convex_and_legendre(model):
     assert checked >= 5
 
 
+@pytest.mark.slow
 # ------------------------------------------------------------------ work density
 def test_work_pdf_equals_ou_density_deep_in_the_tails():
     tau = 2.0
@@ -155,7 +157,9 @@ def slip_density():
     tau = 4.0
     mean = ws.work_rate_mean(SLIP)
     w = np.linspace(mean - 0.75, mean + 1.05, 13)
-    return tau, w, ws.work_pdf(SLIP, w, tau)
+    # 32 modes: at tau = 4 the higher modes are damped by exp(-4 * gap); convergence in modes is
+    # tested separately (test_work_pdf_converged_in_modes)
+    return tau, w, ws.work_pdf(SLIP, w, tau, modes=32)
 
 
 @pytest.mark.slow
@@ -182,9 +186,13 @@ def test_work_pdf_variance_matches_monte_carlo(slip_density):
     assert abs(np.mean(wr) - ws.work_rate_mean(SLIP)) < 4 * math.sqrt(mc_var / n)
 
 
+@pytest.mark.slow
 def test_work_pdf_converged_in_modes():
     w = np.array([0.3])
     np.testing.assert_allclose(ws.work_pdf(FIG8, w, 2.0), ws.work_pdf(FIG8, w, 2.0, modes=80), rtol=2e-4)
+    slip_w = np.array([ws.work_rate_mean(SLIP) + 0.6])
+    np.testing.assert_allclose(ws.work_pdf(SLIP, slip_w, 4.0, modes=32), ws.work_pdf(SLIP, slip_w, 4.0),
+                               rtol=1e-4)
 
 
 @pytest.mark.slow
