@@ -138,8 +138,8 @@ def test_rate_function_zero_at_mean_nonnegative_convex_and_legendre(model):
     assert checked >= 5
 
 
-@pytest.mark.slow
 # ------------------------------------------------------------------ work density
+@pytest.mark.slow
 def test_work_pdf_equals_ou_density_deep_in_the_tails():
     tau = 2.0
     mean = OU10.force * OU10.a * OU10.tau_m
