@@ -50,7 +50,8 @@ REPO_ROOT = Path(__file__).resolve().parents[2]
 CIRCUITS_DIR = REPO_ROOT / "circuits"
 NETLISTS_DIR = REPO_ROOT / "netlists"
 
-_TOP_KEYS = {"name", "description", "model", "circuit", "experiment", "netlist"}
+_TOP_KEYS = {"name", "description", "model", "circuit", "experiment", "netlist", "report"}
+# [report] is read by analogue.report.plan (what the report measures; never reaches a deck).
 _MODEL_KEYS = {"tau_m", "delta", "a", "gamma", "mass", "epsilon"}
 _MODEL_REQUIRED = {"tau_m", "delta", "a", "gamma"}
 _EXPERIMENT_KEYS = {"v0", "replicas", "t_end", "sample_dt", "seed", "burn_in",
