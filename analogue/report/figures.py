@@ -13,6 +13,7 @@ import numpy as np
 
 from ..estimators import (empirical_rate_function, fluctuation_ratio, prehistory,
                           stationary_density, transition_density, work_distribution)
+from ..model import Model
 from ..plots.style import KIND_COLOURS, TIME, VELOCITY, new_figure, save
 from .comparisons import ExperimentAnalysis
 from .runs import ExperimentRuns
@@ -57,7 +58,7 @@ def fig_deterministic(all_runs: list, out: Path):
         ax.legend(fontsize=8)
     path = save(fig, out / "fig1_deterministic.png")
     dev = max(float(np.max(np.abs(r.noise_free.v - np.array(
-        [r.model_effective.replace(gamma=r.exp.model.gamma).deterministic(v0, r.noise_free.t)
+        [Model(**r.noise_free.meta["model_effective"]).deterministic(v0, r.noise_free.t)
          for v0 in r.exp.v0])))) for r in all_runs)
     return path, ("Noise-free motion (paper Fig. 1). Lines: eq. det_eq with the exact sgn law "
                   "(dotted: stick time t_a, eq. tbar1). Circles: the circuit with its noise "
@@ -71,18 +72,20 @@ def fig_prehistory(runs: ExperimentRuns, out: Path, tag: str):
     the transition run from v0[0] that end in a window around (v, t)."""
     from ..theory import weak_noise
 
-    targets = runs.settings.prehistory
+    targets = [p if len(p) == 3 else (runs.exp.v0[0],) + tuple(p) for p in runs.settings.prehistory]
     if not targets:
         return None
-    v0 = runs.exp.v0[0]
-    ens = runs.transition[v0]
     m = runs.exp.model
     n = len(targets)
-    ncols = min(n, 3)
+    ncols = 2 if n == 4 else min(n, 3)
     nrows = -(-n // ncols)
     fig, axes = new_figure(nrows, ncols, squeeze=False)
     lines = []
-    for ax, (v, t) in zip(axes.ravel(), targets):
+    for ax, (v0, v, t) in zip(axes.ravel(), targets):
+        if v0 not in runs.transition:
+            raise ValueError(f"{runs.exp.name}: report.prehistory starts at v0={v0:g}, which is "
+                             f"not one of experiment.v0 = {list(runs.transition)}")
+        ens = runs.transition[v0]
         p = weak_noise.optimal_path(m, v, t, v0, n=600)
         colour = KIND_COLOURS.get(p.kind, "k")
         try:
@@ -97,7 +100,7 @@ def fig_prehistory(runs: ExperimentRuns, out: Path, tag: str):
             ax.fill_between(ph.t, ph.lower, ph.upper, color=CIRCUIT, alpha=0.15,
                             label="circuit 10-90 %")
             ax.plot(ph.t, ph.mean, color=CIRCUIT, lw=1.5, label=f"circuit mean ({ph.count} paths)")
-            lines.append(f"(v={v:g}, t={t:g}): {p.kind}, {ph.count} circuit paths")
+            lines.append(f"v0={v0:g} to (v={v:g}, t={t:g}): {p.kind}, {ph.count} circuit paths")
         ax.plot(p.s, p.v, color=colour, lw=2.2, label=f"optimal path: {p.kind}")
         ax.plot([t], [v], "s", color=colour, ms=5)
         ax.axhline(0, color="0.6", lw=0.7)
@@ -276,6 +279,17 @@ def _work_dists(runs: ExperimentRuns):
     return out
 
 
+def _finite_tau_pdf(model, w, tau):
+    """Exact finite-tau work density, or None (and a note on stderr) where it cannot be had."""
+    from ..theory import exact
+    try:
+        return np.asarray(exact.work_pdf(model, w, tau))
+    except (RuntimeError, ValueError) as exc:
+        import sys
+        print(f"analogue: finite-tau work density skipped for tau={tau:g}: {exc}", file=sys.stderr)
+        return None
+
+
 def fig_rate_function(runs: ExperimentRuns, out: Path):
     """Paper Fig. 8 with circuit data: I(w) of eq. Iw, the exact I_gamma(w), the weak-noise
     limit, the finite-tau exact -ln P_tau(w)/(tau gamma) and the circuit's estimate."""
@@ -288,7 +302,7 @@ def fig_rate_function(runs: ExperimentRuns, out: Path):
         return None
     w_all = np.concatenate([d.centres for d in dists.values()])
     wmax = float(np.max(np.abs(w_all)))
-    w = np.linspace(-wmax, wmax, 301)
+    w = np.linspace(-wmax, wmax, 61)
     fig, axes = new_figure(1, 2, squeeze=False, width=5.5)
     ax = axes[0, 0]
     paper = np.asarray(weak_noise.rate_function(m, w))
@@ -303,9 +317,10 @@ def fig_rate_function(runs: ExperimentRuns, out: Path):
         r = empirical_rate_function(d, tau, m.gamma)
         ax.errorbar(r.w, r.rate, yerr=r.stderr, fmt="o", ms=3, color=c, capsize=2,
                     label=f"circuit, $\\tau$={tau:g}")
-        fin = np.asarray(exact.work_pdf(m, r.w, tau))
-        rate_fin = -np.log(fin) / (tau * m.gamma)
-        ax.plot(r.w, rate_fin - rate_fin.min(), color=c, lw=1, alpha=0.8)
+        fin = _finite_tau_pdf(m, r.w, tau)
+        if fin is not None:
+            rate_fin = -np.log(fin) / (tau * m.gamma)
+            ax.plot(r.w, rate_fin - rate_fin.min(), color=c, lw=1, alpha=0.8)
     ax.set_xlabel("work rate w (model units)")
     ax.set_ylabel("rate function I(w)")
     ax.set_ylim(bottom=-0.02)
@@ -321,9 +336,10 @@ def fig_rate_function(runs: ExperimentRuns, out: Path):
         fr = fluctuation_ratio(d, tau, m.gamma)
         ax.errorbar(fr.w, fr.ratio, yerr=fr.stderr, fmt="o", ms=3, color=c, capsize=2,
                     label=f"circuit, $\\tau$={tau:g}")
-        fin_p = np.asarray(exact.work_pdf(m, fr.w, tau))
-        fin_n = np.asarray(exact.work_pdf(m, -fr.w, tau))
-        ax.plot(fr.w, np.log(fin_p / fin_n) / (tau * m.gamma), color=c, lw=1, alpha=0.8)
+        fin_p = _finite_tau_pdf(m, fr.w, tau)
+        fin_n = _finite_tau_pdf(m, -fr.w, tau)
+        if fin_p is not None and fin_n is not None:
+            ax.plot(fr.w, np.log(fin_p / fin_n) / (tau * m.gamma), color=c, lw=1, alpha=0.8)
     ax.set_xlabel("work rate w > 0 (model units)")
     ax.set_ylabel("ln[P(w)/P(-w)] / ($\\tau\\gamma$)")
     ax.set_title("Fig. 9: fluctuation relation (thin: exact finite-$\\tau$)", fontsize=10)

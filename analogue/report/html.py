@@ -43,7 +43,7 @@ figcaption{font-size:.92em;color:#444;text-align:left;margin-top:.3em}
 table{border-collapse:collapse;margin:1em 0;font-size:.88em;font-family:'DejaVu Sans',sans-serif}
 th,td{border:1px solid #ccc;padding:.25em .5em;text-align:right}
 th{background:#eef}
-td:first-child,th:first-child{text-align:left}
+td:first-child,th:first-child,td.text{text-align:left}
 tr.fail td{background:#fde8e8} tr.ok td{background:#f3fbf3}
 caption{caption-side:top;text-align:left;font-style:italic;margin-bottom:.3em}
 nav{background:#f6f6fb;padding:.6em 1em;border:1px solid #dde}
@@ -90,7 +90,9 @@ def write_page(path: Path, title: str, intro: list, sections: list) -> Path:
             out.append("</tr>")
             for j, row in enumerate(t.rows):
                 cls = f" class='{t.row_classes[j]}'" if t.row_classes else ""
-                out.append(f"<tr{cls}>" + "".join(f"<td>{_fmt(c)}</td>" for c in row) + "</tr>")
+                out.append(f"<tr{cls}>" + "".join(
+                    f"<td class='text'>{_fmt(c)}</td>" if isinstance(c, str) else f"<td>{_fmt(c)}</td>"
+                    for c in row) + "</tr>")
             out.append("</table>")
         for f in s.figures:
             out.append(f"<figure>{_img(f.path)}<figcaption>{f.caption}</figcaption></figure>")

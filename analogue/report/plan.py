@@ -7,7 +7,8 @@ The ``[report]`` table of ``circuits/<name>.toml`` (all keys optional)::
     stationary_t_end = 100.0       # their length (model time)
     stationary_burn_in = 2.0       # discarded at the start of each
     stick_threshold = 0.1          # |v| below this many sqrt(tau_m/gamma) counts as stuck
-    prehistory = [[0.5, 3.0]]      # (v, t) targets: paths from v0[0] reaching them
+    prehistory = [[2.0, 0.5, 3.0]] # (v0, v, t): paths from v0 (one of experiment.v0) reaching
+                                   # (v, t); a pair (v, t) means v0 = experiment.v0[0]
     prehistory_window = 0.15       # half-width of the target window (velocity units)
     work_paths = [[1.0, 5.0]]      # (w, tau): circuit windows of work rate ~ w vs eq. eqelk1
     check_replicas = 64            # replicas re-run for the integration / bandwidth checks
@@ -76,17 +77,19 @@ class ReportSettings:
         b = self.stationary_burn_in
         if not (isinstance(b, (int, float)) and 0 <= b < self.stationary_t_end):
             raise ValueError(f"report.stationary_burn_in must be in [0, stationary_t_end), got {b!r}")
-        for name in ("prehistory", "work_paths"):
-            pairs = getattr(self, name)
-            ok = all(isinstance(p, (list, tuple)) and len(p) == 2
-                     and all(isinstance(x, (int, float)) and not isinstance(x, bool)
-                             and math.isfinite(x) for x in p) for p in pairs)
+        for name, sizes in (("prehistory", (2, 3)), ("work_paths", (2,))):
+            items = getattr(self, name)
+            ok = isinstance(items, (list, tuple)) and all(
+                isinstance(p, (list, tuple)) and len(p) in sizes
+                and all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                        and math.isfinite(x) for x in p) for p in items)
             if not ok:
-                raise ValueError(f"report.{name} must be a list of [number, number] pairs")
-            object.__setattr__(self, name, tuple(tuple(float(x) for x in p) for p in pairs))
-        for v, t in self.prehistory:
-            if t <= 0:
-                raise ValueError(f"report.prehistory times must be > 0, got {t}")
+                shape = " or ".join(f"[{', '.join(['number'] * k)}]" for k in sizes)
+                raise ValueError(f"report.{name} must be a list of {shape} entries")
+            object.__setattr__(self, name, tuple(tuple(float(x) for x in p) for p in items))
+        for p in self.prehistory:
+            if p[-1] <= 0:
+                raise ValueError(f"report.prehistory times must be > 0, got {p[-1]}")
         for w, tau in self.work_paths:
             if tau <= 0:
                 raise ValueError(f"report.work_paths tau must be > 0, got {tau}")
