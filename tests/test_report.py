@@ -1,0 +1,168 @@
+"""Reports: metrics schema, the self-contained page, and the quick paper run end to end
+(including the page loading in headless Chromium, with a screenshot kept as a test artefact)."""
+import json
+import math
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from analogue.report.html import Figure, Section, Table, write_page
+from analogue.report.metrics import Budget, compare, validate_metrics
+from analogue.report.plan import ReportSettings, RunOptions
+
+ROOT = Path(__file__).resolve().parents[1]
+ARTIFACTS = ROOT / "test-artifacts"
+
+
+# ----------------------------------------------------------------------------- metrics
+def test_compare_z_and_budget():
+    c = compare("e", "mean v", 1.10, 0.02, 1.0, "exact", Budget(smoothing=0.01, bandwidth=-0.02))
+    assert c.z == pytest.approx(5.0)
+    # |diff| = 0.1 > 3 SE + 0.03 = 0.09: not explained
+    assert not c.within_budget
+    c2 = compare("e", "mean v", 1.08, 0.02, 1.0, "exact", Budget(smoothing=0.01, bandwidth=-0.02))
+    assert c2.within_budget  # 0.08 <= 0.09
+    d = c.as_dict()
+    assert d["budget"]["total"] == pytest.approx(0.03)
+    assert d["budget"]["dominant"] == "statistical"
+    with pytest.raises(ValueError, match="theory_kind"):
+        compare("e", "x", 1.0, 0.1, 1.0, "guess")
+
+
+def test_validate_metrics_rejects_bad_documents():
+    good = {"comparisons": [compare("e", "x", 1.0, 0.1, 1.0).as_dict()],
+            "provenance": {"parameters": {}, "seeds": {}, "ngspice_version": "x",
+                           "deck_hashes": {}, "wall_time_s": 1.0}}
+    validate_metrics(json.loads(json.dumps(good)))
+    for mutate, needle in [
+        (lambda d: d.pop("provenance"), "provenance"),
+        (lambda d: d["comparisons"][0].pop("z"), "'z'"),
+        (lambda d: d["comparisons"][0].update(theory_kind="guess"), "theory_kind"),
+        (lambda d: d["comparisons"][0].update(within_budget="yes"), "within_budget"),
+        (lambda d: d["provenance"].pop("deck_hashes"), "deck_hashes"),
+    ]:
+        bad = json.loads(json.dumps(good))
+        mutate(bad)
+        with pytest.raises(ValueError, match=needle):
+            validate_metrics(bad)
+
+
+def test_page_is_self_contained(tmp_path):
+    from analogue.plots.style import new_figure, save
+    fig, ax = new_figure()
+    ax.plot([0, 1], [0, 1])
+    png = save(fig, tmp_path / "a.png")
+    page = write_page(tmp_path / "index.html", "T <&>", ["intro"],
+                      [Section("S", ["p"], [Figure(png, "cap")], [Table("t", ["a", "b"], [["x", 1.5]])])])
+    html = page.read_text()
+    assert "T &lt;&amp;&gt;" in html
+    assert re.search(r'src="data:image/png;base64,[A-Za-z0-9+/=]{100,}"', html)
+    assert "http://" not in html and "https://" not in html and "<script" not in html
+
+
+def test_report_settings_validation():
+    assert ReportSettings(prehistory=[[1.0, 2.0], [2.0, 0.5, 1.0]]).prehistory[1] == (2.0, 0.5, 1.0)
+    with pytest.raises(ValueError, match="report.prehistory"):
+        ReportSettings(prehistory=[[1.0]])
+    with pytest.raises(ValueError, match="report.stationary_replicas"):
+        ReportSettings(stationary_replicas=1)
+    with pytest.raises(ValueError, match="report.stationary_burn_in"):
+        ReportSettings(stationary_burn_in=200.0)
+    q = ReportSettings().for_options(RunOptions(quick=True))
+    assert q.stationary_replicas == 32 and q.stationary_t_end == 50.0
+
+
+# --------------------------------------------------------------------- quick paper run
+@pytest.fixture(scope="module")
+def paper_report(tmp_path_factory):
+    out = tmp_path_factory.mktemp("paper")
+    store = tmp_path_factory.mktemp("store")
+    exe = Path(sys.executable).with_name("analogue")
+    env = dict(os.environ, ANALOGUE_STORE=str(store))
+    p = subprocess.run([str(exe), "paper", "--quick", "--out", str(out), "--no-progress"],
+                       capture_output=True, text=True, timeout=1500, env=env)
+    assert p.returncode == 0, p.stderr[-3000:]
+    return out, p
+
+
+@pytest.mark.slow
+@pytest.mark.xdist_group("paper")
+def test_quick_paper_writes_valid_report(paper_report):
+    out, proc = paper_report
+    metrics = json.loads((out / "metrics.json").read_text())
+    validate_metrics(metrics)
+    names = {c["experiment"] for c in metrics["comparisons"]}
+    assert names == {"stick", "slip", "work"}
+    kinds = {c["theory_kind"] for c in metrics["comparisons"]}
+    assert kinds == {"exact", "weak-noise"}
+    prov = metrics["provenance"]
+    assert prov["ngspice_version"].lower().startswith("ngspice")
+    assert all(len(h) == 64 for hashes in prov["deck_hashes"].values() for h in hashes.values())
+    pngs = sorted(p.name for p in out.glob("*.png"))
+    for needed in ("fig1_deterministic.png", "fig5_boundaries_stick.png",
+                   "fig6_propagator_stick_v0_2.png", "fig7_work_paths_work.png",
+                   "fig8_9_work_work.png", "open_question_rate.png"):
+        assert needed in pngs
+    html = (out / "index.html").read_text()
+    assert html.count("data:image/png;base64,") >= len(pngs)
+    assert "report written" in proc.stderr
+
+
+@pytest.mark.slow
+@pytest.mark.xdist_group("paper")
+def test_quick_paper_comparisons_are_within_budget_or_flagged(paper_report):
+    """Circuit vs exact: |z| < 3 or explained by the budget; what is neither must be named in
+    the report.  With n comparisons a 3-sigma rule flags ~0.27 % by chance: allow at most the
+    99.9 % binomial quantile of such flukes."""
+    out, _ = paper_report
+    metrics = json.loads((out / "metrics.json").read_text())
+    exact = [c for c in metrics["comparisons"] if c["theory_kind"] == "exact"]
+    bad = [c for c in exact if not c["within_budget"]]
+    allowed = int(stats.binom.ppf(0.999, len(exact), 2 * stats.norm.sf(3.0)))
+    assert len(bad) <= allowed, [(c["experiment"], c["observable"], c["z"]) for c in bad]
+    html = (out / "index.html").read_text()
+    for c in bad:
+        assert f"{c['experiment']} / {c['observable']}" in html
+    for c in exact:
+        assert c["within_budget"] == (abs(c["circuit"] - c["theory"])
+                                      <= 3 * c["circuit_stderr"] + c["budget"]["total"] + 1e-15)
+
+
+def _chromium():
+    for name in ("chromium", "chromium-browser", "google-chrome"):
+        path = shutil.which(name)
+        if path:
+            return path
+    raise AssertionError("headless Chromium is needed for this test: install Debian's "
+                         "'chromium' (make setup-test does)")
+
+
+@pytest.mark.slow
+@pytest.mark.xdist_group("paper")
+def test_report_loads_in_headless_chromium(paper_report, tmp_path):
+    out, _ = paper_report
+    ARTIFACTS.mkdir(exist_ok=True)
+    shot = ARTIFACTS / "report.png"
+    if shot.exists():
+        shot.unlink()
+    cmd = [_chromium(), "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+           "--no-first-run", "--disable-background-networking", "--disable-component-update",
+           "--disable-sync", f"--user-data-dir={tmp_path / 'profile'}", "--window-size=1280,2400",
+           "--enable-logging=stderr", "--v=0", f"--screenshot={shot}",
+           (out / "index.html").as_uri()]
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=180)
+    assert p.returncode == 0, p.stderr[-2000:]
+    assert shot.exists() and shot.stat().st_size > 20_000
+    # no failed loads and no console errors from the page itself
+    assert "Failed to load resource" not in p.stderr
+    assert "CONSOLE" not in p.stderr
+    from matplotlib.image import imread
+    img = imread(shot)
+    assert img.std() > 0.05, "the screenshot is blank"
