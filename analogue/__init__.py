@@ -11,9 +11,15 @@ __all__ = ["Model", "MechanicalParameters", "Ensemble", "simulate"]
 __version__ = "0.1.0"
 
 
+_SUBMODULES = ("theory", "estimators", "montecarlo", "circuit", "report", "plots")
+
+
 def __getattr__(name):
     # The circuit runner pulls in PySpice and friends; import it only when asked for.
     if name == "simulate":
         from .circuit.simulate import simulate
         return simulate
+    if name in _SUBMODULES:
+        import importlib
+        return importlib.import_module(f".{name}", __name__)
     raise AttributeError(f"module 'analogue' has no attribute {name!r}")
