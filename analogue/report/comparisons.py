@@ -16,7 +16,7 @@ from ..circuit.mapping import map_model
 from ..theory.exact import sample_stationary
 from .budget import SE_MULTIPLIER, held_noise_pair
 from .metrics import Budget, Comparison, compare
-from .observables import (exact_stationary, exact_transition, jackknife, jackknife_difference,
+from .observables import (exact_stationary, exact_transition, histogram_chi2, tname, jackknife, jackknife_difference,
                           stationary_values, subset, transition_values, weak_noise_transition)
 from .runs import ExperimentRuns
 
@@ -78,7 +78,8 @@ def analyse(runs: ExperimentRuns, *, progress=None) -> ExperimentAnalysis:
         n = ens.replicas
         circ = {k: (v, _prob_floor(k, v, se, n)) for k, (v, se) in circ.items()}
         ex = exact_transition(model, v0, times, h=h)
-        ex_eff = exact_transition(model_eff, v0, times, h=h)
+        dens = {}
+        ex_eff = exact_transition(model_eff, v0, times, h=h, densities=dens)
         held, white = held_noise_pair(model_eff, v0=v0, t_end=max(times), replicas=MC_REPLICAS,
                                       seed=exp.seed + 17 * i, noise_dt=noise_dt,
                                       sample_dt=exp.sample_dt)
@@ -103,6 +104,14 @@ def analyse(runs: ExperimentRuns, *, progress=None) -> ExperimentAnalysis:
                     exp.name, k, val, se, weak[k], "weak-noise", bw,
                     "saddle-point propagator (eqs. sol1-sol3) normalised on a grid; "
                     "finite_noise = exact(gamma) - weak-noise"))
+
+        for t, f in zip(times, dens["f"]):
+            chi2, dof = histogram_chi2(ens.at(t), dens["v"], f)
+            res.comparisons.append(compare(
+                exp.name, tname("histogram chi2/dof", t, v0), chi2 / dof, math.sqrt(2.0 / dof),
+                1.0, "exact", Budget(),
+                f"Pearson chi^2 of the {ens.replicas} circuit velocities against the exact "
+                f"f(v, t | v0) at the circuit's epsilon, {dof + 1} equal-probability bins"))
 
     # ---------------------------------------------------------------- stationary run
     tick(f"{exp.name}: stationary observables")

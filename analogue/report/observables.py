@@ -118,14 +118,18 @@ def _moments(v, f):
     return mean, var, neg
 
 
-def exact_transition(model: Model, v0: float, times, h: float | None = None) -> dict:
+def exact_transition(model: Model, v0: float, times, h: float | None = None,
+                     densities: dict | None = None) -> dict:
     """Exact finite-noise mean, variance and P(v<0) of f(v, t | v0) (Fokker-Planck).
 
     ``h`` fixes the Fokker-Planck grid spacing: a difference between two models (the smoothing
-    bias) is computed on one common grid so that discretisation errors cancel."""
+    bias) is computed on one common grid so that discretisation errors cancel.  If
+    ``densities`` is a dict, the grid and densities are stored in it ("v", "f")."""
     from ..theory import exact
     v = velocity_grid(model, [v0])
     f = np.atleast_2d(exact.propagator(model, v, np.asarray(times, dtype=float), v0, h=h))
+    if densities is not None:
+        densities.update(v=v, f=f)
     out = {}
     for t, row in zip(times, f):
         m, var, neg = _moments(v, row)
@@ -133,6 +137,24 @@ def exact_transition(model: Model, v0: float, times, h: float | None = None) -> 
         out[tname("var v", t, v0)] = var
         out[tname("P(v<0)", t, v0)] = neg
     return out
+
+
+def histogram_chi2(samples, v, f, min_expected: float = 5.0):
+    """Pearson chi^2 of iid ``samples`` against the density ``f`` on the grid ``v``.
+
+    Bins are equal-probability under the theory (about ``n/20`` expected counts each, at
+    least ``min_expected``), so every bin is well populated and the statistic is close to its
+    chi^2 law; returns ``(chi2, dof)``."""
+    samples = np.asarray(samples, dtype=float)
+    n = samples.size
+    cdf = np.concatenate([[0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * np.diff(v))])
+    cdf /= cdf[-1]
+    k = int(max(2, min(20, n // min_expected)))
+    qs = np.linspace(0, 1, k + 1)[1:-1]
+    edges = np.interp(qs, cdf, v)
+    counts = np.bincount(np.searchsorted(edges, samples), minlength=k)
+    expected = n / k
+    return float(np.sum((counts - expected) ** 2) / expected), k - 1
 
 
 def weak_noise_transition(model: Model, v0: float, times) -> dict:
