@@ -417,7 +417,9 @@ class _Reduced:
         mu, V = np.linalg.eig(A)
         left = np.einsum("i,kij->kj", self.c, V)
         right = np.linalg.solve(V, np.broadcast_to(self.c.astype(complex), mu.shape)[..., None])[..., 0]
-        return np.log(np.sum(left * right * np.exp(tau * (mu - shift)), axis=-1))
+        # a failing basis shows up as overflow/NaN here; the caller checks and retries
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            return np.log(np.sum(left * right * np.exp(tau * (mu - shift)), axis=-1))
 
 
 def _work_pdf_one(model, w, tau, h, modes, mean):
@@ -433,21 +435,30 @@ def _work_pdf_one(model, w, tau, h, modes, mean):
     ``p_W = exp(K(k*) - k* W) / sqrt(2 pi K''(k*))``, is returned (relative error O(1/tau);
     only reached far in the tail, at densities far below 1e-8).
     """
-    k0 = _legendre_root(model, w, h, mean)[0]
+    k0, lam = _legendre_root(model, w, h, mean)
+    W = w * tau
     g1 = _grid_for(model, k0, h, extra=_tilt_centres(model, 0.0))
     g2 = Grid(h / 2.0, 2 * g1.i_min, 2 * g1.i_max)
-    W = w * tau
-    saddle = None
     for m in (modes, 2 * modes):
         red2 = _Reduced(model, k0, g2, m)
         ks, K2, curv = _saddle(model, red2, W, tau, k0)
-        red1 = _Reduced(model, k0, g1, m)
-        K1 = red1.log_g_and_derivatives(ks, tau)[0]
-        saddle = (4.0 * K2 - K1) / 3.0 - ks * W
         integral = _contour_integral(red2, ks, W, tau, K2, curv)
         if integral is not None:
-            return math.exp(math.log(tau) + saddle + math.log(integral / math.pi))
-    return math.exp(math.log(tau) + saddle - 0.5 * math.log(2.0 * math.pi * curv))
+            K1 = _Reduced(model, k0, g1, m).log_g_and_derivatives(ks, tau)[0]
+            return math.exp(math.log(tau) + (4.0 * K2 - K1) / 3.0 - ks * W
+                            + math.log(integral / math.pi))
+    # Fallback (far tail): large-deviation density with the Gaussian (Bahadur-Rao) prefactor
+    # from the principal eigenpair only; the overlap factor of the stationary state with the
+    # tilted ground state (too small to compute from eigenvectors in floating point) is left
+    # out, so ln p is right to O(1), i.e. -ln p / tau to O(1/tau).
+    _FALLBACKS.append((w, tau))
+    d = 1e-4 * max(abs(k0), 1.0)
+    lpp = (_scgf_pair(model, k0 + d, h, check=False)[1]
+           - _scgf_pair(model, k0 - d, h, check=False)[1]) / (2 * d)
+    return math.exp(-tau * (k0 * w - lam) + 0.5 * math.log(tau / (2.0 * math.pi * max(lpp, 1e-300))))
+
+
+_FALLBACKS: list = []   # (w, tau) of large-deviation fallbacks, for diagnostics and tests
 
 
 def _saddle(model, red, W, tau, k0):
