@@ -115,7 +115,8 @@ def test_reflection_symmetry_and_shapes():
     assert heavy == pytest.approx(f[1], rel=1e-12, abs=1e-300)
     shifted = exact.propagator(m, v[:400].reshape(20, 20), 2.2, 1.1, t0=1.0)
     assert shifted.shape == (20, 20)
-    assert shifted.ravel() == pytest.approx(f[1][:400], rel=1e-12, abs=1e-300)
+    # 2.2 - 1.0 != 1.2 in floating point: the tails (1e-19) differ at the 1e-12 level
+    assert shifted.ravel() == pytest.approx(f[1][:400], rel=1e-9, abs=1e-300)
     assert exact.propagator(m, 0.0, [0.5, 1.0], 0.2).shape == (2,)
 
 
