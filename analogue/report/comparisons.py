@@ -81,7 +81,7 @@ def analyse(runs: ExperimentRuns, *, progress=None) -> ExperimentAnalysis:
         dens = {}
         ex_eff = exact_transition(model_eff, v0, times, h=h, densities=dens)
         held, white = held_noise_pair(model_eff, v0=v0, t_end=max(times), replicas=MC_REPLICAS,
-                                      seed=exp.seed + 17 * i, noise_dt=noise_dt,
+                                      seed=1000 * exp.seed + 600 + i, noise_dt=noise_dt,
                                       sample_dt=exp.sample_dt)
         band = jackknife_difference(fn, held, white)
         integ = {}
@@ -124,10 +124,10 @@ def analyse(runs: ExperimentRuns, *, progress=None) -> ExperimentAnalysis:
     circ = jackknife(fn, ens)
     ex = exact_stationary(model, threshold=thr, taus=taus, h=h)
     ex_eff = exact_stationary(model_eff, threshold=thr, taus=taus, h=h)
-    v0_mc = sample_stationary(model_eff, MC_STATIONARY_REPLICAS, exp.seed + 103)
+    v0_mc = sample_stationary(model_eff, MC_STATIONARY_REPLICAS, 1000 * exp.seed + 701)
     tick(f"{exp.name}: held-noise Monte Carlo pair")
     held, white = held_noise_pair(model_eff, v0=v0_mc, t_end=st.stationary_t_end,
-                                  replicas=v0_mc.size, seed=exp.seed + 101, noise_dt=noise_dt,
+                                  replicas=v0_mc.size, seed=1000 * exp.seed + 700, noise_dt=noise_dt,
                                   sample_dt=exp.sample_dt)
     band = jackknife_difference(fn, held, white)
     chk = runs.check_stationary

@@ -157,16 +157,23 @@ def fig_propagator(runs: ExperimentRuns, out: Path, v0: float | None = None):
     v = np.unique(np.concatenate([v, [0.0]]))
     f_exact = np.atleast_2d(exact.propagator(m, v, np.array(times), v0))
     for j, t in enumerate(times):
-        d = transition_density(ens, t, bins=40, range=(grid_lo, grid_hi))
+        sample = ens.at(t)
+        pad = 0.5 * m.velocity_scale
+        lo, hi = float(sample.min()) - pad, float(sample.max()) + pad
+        d = transition_density(ens, t, bins=30, range=(lo, hi))
+        occupied = d.counts > 0
         f_weak = np.asarray(weak_noise.propagator(m, v, t, v0)) if m.delta > 0 else None
         for row, log in enumerate((False, True)):
             ax = axes[row, j]
-            ax.fill_between(d.centres, d.lower, d.upper, step="mid", color=CIRCUIT, alpha=0.25)
-            ax.step(d.centres, d.density, where="mid", color=CIRCUIT, lw=1.2,
-                    label=f"circuit ({ens.replicas} paths, 95 % band)")
+            band_lo = np.where(occupied | (row == 0), d.lower, np.nan)
+            band_hi = np.where(occupied | (row == 0), d.upper, np.nan)
+            ax.fill_between(d.centres, band_lo, band_hi, step="mid", color=CIRCUIT, alpha=0.25)
+            ax.step(d.centres, np.where(occupied | (row == 0), d.density, np.nan), where="mid",
+                    color=CIRCUIT, lw=1.2, label=f"circuit ({ens.replicas} paths, 95 % band)")
             ax.plot(v, f_exact[j], color=EXACT, lw=1.4, label="exact (Fokker-Planck)")
             if f_weak is not None:
                 ax.plot(v, f_weak, color=WEAK, lw=1.2, ls="--", label="weak noise (eqs. sol1-sol3)")
+            ax.set_xlim(lo - pad, hi + pad)
             if row == 0:
                 ax.set_title(f"t = {t:g}", fontsize=10)
                 ax.set_ylim(bottom=0)
@@ -357,7 +364,8 @@ def fig_rate_function(runs: ExperimentRuns, out: Path):
 
 # ------------------------------------------------------------------------- error budget
 def fig_budget(analysis: ExperimentAnalysis, out: Path):
-    comps = [c for c in analysis.comparisons if c.theory_kind == "exact"]
+    comps = [c for c in analysis.comparisons
+             if c.theory_kind == "exact" and not c.observable.startswith("histogram chi2")]
     if not comps:
         return None
     names = [c.observable for c in comps]
@@ -382,7 +390,7 @@ def fig_budget(analysis: ExperimentAnalysis, out: Path):
     ax.legend(fontsize=7, loc="lower right")
     ax.set_title(f"Error budget — {analysis.runs.exp.name}", fontsize=10)
     path = save(fig, out / f"budget_{analysis.runs.exp.name}.png")
-    return path, ("Error budget per observable: stacked bars are the allowed deviation "
+    return path, ("Error budget per observable (histogram chi-square tests are in the table): stacked bars are the allowed deviation "
                   "(3 standard errors + smoothing + noise bandwidth + integration, each estimated "
                   "independently); diamonds are the actual |circuit - exact|. A diamond inside "
                   "its bar is explained by the budget.")

@@ -21,6 +21,7 @@ class Table:
     header: list
     rows: list
     row_classes: list | None = None
+    collapsed: bool = False
 
 
 @dataclass
@@ -48,6 +49,7 @@ tr.fail td{background:#fde8e8} tr.ok td{background:#f3fbf3}
 caption{caption-side:top;text-align:left;font-style:italic;margin-bottom:.3em}
 nav{background:#f6f6fb;padding:.6em 1em;border:1px solid #dde}
 code{background:#f4f4f4;padding:0 .2em}
+summary{cursor:pointer;margin:.6em 0;font-style:italic}
 """
 
 
@@ -85,6 +87,8 @@ def write_page(path: Path, title: str, intro: list, sections: list) -> Path:
         out.append(f"<h2 id='{s.anchor}'>{html.escape(s.title)}</h2>")
         out += [f"<p>{p}</p>" for p in s.paragraphs]
         for t in s.tables:
+            if t.collapsed:
+                out.append(f"<details><summary>{html.escape(t.caption)}</summary>")
             out.append(f"<table><caption>{html.escape(t.caption)}</caption><tr>")
             out += [f"<th>{html.escape(str(h))}</th>" for h in t.header]
             out.append("</tr>")
@@ -94,6 +98,8 @@ def write_page(path: Path, title: str, intro: list, sections: list) -> Path:
                     f"<td class='text'>{_fmt(c)}</td>" if isinstance(c, str) else f"<td>{_fmt(c)}</td>"
                     for c in row) + "</tr>")
             out.append("</table>")
+            if t.collapsed:
+                out.append("</details>")
         for f in s.figures:
             out.append(f"<figure>{_img(f.path)}<figcaption>{f.caption}</figcaption></figure>")
     out.append("</body></html>")

@@ -104,13 +104,16 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
     mapping = map_model(model, spec)
     model_eff = mapping.model_effective
     replicas = opts.scaled(exp.replicas)
-    seeds = {"transition": exp.seed, "stationary": exp.seed + 1000, "noise_free": exp.seed + 2000}
+    # Each run gets its own seed, derived from the experiment's: distinct experiments (whose
+    # seeds differ) never share a noise realisation, so their comparisons are independent.
+    base = 1000 * exp.seed
+    seeds = {"stationary": base + 500, "noise_free": base + 900}
 
     transition = {}
     for i, v0 in enumerate(exp.v0):
+        seeds[f"transition v0={v0:g}"] = base + i
         transition[v0] = simulate(model, v0=v0, t_end=exp.t_end, replicas=replicas,
-                                  seed=exp.seed + i, sample_dt=exp.sample_dt, circuit=spec, **kw)
-        seeds[f"transition v0={v0:g}"] = exp.seed + i
+                                  seed=base + i, sample_dt=exp.sample_dt, circuit=spec, **kw)
 
     n_stat = settings.stationary_replicas
     v0_stat = np.asarray(sample_stationary(model_eff, n_stat, seeds["stationary"]), dtype=float)
@@ -126,7 +129,7 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
     tight = _tight(spec, mapping)
     v00 = exp.v0[0]
     n0 = first_deck_size(replicas)
-    check_transition = simulate(model, v0=v00, t_end=exp.t_end, replicas=n0, seed=exp.seed,
+    check_transition = simulate(model, v0=v00, t_end=exp.t_end, replicas=n0, seed=base,
                                 sample_dt=exp.sample_dt, circuit=tight, **kw)
     _check_coupled(transition[v00], check_transition, "transition check")
     n1 = first_deck_size(n_stat)
