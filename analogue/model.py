@@ -20,6 +20,8 @@ from typing import NamedTuple
 import numpy as np
 from scipy import integrate, optimize, special
 
+from .checks import finite as _finite, nonnegative as _nonnegative, positive as _positive
+
 __all__ = ["Model", "MechanicalParameters"]
 
 
@@ -33,28 +35,7 @@ class MechanicalParameters(NamedTuple):
     D: float
 
 
-def _finite(name: str, value) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a real number, got {value!r}") from None
-    if not math.isfinite(x):
-        raise ValueError(f"{name} must be finite, got {x!r}")
-    return x
 
-
-def _positive(name: str, value) -> float:
-    x = _finite(name, value)
-    if not x > 0:
-        raise ValueError(f"{name} must be > 0, got {x!r}")
-    return x
-
-
-def _nonnegative(name: str, value) -> float:
-    x = _finite(name, value)
-    if not x >= 0:
-        raise ValueError(f"{name} must be >= 0, got {x!r}")
-    return x
 
 
 def _logcosh(x):

@@ -5,6 +5,8 @@ import math
 
 import numpy as np
 
+from ..checks import finite, nonnegative, positive  # noqa: F401  (re-exported)
+
 from ..ensemble import Ensemble
 
 
@@ -14,28 +16,7 @@ def ensemble(obj) -> Ensemble:
     return obj
 
 
-def finite(name: str, value) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a real number, got {value!r}") from None
-    if not math.isfinite(x):
-        raise ValueError(f"{name} must be finite, got {x!r}")
-    return x
 
-
-def positive(name: str, value) -> float:
-    x = finite(name, value)
-    if not x > 0:
-        raise ValueError(f"{name} must be > 0, got {x!r}")
-    return x
-
-
-def nonnegative(name: str, value) -> float:
-    x = finite(name, value)
-    if not x >= 0:
-        raise ValueError(f"{name} must be >= 0, got {x!r}")
-    return x
 
 
 def confidence(value) -> float:

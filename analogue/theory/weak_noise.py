@@ -45,6 +45,7 @@ import numpy as np
 from scipy.integrate import trapezoid
 from scipy.optimize.elementwise import find_root
 
+from ..checks import finite as _finite
 from ..model import Model
 from .weak_noise_pieces import bridge, bridge_min, monotone_time, ou_action, ou_action_rate
 
@@ -60,15 +61,6 @@ _ADMISSIBLE_RTOL = 1e-11
 
 
 # ----------------------------------------------------------------------------- validation
-def _finite(name: str, value) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a real number, got {value!r}") from None
-    if not math.isfinite(x):
-        raise ValueError(f"{name} must be finite, got {x!r}")
-    return x
-
 
 def _times(t, t0):
     t0 = _finite("t0", t0)

@@ -33,30 +33,13 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import optimize
 
+from ..checks import finite as _finite, finite_array as _finite_array
 from ..model import Model
 
 __all__ = ["rate_function", "fluctuation_relation", "work_optimal_path", "WorkOptimalPath"]
 
 
 # ----------------------------------------------------------------------------- validation
-def _finite(name: str, value) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a real number, got {value!r}") from None
-    if not math.isfinite(x):
-        raise ValueError(f"{name} must be finite, got {x!r}")
-    return x
-
-
-def _finite_array(name: str, value) -> np.ndarray:
-    try:
-        x = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be real numbers, got {value!r}") from None
-    if not np.all(np.isfinite(x)):
-        raise ValueError(f"{name} must be finite")
-    return x
 
 
 def _require_force(model: Model) -> None:
