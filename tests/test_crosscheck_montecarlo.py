@@ -106,7 +106,7 @@ def test_work_variance_and_mean_match_autocorrelation(name):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["slip_neg_heavy", "stick_pos"])
+@pytest.mark.parametrize("name", ["slip_neg_heavy"])
 def test_work_density_matches_histogram(name):
     """exact.work_pdf (density of w = W/tau) vs a histogram of simulated work rates: each bin
     probability within 4 binomial SE (+ dt bias from the 2 dt run)."""
@@ -119,17 +119,31 @@ def test_work_density_matches_histogram(name):
     n = w.size
     counts = np.histogram(w, edges)[0]
     counts_c = np.histogram(wc, edges)[0]
-    # bin probabilities from the exact density (Gauss-Legendre, 5 nodes per bin: in the stick
-    # regime the density has a sharp peak near w = 0 that 3 nodes miss).  modes=32 instead of
-    # the default 48: measured to change the density by <= 1.5% relative (near the peak at
-    # w = 0, stick_pos), well below the ~5-10% standard error of a bin, at half the cost.
-    xg, wg = np.polynomial.legendre.leggauss(5)
+    # bin probabilities from the exact density (Gauss-Legendre, 3 nodes per bin; the density
+    # is smooth on the scale of a bin here).  Default modes (see the stick-regime test below
+    # for why fewer modes are not safe).
+    xg, wg = np.polynomial.legendre.leggauss(3)
     mids, halfs = 0.5 * (edges[1:] + edges[:-1]), 0.5 * np.diff(edges)
     nodes = (mids[:, None] + halfs[:, None] * xg).ravel()
-    dens = exact.work_pdf(model, nodes, tau, modes=32).reshape(mids.size, xg.size)
+    dens = exact.work_pdf(model, nodes, tau).reshape(mids.size, xg.size)
     assert np.all(dens >= 0)
     prob = (dens * wg).sum(axis=1) * halfs
     p_hat = counts / n
     se = np.sqrt(prob * (1 - prob) / n)
     bias = np.abs(counts - counts_c) / n
     assert np.all(np.abs(p_hat - prob) < Z * se + bias), (p_hat, prob, se)
+
+
+@pytest.mark.slow
+def test_work_pdf_stick_regime_converged_in_modes():
+    """QA finding: in the stick regime (tau_m = 2.5, Delta = 1.5, a = 0.4, gamma = 3, tau = 2.5)
+    work_pdf with modes=32 is silently wrong at w < 0 (0.085 vs 1.28 with the default 48 at
+    w = -0.047, the 3% quantile of a 6000-replica Monte Carlo, whose box estimate there is
+    1.48 +- 0.08).  A density that depends on the truncation by a factor 15 is not converged;
+    the function should either converge (the two agree within 5%) or refuse/warn.  Until then
+    the 2-bin histogram check for this case is left out (it costs ~100 s at 48 modes)."""
+    model = Model(**CASES["stick_pos"])
+    w = np.array([-0.047, -0.019])
+    p32 = exact.work_pdf(model, w, model.tau_m, modes=32)
+    p48 = exact.work_pdf(model, w, model.tau_m)
+    assert np.allclose(p32, p48, rtol=0.05), (p32, p48)
