@@ -365,10 +365,10 @@ def sample_stationary(model: Model, size, seed=None) -> np.ndarray:
     ``seed``: None, an int, a SeedSequence or a numpy Generator.
     """
     _check_model(model)
-    try:
-        shape = tuple(int(s) for s in np.atleast_1d(size))
-    except (TypeError, ValueError):
-        raise ValueError(f"size must be an int or a tuple of ints, got {size!r}") from None
+    sizes = np.atleast_1d(np.asarray(size, dtype=object))
+    if not all(isinstance(s, (int, np.integer)) and not isinstance(s, bool) for s in sizes):
+        raise ValueError(f"size must be an int or a tuple of ints, got {size!r}")
+    shape = tuple(int(s) for s in sizes)
     if any(s < 0 for s in shape):
         raise ValueError(f"size must be >= 0, got {size!r}")
     if np.ndim(size) == 0:

@@ -89,6 +89,8 @@ class _Frame:
 
     @classmethod
     def of(cls, model: Model) -> "_Frame":
+        if not isinstance(model, Model):
+            raise ValueError(f"model must be an analogue.Model, got {type(model).__name__}")
         flip = -1.0 if model.a < 0 else 1.0
         return cls(model.tau_m, model.delta, abs(model.a), flip)
 
