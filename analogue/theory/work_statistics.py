@@ -343,15 +343,16 @@ def work_pdf(model: Model, w, tau, *, h: float | None = None, modes: int = 48):
     states far from it fall below floating-point resolution, and the projected generating
     function then violates ``|G(k*+iy)| <= G(k*)`` (true of every moment generating
     function) or stops decaying along the contour.  This is checked; the basis is then
-    doubled once, and if that fails too the density falls back to the large-deviation form
-    ``sqrt(tau / (2 pi lambda''(k0))) exp(-tau (k0 w - lambda(k0)))`` (principal eigenpair,
-    Gaussian prefactor, the overlap factor left out): ``-ln p / tau`` is right to O(1/tau),
-    the density itself only to the left-out overlap factor, which can be large at short tau:
-    Fig. 8 parameters (gamma = 10), tau = 1, w = -0.5 / 1.0: fallback 4.9e-8 / 2.9e-7 where a
-    4 x 48-mode contour (68 s) gives 2.9e-13 / 1.4e-17.  Measured (gamma = 10, tau_m = 1,
-    w in [-1.5, 2.5]): at tau >= 2 the fallback is reached only below 1e-13 (tau = 2) or far
-    lower; at tau = 1 at some points with densities 1e-13 .. 1e-6 (the contour then is not
-    resolved by 96 modes).  It never raises for finite inputs.
+    doubled once (and centred on the finite-tau saddle), and if that fails too the density
+    falls back to the large-deviation form ``<phi_k0|sqrt(pi)>^2 sqrt(tau / (2 pi
+    lambda''(k0))) exp(-tau (k0 w - lambda(k0)))`` (principal eigenpair, Gaussian prefactor,
+    overlap from log-space ground states, :func:`_log_ground_state`).  It leaves out the
+    finite-tau boundary terms of ln G, so ``-ln p / tau`` is right only to O(1/tau): OU,
+    gamma = 10, tau = 2, w = -1.5 (8 sd): 3.2e-40 against the exact 4.6e-47 (ln p off by 16
+    of 107).  Measured (gamma = 10, tau_m = 1, w in [-1.5, 2.5]): at tau >= 2 the fallback
+    is reached only below ~1e-13; at tau = 1 also at some densities 1e-13 .. 1e-6 (contour
+    not resolved by 96 modes; 192 modes resolve them at ~30 s per point).  It never raises
+    for finite inputs; the (w, tau) of fallbacks are appended to ``_FALLBACKS``.
     Cost: per w, a Legendre root of the SCGF, two tridiagonal eigen-solves of ``modes``
     vectors and 12-120 dense complex ``modes x modes`` eigen-decompositions per grid
     (the y range adapts to the slowly decaying characteristic function of the stick regime);
@@ -471,7 +472,50 @@ def _work_pdf_one(model, w, tau, h, modes, mean):
     d = 1e-4 * max(abs(k0), 1.0)
     lpp = (_scgf_pair(model, k0 + d, h, check=False)[1]
            - _scgf_pair(model, k0 - d, h, check=False)[1]) / (2 * d)
-    return math.exp(-tau * (k0 * w - lam) + 0.5 * math.log(tau / (2.0 * math.pi * max(lpp, 1e-300))))
+    log_overlap = 2.0 * (_log_overlap(model, g2, k0))
+    return math.exp(log_overlap - tau * (k0 * w - lam)
+                    + 0.5 * math.log(tau / (2.0 * math.pi * max(lpp, 1e-300))))
+
+
+def _log_ground_state(d, c, lam, phi):
+    """ln of a positive tridiagonal ground state ``c phi_{i-1} + d_i phi_i + c phi_{i+1} =
+    lam phi_i`` with tails far below round-off: the eigen-solver's vector (accurate only to
+    1e-16 of its peak) anchors the peak, the ratios phi_{i-1}/phi_i (from the left end) and
+    phi_{i+1}/phi_i (from the right end) continue it outwards, each recursion run in its
+    stable direction (towards the peak).  Sequential in i by nature."""
+    n = d.size
+    x = (d - lam) / c
+    q = np.zeros(n)          # q[i] = phi_{i-1}/phi_i
+    r = np.zeros(n)          # r[i] = phi_{i+1}/phi_i
+    for i in range(n - 1):
+        q[i + 1] = -1.0 / (x[i] + q[i])
+    for i in range(n - 1, 0, -1):
+        r[i - 1] = -1.0 / (x[i] + r[i])
+    j = int(np.argmax(np.abs(phi)))
+    out = np.empty(n)
+    out[j] = math.log(abs(phi[j]))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        lq = np.log(np.where(q > 0, q, np.nan))
+        lr = np.log(np.where(r > 0, r, np.nan))
+    out[:j] = out[j] + np.cumsum(lq[j:0:-1])[::-1]
+    out[j + 1:] = out[j] + np.cumsum(lr[j:n - 1])
+    return out
+
+
+def _log_overlap(model, grid, k):
+    """ln <phi_k|phi_0> of the normalised principal eigenvectors of S_k and S_0 (both
+    positive), with the tails from :func:`_log_ground_state`, so that overlaps far below
+    1e-16 (tilted states far from the stationary one) are resolved."""
+    from scipy.special import logsumexp
+    logs = []
+    for kk in (k, 0.0):
+        d, e = tilted_operator(model, grid, kk)
+        n = grid.n
+        lam, vec = linalg.eigh_tridiagonal(d, e, select="i", select_range=(n - 1, n - 1))
+        lphi = _log_ground_state(d, e[0], lam[0], vec[:, 0])
+        lphi = np.where(np.isfinite(lphi), lphi, -np.inf)
+        logs.append(lphi - 0.5 * logsumexp(2.0 * lphi))
+    return float(logsumexp(logs[0] + logs[1]))
 
 
 _FALLBACKS: list = []   # (w, tau) of large-deviation fallbacks, for diagnostics and tests
