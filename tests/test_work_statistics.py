@@ -253,3 +253,25 @@ def test_finite_tau_density_approaches_rate_function_with_log_correction():
 def test_bad_input_raises_value_error(call, needle):
     with pytest.raises(ValueError, match=needle):
         call()
+
+
+def test_log_ground_state_resolves_tails_below_round_off():
+    """The fallback's overlap needs ground-state tails far below 1e-16 of the peak: the ratio
+    recursion must follow ln sqrt(pi) = -gamma U/2 + const (OU, continuum ground state of
+    S_0) out to e^-100, and agree with the eigen-solver where that is accurate."""
+    from scipy import linalg
+    from analogue.theory.fokker_planck import Grid
+    h = ws.tilted_grid_spacing(OU10)
+    grid = Grid.span(-6.0, 7.0, h)
+    d, e = ws.tilted_operator(OU10, grid, 0.0)
+    n = grid.n
+    lam, vec = linalg.eigh_tridiagonal(d, e, select="i", select_range=(n - 1, n - 1))
+    lphi = ws._log_ground_state(d, e[0], lam[0], np.abs(vec[:, 0]))
+    ref = -0.5 * OU10.gamma * OU10.potential(grid.v)
+    j = int(np.argmax(ref))
+    diff = (lphi - lphi[j]) - (ref - ref[j])
+    assert np.min(ref - ref[j]) < -100
+    # O((h/sigma)^2) = O(h^2 gamma/tau_m) = 2.5e-3 relative error of the exponent (measured 5e-3)
+    assert np.all(np.abs(diff) <= 1e-2 * np.abs(ref - ref[j]) + 1e-6)
+    big = np.abs(vec[:, 0]) > 1e-8 * np.abs(vec[:, 0]).max()
+    np.testing.assert_allclose(lphi[big], np.log(np.abs(vec[big, 0])), atol=1e-6)
