@@ -343,7 +343,7 @@ def work_pdf(model: Model, w, tau, *, h: float | None = None, modes: int = 48):
     states far from it fall below floating-point resolution, and the projected generating
     function then violates ``|G(k*+iy)| <= G(k*)`` (true of every moment generating
     function) or stops decaying along the contour.  This is checked; the basis is then
-    doubled once (and centred on the finite-tau saddle), and if that fails too the density
+    doubled (at k0, then centred on the finite-tau saddle), and if that fails too the density
     falls back to the large-deviation form ``<phi_k0|sqrt(pi)>^2 sqrt(tau / (2 pi
     lambda''(k0))) exp(-tau (k0 w - lambda(k0)))`` (principal eigenpair, Gaussian prefactor,
     overlap from log-space ground states, :func:`_log_ground_state`).  It leaves out the
@@ -352,7 +352,8 @@ def work_pdf(model: Model, w, tau, *, h: float | None = None, modes: int = 48):
     of 107).  Measured (gamma = 10, tau_m = 1, w in [-1.5, 2.5]): at tau >= 2 the fallback
     is reached only below ~1e-13; at tau = 1 also at some densities 1e-13 .. 1e-6 (contour
     not resolved by 96 modes; 192 modes resolve them at ~30 s per point).  It never raises
-    for finite inputs; the (w, tau) of fallbacks are appended to ``_FALLBACKS``.
+    for finite inputs; the (w, tau) of fallbacks are appended to ``_FALLBACKS``, and a
+    RuntimeWarning is issued when a fallback density exceeds 1e-8.
     Cost: per w, a Legendre root of the SCGF, two tridiagonal eigen-solves of ``modes``
     vectors and 12-120 dense complex ``modes x modes`` eigen-decompositions per grid
     (the y range adapts to the slowly decaying characteristic function of the stick regime);
@@ -448,14 +449,14 @@ def _work_pdf_one(model, w, tau, h, modes, mean):
     W = w * tau
     g1 = _grid_for(model, k0, h, extra=_tilt_centres(model, 0.0))
     g2 = Grid(h / 2.0, 2 * g1.i_min, 2 * g1.i_max)
-    kb = k0
-    for m in (modes, 2 * modes):
+    ks = k0
+    # attempts: the basis at the Legendre point k0, twice the modes there, twice the modes
+    # centred on the finite-tau saddle (at short tau it can lie far from k0)
+    for m, centre in ((modes, False), (2 * modes, False), (2 * modes, True)):
+        kb = ks if centre else k0
         red2 = _Reduced(model, kb, g2, m)
         ks, K2, curv = _saddle(model, red2, W, tau, kb)
         integral = _contour_integral(red2, ks, W, tau, K2, curv)
-        # second attempt: twice the modes, centred on the finite-tau saddle (at short tau
-        # it can lie far from the Legendre point k0 of the infinite-tau SCGF)
-        kb = ks
         if integral is not None:
             red1 = _Reduced(model, red2.k0, g1, m)
             K1 = red1.log_g_and_derivatives(ks, tau)[0]
@@ -473,8 +474,13 @@ def _work_pdf_one(model, w, tau, h, modes, mean):
     lpp = (_scgf_pair(model, k0 + d, h, check=False)[1]
            - _scgf_pair(model, k0 - d, h, check=False)[1]) / (2 * d)
     log_overlap = 2.0 * (_log_overlap(model, g2, k0))
-    return math.exp(log_overlap - tau * (k0 * w - lam)
-                    + 0.5 * math.log(tau / (2.0 * math.pi * max(lpp, 1e-300))))
+    p = math.exp(log_overlap - tau * (k0 * w - lam)
+                 + 0.5 * math.log(tau / (2.0 * math.pi * max(lpp, 1e-300))))
+    if p > 1e-8:
+        warnings.warn(f"work_pdf: contour not resolved at w={w:g}, tau={tau:g} with up to "
+                      f"{2 * modes} modes; large-deviation fallback {p:.3g} may be off by a "
+                      "large factor: pass a larger modes", RuntimeWarning, stacklevel=3)
+    return p
 
 
 def _log_ground_state(d, c, lam, phi):
