@@ -29,8 +29,11 @@ __all__ = ["RunOptions", "run_experiment", "build_experiment_report", "build_pap
            "build_report", "RunSummary"]
 
 
+_T0 = time.perf_counter()
+
+
 def _log(msg: str) -> None:
-    print(f"analogue: {msg}", file=sys.stderr, flush=True)
+    print(f"analogue [{time.perf_counter() - _T0:6.1f} s]: {msg}", file=sys.stderr, flush=True)
 
 
 @dataclass
@@ -120,11 +123,17 @@ def _software() -> dict:
 def _figures_for(runs: ExperimentRuns, analysis: ExperimentAnalysis, out: Path) -> list:
     items = []
     tag = {"stick": "2", "slip": "3-4"}.get(runs.exp.name, "paths")
-    for fn in (lambda: F.fig_prehistory(runs, out, tag), lambda: F.fig_boundaries(runs, out),
-               lambda: F.fig_propagator(runs, out),
-               lambda: F.fig_propagator(runs, out, runs.exp.v0[-1]) if len(runs.exp.v0) > 1 else None,
-               lambda: F.fig_stationary(runs, out), lambda: F.fig_work_paths(runs, out),
-               lambda: F.fig_rate_function(runs, out), lambda: F.fig_budget(analysis, out)):
+    for what, fn in (
+            ("prehistory", lambda: F.fig_prehistory(runs, out, tag)),
+            ("boundaries", lambda: F.fig_boundaries(runs, out)),
+            ("propagator", lambda: F.fig_propagator(runs, out)),
+            ("propagator", lambda: F.fig_propagator(runs, out, runs.exp.v0[-1])
+             if len(runs.exp.v0) > 1 else None),
+            ("stationary law", lambda: F.fig_stationary(runs, out)),
+            ("work paths", lambda: F.fig_work_paths(runs, out)),
+            ("rate function", lambda: F.fig_rate_function(runs, out)),
+            ("error budget", lambda: F.fig_budget(analysis, out))):
+        _log(f"{runs.exp.name}: figure: {what}")
         r = fn()
         if r is not None:
             items.append(Figure(*r))
@@ -213,6 +222,7 @@ def build_report(names, out: Path, opts: RunOptions, title: str) -> Path:
                                 figures=_figures_for(runs, a, out)))
 
     if any(r.exp.name == "work" for r in all_runs) or len(names) > 1:
+        _log("the paper's open question: exact rate functions at several gamma")
         sections.append(_open_question_section(out, opts))
 
     sections.append(Section("All comparisons and their error budgets", [
