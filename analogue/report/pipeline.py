@@ -263,7 +263,7 @@ def build_report(names, out: Path, opts: RunOptions, title: str) -> Path:
     tmp.replace(out / "metrics.json")
 
     intro = [f"Generated {provenance['created']} by analogue {provenance['software']['analogue']} "
-             f"with {provenance['ngspice_version']} ({'quick' if opts.quick else 'full'} run, "
+             f"with ngspice {provenance['ngspice_version']} ({'quick' if opts.quick else 'full'} run, "
              f"{wall:.0f} s). Model units throughout: velocity, time and work rate of the "
              "reduced equation dv/dt = -v/tau_m - Delta sgn(v) + a + xi/m (Baule, Touchette & "
              "Cohen).",

@@ -362,7 +362,10 @@ def work_pdf(model: Model, w, tau, *, h: float | None = None, modes: int = 48):
     model = _check_model(model)
     F = _force(model)
     w = _finite_array("w", w)
-    tau = float(_finite_array("tau", tau))
+    tau_arr = _finite_array("tau", tau)
+    if tau_arr.ndim != 0:
+        raise ValueError(f"tau must be a single number (one window length per call), got {tau!r}")
+    tau = float(tau_arr)
     if not tau > 0:
         raise ValueError(f"tau must be > 0, got {tau!r}")
     modes = int(modes)
