@@ -14,7 +14,7 @@ diode bridge of Shockley diodes does), whose potential is
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from typing import NamedTuple
 
 import numpy as np

@@ -6,8 +6,9 @@ formatted here from finite floats, never copied from user text.
 """
 from __future__ import annotations
 
-import math
 import re
+
+from .. import checks
 
 __all__ = ["NAME_PATTERN", "check_name", "finite", "positive", "nonnegative", "spice_number"]
 
@@ -22,31 +23,25 @@ def check_name(value, what: str = "name") -> str:
     return value
 
 
-def finite(value, what: str) -> float:
-    """A finite float (bools and strings are refused: they are never meant as numbers here)."""
+def _number(value, what: str):
+    # Stricter than analogue.checks: a bool or a string is never meant as a number in a deck
+    # (float("1e3") would otherwise let text through).
     if isinstance(value, (bool, str, bytes)):
         raise ValueError(f"{what} must be a finite real number, got {value!r}")
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{what} must be a finite real number, got {value!r}") from None
-    if not math.isfinite(x):
-        raise ValueError(f"{what} must be finite, got {x!r}")
-    return x
+    return value
+
+
+def finite(value, what: str) -> float:
+    """A finite float (bools and strings are refused: they are never meant as numbers here)."""
+    return checks.finite(what, _number(value, what))
 
 
 def positive(value, what: str) -> float:
-    x = finite(value, what)
-    if not x > 0:
-        raise ValueError(f"{what} must be > 0, got {x!r}")
-    return x
+    return checks.positive(what, _number(value, what))
 
 
 def nonnegative(value, what: str) -> float:
-    x = finite(value, what)
-    if not x >= 0:
-        raise ValueError(f"{what} must be >= 0, got {x!r}")
-    return x
+    return checks.nonnegative(what, _number(value, what))
 
 
 def spice_number(value, what: str = "value") -> str:

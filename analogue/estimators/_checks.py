@@ -1,7 +1,6 @@
 """Input validation and binning helpers shared by the estimators (no physics here)."""
 from __future__ import annotations
 
-import math
 
 import numpy as np
 

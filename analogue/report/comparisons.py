@@ -15,7 +15,7 @@ import numpy as np
 from ..circuit.mapping import map_model
 from ..theory.exact import sample_stationary
 from .budget import SE_MULTIPLIER, held_noise_pair
-from .metrics import Budget, Comparison, compare
+from .metrics import Budget, compare
 from .observables import (exact_stationary, exact_transition, histogram_chi2, tname, jackknife, jackknife_difference,
                           stationary_values, subset, transition_values, weak_noise_transition)
 from .runs import ExperimentRuns

@@ -19,7 +19,7 @@ from .comparisons import ExperimentAnalysis
 from .runs import ExperimentRuns
 
 __all__ = ["fig_deterministic", "fig_prehistory", "fig_propagator", "fig_stationary",
-           "fig_work_paths", "fig_rate_function", "fig_fluctuation_relation", "fig_budget",
+           "fig_work_paths", "fig_rate_function", "fig_budget",
            "fig_boundaries"]
 
 CIRCUIT = "tab:red"

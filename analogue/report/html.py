@@ -74,7 +74,7 @@ def _img(path: Path) -> str:
 
 def write_page(path: Path, title: str, intro: list, sections: list) -> Path:
     """Write ``path`` (index.html) with every figure inlined."""
-    out = [f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>",
+    out = ["<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>",
            f"<title>{html.escape(title)}</title><style>{_CSS}</style></head><body>",
            f"<h1>{html.escape(title)}</h1>"]
     out += [f"<p>{p}</p>" for p in intro]

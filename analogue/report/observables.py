@@ -10,7 +10,7 @@ import numpy as np
 from scipy import integrate
 
 from ..ensemble import Ensemble
-from ..estimators import stick_statistics, transport, work_rate_samples
+from ..estimators import transport, work_rate_samples
 from ..model import Model
 
 __all__ = ["transition_values", "stationary_values", "jackknife", "subset", "jackknife_difference",

@@ -7,7 +7,6 @@ exact numerics, and every circuit-versus-theory comparison with its error budget
 from __future__ import annotations
 
 import json
-import os
 import platform
 import sys
 import time

@@ -360,7 +360,7 @@ def work_pdf(model: Model, w, tau, *, h: float | None = None, modes: int = 48):
     BLAS is limited to one thread meanwhile.
     """
     model = _check_model(model)
-    F = _force(model)
+    _force(model)  # refuses a = 0: the work is identically zero
     w = _finite_array("w", w)
     tau_arr = _finite_array("tau", tau)
     if tau_arr.ndim != 0:
