@@ -97,9 +97,10 @@ def fig_prehistory(runs: ExperimentRuns, out: Path, tag: str):
             ext = [ph.hist_t_edges[0], ph.hist_t_edges[-1], ph.hist_v_edges[0], ph.hist_v_edges[-1]]
             ax.imshow(np.nan_to_num(ph.hist).T, origin="lower", aspect="auto", extent=ext,
                       cmap="Greys", alpha=0.6)
-            ax.fill_between(ph.t, ph.lower, ph.upper, color=CIRCUIT, alpha=0.15,
+            # grey, so that the optimal path keeps its kind's colour (one of which is red)
+            ax.fill_between(ph.t, ph.lower, ph.upper, color="0.55", alpha=0.25,
                             label="circuit 10-90 %")
-            ax.plot(ph.t, ph.mean, color=CIRCUIT, lw=1.5, label=f"circuit mean ({ph.count} paths)")
+            ax.plot(ph.t, ph.mean, color="0.15", lw=1.3, label=f"circuit mean ({ph.count} paths)")
             lines.append(f"v0={v0:g} to (v={v:g}, t={t:g}): {p.kind}, {ph.count} circuit paths")
         ax.plot(p.s, p.v, color=colour, lw=2.2, label=f"optimal path: {p.kind}")
         ax.plot([t], [v], "s", color=colour, ms=5)
@@ -115,8 +116,8 @@ def fig_prehistory(runs: ExperimentRuns, out: Path, tag: str):
     return path, ("Optimal paths (paper Figs. 2-4: direct, crossing, indirect and twice-crossing "
                   "kinds from eqs. Adir-Adc) against the prehistory of the circuit (Dykman et al. "
                   "1992): all circuit paths from v0 that end within "
-                  f"±{runs.settings.prehistory_window:g} of the target; grey: their density, "
-                  "red: mean and 10-90 % band. At this finite noise the prehistory is broad; "
+                  f"±{runs.settings.prehistory_window:g} of the target; dark grey: their mean, "
+                  "light grey: 10-90 % band. At this finite noise the prehistory is broad; "
                   "the optimal path is its gamma -> infinity limit. " + "; ".join(lines))
 
 
