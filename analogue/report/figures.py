@@ -271,7 +271,11 @@ def fig_work_paths(runs: ExperimentRuns, out: Path):
     return path, ("Paths with a prescribed work rate (paper Fig. 7). Black: minimiser of "
                   "K = A - beta W (eqs. Keq-eqelk1) between the median end points of the circuit "
                   "windows; red: circuit windows of the stationary run whose work rate lies within "
-                  "10 % of w (first such window of each replica). " + "; ".join(notes))
+                  "10 % of w (first such window of each replica). Near w = 0 the optimal path "
+                  "shares its time between sticking at v = 0 and sliding (the time-sharing that "
+                  "makes the true rate function the convex envelope of eq. Iw); in the circuit "
+                  "the switching instant varies from window to window, so the mean smears the "
+                  "stuck and sliding stretches. " + "; ".join(notes))
 
 
 # ------------------------------------------------------------------------------ Figs. 8-9
