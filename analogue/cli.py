@@ -37,9 +37,11 @@ class _Group(click.Group):
             ctx.exit(EXIT_USAGE if isinstance(exc, (ValueError, KeyError)) else EXIT_FAILURE)
 
 
-def _floats(text: str | None, name: str):
-    if text is None:
+def _floats(text, name: str):
+    if not text:
         return None
+    if isinstance(text, (tuple, list)):  # repeated option: --w 0 --w 2
+        text = ",".join(text)
     try:
         vals = [float(s) for s in text.split(",") if s.strip()]
     except ValueError:
@@ -158,11 +160,11 @@ QUANTITIES = ("stationary", "deterministic", "action", "path", "boundaries", "pr
 @click.option("--gamma", type=float, default=None, help="gamma = m^2/D (> 0).")
 @click.option("--mass", type=float, default=None, help="m (> 0, default 1).")
 @click.option("--epsilon", type=float, default=None, help="tanh width (>= 0, default 0 = sgn).")
-@click.option("--v", "v", default=None, help="Final velocities, comma-separated.")
-@click.option("--t", "t", default=None, help="Times, comma-separated.")
+@click.option("--v", "v", multiple=True, help="Final velocities, comma-separated (or repeat the option).")
+@click.option("--t", "t", multiple=True, help="Times, comma-separated (or repeat the option).")
 @click.option("--v0", type=float, default=None, help="Initial velocity.")
-@click.option("--w", "w", default=None, help="Work rates, comma-separated.")
-@click.option("--k", "k", default=None, help="Tilts for the SCGF, comma-separated.")
+@click.option("--w", "w", multiple=True, help="Work rates, comma-separated (or repeat the option).")
+@click.option("--k", "k", multiple=True, help="Tilts for the SCGF, comma-separated (or repeat the option).")
 @click.option("--tau", type=float, default=None, help="Work time window.")
 @click.option("--kind", type=click.Choice(["exact", "weak-noise", "limit"]), default="exact",
               show_default=True, help="Which theory for propagator / rate-function.")

@@ -97,3 +97,11 @@ def test_netlist_check_passes_on_committed_decks(cli):
     r = cli.invoke(main, ["netlist", "--check"])
     assert r.exit_code == 0, r.output
     assert "up to date" in r.output
+
+
+def test_repeated_options_and_comma_lists_are_the_same(cli):
+    base = ["theory", "rate-function", "--kind", "weak-noise", "--tau-m", "1", "--delta", "1",
+            "--a", "0.5", "--gamma", "10", "--json"]
+    a = json.loads(cli.invoke(main, base + ["--w", "-1,1"]).output)
+    b = json.loads(cli.invoke(main, base + ["--w", "-1", "--w", "1"]).output)
+    assert a["rows"] == b["rows"] and len(a["rows"]) == 2
