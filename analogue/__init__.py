@@ -1,13 +1,14 @@
 """analogue: stick-slip friction with noise, as theory and as an ngspice circuit.
 
 Public entry points: :class:`Model`, :class:`Ensemble`, :func:`simulate` (the circuit in
-ngspice), the theory packages :mod:`analogue.theory.weak_noise` and
+ngspice), :func:`open_ensemble` (netCDF files of ``Ensemble.to_netcdf`` / ``analogue export``),
+:func:`load_runs` (an experiment's circuit runs by role), the theory packages :mod:`analogue.theory.weak_noise` and
 :mod:`analogue.theory.exact`, and the estimators in :mod:`analogue.estimators`.
 """
 from .model import Model, MechanicalParameters
 from .ensemble import Ensemble
 
-__all__ = ["Model", "MechanicalParameters", "Ensemble", "simulate"]
+__all__ = ["Model", "MechanicalParameters", "Ensemble", "simulate", "open_ensemble", "load_runs"]
 __version__ = "0.1.0"
 
 
@@ -19,6 +20,13 @@ def __getattr__(name):
     if name == "simulate":
         from .circuit.simulate import simulate
         return simulate
+    # xarray / netCDF and the report's run plan load only when asked for, too.
+    if name == "open_ensemble":
+        from .data import open_ensemble
+        return open_ensemble
+    if name == "load_runs":
+        from .export import load_runs
+        return load_runs
     if name in _SUBMODULES:
         import importlib
         return importlib.import_module(f".{name}", __name__)

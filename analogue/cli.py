@@ -146,6 +146,30 @@ def figures(out):
         click.echo(f"wrote {p}")
 
 
+# ------------------------------------------------------------------------------- export
+@main.command()
+@click.argument("experiment")
+@click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help="Output directory (default export/<experiment>).")
+@click.option("--report", "report_dir", type=click.Path(path_type=Path), default=None,
+              help="Report directory whose metrics.json goes to metrics.csv (default: "
+                   "report/<experiment> or report/, if they hold this experiment).")
+@_run_options
+def export(experiment, out, report_dir, workers, scheduler, store, quick, progress):
+    """Write every circuit run of EXPERIMENT as netCDF (<role>.nc) and metrics.csv.
+
+    Runs come from the store (running what is missing); read them back with
+    analogue.open_ensemble(path) or xarray.open_dataset(path).
+    """
+    from .circuit.experiments import load_experiment
+    from .export import export_experiment
+    name = load_experiment(experiment).name
+    out = out or Path("export") / name
+    for p in export_experiment(experiment, out, report=report_dir, quick=quick, store=store,
+                               workers=workers, scheduler=scheduler, progress=progress):
+        click.echo(f"wrote {p}")
+
+
 # ------------------------------------------------------------------------------- theory
 QUANTITIES = ("stationary", "deterministic", "action", "path", "boundaries", "propagator",
               "rate-function", "fluctuation-relation", "scgf", "work-pdf")

@@ -27,12 +27,19 @@ class Ensemble:
     meta : dict
         Provenance: model parameters, source ("circuit" / "sde"), seeds, mapping, ngspice
         version, deck hash, ...  JSON-serialisable.
+    noise : (replicas, n_hold) array or None
+        The standard normal numbers that drove each replica, one per noise hold time
+        ``meta["noise_dt"]`` (``simulate(..., return_noise=True)``), when recorded.
+
+    ``to_xarray()`` / ``to_netcdf(path)`` give labelled data (dims ``replica``, ``time``);
+    :func:`analogue.open_ensemble` reads such a file back, exactly.
     """
 
     t: np.ndarray
     v: np.ndarray
     x: np.ndarray
     meta: dict = field(default_factory=dict)
+    noise: np.ndarray | None = None
 
     def __post_init__(self):
         t = np.asarray(self.t, dtype=float)
@@ -44,9 +51,17 @@ class Ensemble:
             raise ValueError(f"Ensemble shapes disagree: t {t.shape}, v {v.shape}, x {x.shape}")
         if t.size > 1 and not np.all(np.diff(t) > 0):
             raise ValueError("Ensemble.t must be strictly increasing")
+        if not isinstance(self.meta, dict):
+            raise TypeError(f"Ensemble.meta must be a dict, got {type(self.meta).__name__}")
         object.__setattr__(self, "t", t)
         object.__setattr__(self, "v", v)
         object.__setattr__(self, "x", x)
+        if self.noise is not None:
+            z = np.atleast_2d(np.asarray(self.noise, dtype=float))
+            if z.ndim != 2 or z.shape[0] != v.shape[0]:
+                raise ValueError(f"Ensemble.noise must have shape (replicas, n_hold) = "
+                                 f"({v.shape[0]}, n), got {z.shape}")
+            object.__setattr__(self, "noise", z)
 
     @property
     def replicas(self) -> int:
@@ -62,20 +77,44 @@ class Ensemble:
         i = int(np.argmin(np.abs(self.t - time)))
         return self.v[:, i]
 
-    def window(self, t_start: float, t_stop: float | None = None) -> "Ensemble":
+    def window(self, t_start: float, t_stop: float | None = None) -> Ensemble:
         """Sub-ensemble on ``t_start <= t <= t_stop`` (positions re-zeroed at the start)."""
         hi = self.t[-1] if t_stop is None else t_stop
         sel = (self.t >= t_start - 1e-12) & (self.t <= hi + 1e-12)
         x = self.x[:, sel]
         return Ensemble(self.t[sel], self.v[:, sel], x - x[:, :1], dict(self.meta))
 
-    def concatenate(self, other: "Ensemble") -> "Ensemble":
+    def concatenate(self, other: Ensemble) -> Ensemble:
         """Pool replicas of two ensembles on the same time grid."""
         if other.t.shape != self.t.shape or not np.allclose(other.t, self.t):
             raise ValueError("cannot pool ensembles on different time grids")
         meta = dict(self.meta)
         meta.setdefault("pooled", []).append(other.meta)
-        return Ensemble(self.t, np.vstack([self.v, other.v]), np.vstack([self.x, other.x]), meta)
+        noise = None
+        if (self.noise is not None and other.noise is not None
+                and self.noise.shape[1] == other.noise.shape[1]):
+            noise = np.vstack([self.noise, other.noise])
+        return Ensemble(self.t, np.vstack([self.v, other.v]), np.vstack([self.x, other.x]), meta,
+                        noise)
+
+    def to_xarray(self):
+        """An ``xarray.Dataset``: ``v`` and ``x`` on dims (``replica``, ``time``), the noise
+        (when recorded) on (``replica``, ``noise_time``), units on every coordinate and
+        variable, provenance as JSON-safe attributes.  See :mod:`analogue.data`."""
+        from .data import ensemble_to_xarray
+        return ensemble_to_xarray(self)
+
+    @classmethod
+    def from_xarray(cls, dataset) -> Ensemble:
+        """Inverse of :meth:`to_xarray` (exact: arrays and meta)."""
+        from .data import ensemble_from_xarray
+        return ensemble_from_xarray(dataset)
+
+    def to_netcdf(self, path) -> None:
+        """Write a netCDF-4 file that :func:`analogue.open_ensemble`
+        reads back exactly; written atomically."""
+        from .data import write_netcdf
+        write_netcdf(self, path)
 
     def save(self, path) -> None:
         """Write to a compressed ``.npz`` (meta stored as JSON)."""
@@ -83,7 +122,7 @@ class Ensemble:
         np.savez_compressed(path, t=self.t, v=self.v, x=self.x, meta=json.dumps(self.meta))
 
     @classmethod
-    def load(cls, path) -> "Ensemble":
+    def load(cls, path) -> Ensemble:
         import json
         with np.load(path, allow_pickle=False) as f:
             return cls(f["t"], f["v"], f["x"], json.loads(str(f["meta"])))
