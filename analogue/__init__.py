@@ -5,10 +5,11 @@ ngspice), :func:`open_ensemble` (netCDF files of ``Ensemble.to_netcdf`` / ``anal
 :func:`load_runs` (an experiment's circuit runs by role), the theory packages :mod:`analogue.theory.weak_noise` and
 :mod:`analogue.theory.exact`, and the estimators in :mod:`analogue.estimators`.
 """
-from .model import Model, MechanicalParameters
+from .model import Model, MechanicalParameters, ShotNoise
 from .ensemble import Ensemble
 
-__all__ = ["Model", "MechanicalParameters", "Ensemble", "simulate", "open_ensemble", "load_runs"]
+__all__ = ["Model", "MechanicalParameters", "ShotNoise", "Ensemble", "simulate", "open_ensemble",
+           "load_runs"]
 __version__ = "0.1.0"
 
 

@@ -1,4 +1,5 @@
-"""Model parameters of the stick-slip Langevin equation and its noise-free facts.
+"""Model parameters of the stick-slip Langevin equation, its family of extensions, and its
+noise-free facts.
 
 The reduced equation (paper, eqs. bm and U_pot) is
 
@@ -10,11 +11,41 @@ With ``epsilon > 0`` the Coulomb term ``Delta sgn(v)`` is replaced by the smooth
 ``Delta tanh(v/epsilon)`` (the paper's suggested regularisation, and exactly what a
 diode bridge of Shockley diodes does), whose potential is
 ``Delta epsilon ln cosh(v/epsilon)``.
+
+The family (the extensions the paper's conclusion proposes; keyword-only fields whose
+defaults give the paper's model exactly):
+
+    dv/dt = -v/tau_m - cubic v^3 - Delta(v) sgn v - spring x + a
+            + sqrt(2/gamma) xi_G + shot kicks,                        dx/dt = v,
+
+* ``cubic >= 0``: cubic viscous friction;
+* ``stribeck = (delta_s, v_s)``: ``Delta(v) = Delta + (delta_s - Delta) exp(-|v|/v_s)``, the
+  Stribeck curve (static threshold ``Delta(0) = delta_s``, dynamic ``Delta``);
+* ``spring >= 0``: a linear spring ``-spring x`` with ``x(0) = x0``;
+* ``shot``: :class:`ShotNoise` (kicks at ``rate``, exponential sizes of mean ``mean``,
+  one- or two-sided);
+* ``gamma = inf`` switches the Gaussian noise off.  Decision: ``gamma = inf`` with
+  ``shot=None`` is allowed and is the *noise-free* model (``is_noisy`` is False); theory
+  that needs noise (stationary law, propagator) refuses it with a ValueError naming gamma.
+
+For every one-dimensional member (``spring = 0``) the drift is a gradient, ``-U'(v)`` with
+
+    U = v^2/(2 tau_m) + cubic v^4/4 + Delta |v| + (delta_s - Delta) v_s (1 - e^{-|v|/v_s}) - a v,
+
+so with Gaussian noise only, ``p_s ~ exp(-gamma U)`` stays exact (``is_gradient``).
+
+Bounds (to keep every derived quantity far from float overflow; ``Model`` refuses values
+outside them naming the parameter): nonzero magnitudes of all parameters lie in
+``[1e-30, 1e30]``; the derived velocity scales ``sqrt(tau_m/gamma)``, ``|a| tau_m``,
+``Delta tau_m``, ``delta_s tau_m`` and ``rate mean tau_m`` are at most ``1e15``
+(``VELOCITY_LIMIT``).  Then ``v^4``, ``cubic v^4`` and ``gamma U`` stay below ``1e150``.
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+import numbers
+from collections.abc import Mapping
+from dataclasses import KW_ONLY, dataclass, field, replace
 from typing import NamedTuple
 
 import numpy as np
@@ -22,7 +53,12 @@ from scipy import integrate, optimize, special
 
 from .checks import finite as _finite, nonnegative as _nonnegative, positive as _positive
 
-__all__ = ["Model", "MechanicalParameters"]
+__all__ = ["Model", "MechanicalParameters", "ShotNoise", "LIMIT", "VELOCITY_LIMIT"]
+
+#: Largest allowed magnitude of any parameter (see module docstring).
+LIMIT = 1e30
+#: Largest allowed derived velocity scale (see module docstring).
+VELOCITY_LIMIT = 1e15
 
 
 class MechanicalParameters(NamedTuple):
@@ -35,7 +71,64 @@ class MechanicalParameters(NamedTuple):
     D: float
 
 
+# ------------------------------------------------------------------ strict checks
+def _real(name: str, value, *, allow_inf: bool = False) -> float:
+    """A real number (int/float/numpy real, not bool, not str): TypeError otherwise; NaN and
+    (unless allowed) infinities raise ValueError."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{name} must be a real number, got {type(value).__name__} {value!r}")
+    x = float(value)
+    if math.isnan(x) or (math.isinf(x) and not (allow_inf and x > 0)):
+        raise ValueError(f"{name} must be finite, got {x!r}")
+    return x
 
+
+def _bounded(name: str, value, *, lower: str = "any", allow_inf: bool = False) -> float:
+    """Strict real with the sign rule ``lower`` ("positive", "nonnegative", "any") and the
+    magnitude bounds of the module docstring."""
+    x = _real(name, value, allow_inf=allow_inf)
+    if lower == "positive" and not x > 0:
+        raise ValueError(f"{name} must be > 0, got {x!r}")
+    if lower == "nonnegative" and not x >= 0:
+        raise ValueError(f"{name} must be >= 0, got {x!r}")
+    if math.isinf(x):
+        return x
+    if abs(x) > LIMIT or (x != 0 and abs(x) < 1.0 / LIMIT):
+        what = "within" if lower == "positive" else "0 or of magnitude within"
+        raise ValueError(f"{name} must be {what} [1e-30, 1e30], got {x!r}")
+    return x
+
+
+@dataclass(frozen=True)
+class ShotNoise:
+    """Poissonian shot noise: velocity kicks at ``rate`` per unit time, each exponentially
+    distributed with mean ``mean``; with ``two_sided`` each kick's sign is +/- with
+    probability 1/2.  Its mean force is ``rate * mean`` (one-sided) or 0 (two-sided)."""
+
+    rate: float
+    mean: float
+    two_sided: bool = False
+
+    def __post_init__(self):
+        object.__setattr__(self, "rate", _bounded("shot.rate", self.rate, lower="positive"))
+        object.__setattr__(self, "mean", _bounded("shot.mean", self.mean, lower="positive"))
+        if not isinstance(self.two_sided, (bool, np.bool_)):
+            raise TypeError(f"shot.two_sided must be a bool, got {self.two_sided!r}")
+        object.__setattr__(self, "two_sided", bool(self.two_sided))
+
+    @property
+    def mean_force(self) -> float:
+        """Mean acceleration the kicks exert, ``rate * <z>``."""
+        return 0.0 if self.two_sided else self.rate * self.mean
+
+    @property
+    def intensity(self) -> float:
+        """``rate <z^2> / 2 = rate mean^2``: the Gaussian intensity ``1/gamma`` with the same
+        velocity-variance growth (the diffusion limit of many small kicks)."""
+        return self.rate * self.mean**2
+
+    def as_dict(self) -> dict:
+        return {"rate": self.rate, "mean": self.mean, "two_sided": self.two_sided}
 
 
 def _logcosh(x):
@@ -44,24 +137,39 @@ def _logcosh(x):
     return ax + np.log1p(np.exp(-2.0 * ax)) - math.log(2.0)
 
 
+# Composite Gauss-Legendre rule on [0, 1] for the Stribeck-tanh integral (20 panels x 16
+# nodes over 40 epsilon: tanh's poles sit 1.57 epsilon off the axis, panel half-width is
+# epsilon, so the error is ~3.4^-32, below double precision).
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(16)
+_PANELS = 20
+_GL_NODES = ((np.arange(_PANELS)[:, None] + 0.5 * (_GL_X[None, :] + 1.0)) / _PANELS).ravel()
+_GL_WEIGHTS = np.tile(0.5 * _GL_W / _PANELS, _PANELS)
+
+
 @dataclass(frozen=True)
 class Model:
-    """Parameters of the reduced stick-slip model (paper, eqs. bm and U_pot).
+    """Parameters of the reduced stick-slip model (paper, eqs. bm and U_pot) and its family.
 
     Parameters
     ----------
     tau_m : float
         Inertial (viscous) relaxation time ``m/alpha``; > 0.
     delta : float
-        Dry-friction threshold acceleration ``Delta = Delta_F/m``; >= 0.
+        Dry-friction threshold acceleration ``Delta = Delta_F/m``; >= 0 (the dynamic value
+        when ``stribeck`` is set).
     a : float
         External acceleration ``a = F/m``; any finite sign.
     gamma : float
-        Inverse noise strength ``m^2/D``; > 0.  The weak-noise limit is gamma -> infinity.
+        Inverse noise strength ``m^2/D``; > 0.  The weak-noise limit is gamma -> infinity;
+        ``math.inf`` switches the Gaussian noise off.
     mass : float
         Mass ``m`` (only enters conversions to mechanical units and the work ``F = m a``); > 0.
     epsilon : float
         Width of the smooth friction law ``tanh(v/epsilon)``; 0 means the exact ``sgn``; >= 0.
+
+    Keyword-only (the extensions; see the module docstring):
+    cubic >= 0, stribeck = None or (delta_s >= 0, v_s > 0), spring >= 0, x0 (initial
+    position), shot = None or :class:`ShotNoise` (a mapping with its fields is accepted).
     """
 
     tau_m: float
@@ -70,14 +178,70 @@ class Model:
     gamma: float
     mass: float = 1.0
     epsilon: float = 0.0
+    _: KW_ONLY
+    cubic: float = 0.0
+    stribeck: tuple[float, float] | None = None
+    spring: float = 0.0
+    x0: float = 0.0
+    shot: ShotNoise | None = field(default=None)
 
     def __post_init__(self):
-        object.__setattr__(self, "tau_m", _positive("tau_m", self.tau_m))
-        object.__setattr__(self, "delta", _nonnegative("delta", self.delta))
-        object.__setattr__(self, "a", _finite("a", self.a))
-        object.__setattr__(self, "gamma", _positive("gamma", self.gamma))
-        object.__setattr__(self, "mass", _positive("mass", self.mass))
-        object.__setattr__(self, "epsilon", _nonnegative("epsilon", self.epsilon))
+        s = object.__setattr__
+        s(self, "tau_m", _bounded("tau_m", self.tau_m, lower="positive"))
+        s(self, "delta", _bounded("delta", self.delta, lower="nonnegative"))
+        s(self, "a", _bounded("a", self.a))
+        s(self, "gamma", _bounded("gamma", self.gamma, lower="positive", allow_inf=True))
+        s(self, "mass", _bounded("mass", self.mass, lower="positive"))
+        s(self, "epsilon", _bounded("epsilon", self.epsilon, lower="nonnegative"))
+        s(self, "cubic", _bounded("cubic", self.cubic, lower="nonnegative"))
+        s(self, "spring", _bounded("spring", self.spring, lower="nonnegative"))
+        s(self, "x0", _bounded("x0", self.x0))
+        if self.stribeck is not None:
+            st = self.stribeck
+            if isinstance(st, (str, bytes)) or not hasattr(st, "__len__") or len(st) != 2:
+                raise TypeError(f"stribeck must be None or a pair (delta_s, v_s), got {st!r}")
+            s(self, "stribeck", (_bounded("stribeck delta_s", st[0], lower="nonnegative"),
+                                 _bounded("stribeck v_s", st[1], lower="positive")))
+        if isinstance(self.shot, Mapping):
+            s(self, "shot", ShotNoise(**self.shot))
+        elif self.shot is not None and not isinstance(self.shot, ShotNoise):
+            raise TypeError(f"shot must be None or analogue.ShotNoise, got {self.shot!r}")
+        # Derived scales (module docstring): refuse what would overflow downstream.
+        tau = self.tau_m
+        if math.isfinite(self.gamma) and tau / self.gamma > VELOCITY_LIMIT**2:
+            raise ValueError(f"gamma={self.gamma!r} is too small for tau_m={tau!r}: the velocity "
+                             f"scale sqrt(tau_m/gamma) exceeds {VELOCITY_LIMIT:g}")
+        for name, val in (("a", self.a), ("delta", self.delta),
+                          ("stribeck delta_s", self.stribeck[0] if self.stribeck else 0.0)):
+            if abs(val) * tau > VELOCITY_LIMIT:
+                raise ValueError(f"{name}={val!r} with tau_m={tau!r} gives the velocity "
+                                 f"{name} tau_m beyond {VELOCITY_LIMIT:g}; reduce {name} or tau_m")
+        if self.shot is not None and max(self.shot.rate * tau, 1.0) * self.shot.mean > VELOCITY_LIMIT:
+            raise ValueError(f"shot.mean * max(1, shot.rate tau_m) exceeds {VELOCITY_LIMIT:g}; "
+                             f"reduce shot.mean or shot.rate")
+
+    # ------------------------------------------------------------------ family flags
+    @property
+    def dimension(self) -> int:
+        """1 for the velocity-only members, 2 with a spring (state (x, v))."""
+        return 2 if self.spring > 0 else 1
+
+    @property
+    def is_paper(self) -> bool:
+        """True for the paper's model (no extension field set; Gaussian noise on)."""
+        return (self.cubic == 0 and self.stribeck is None and self.spring == 0
+                and self.shot is None and math.isfinite(self.gamma))
+
+    @property
+    def is_noisy(self) -> bool:
+        return math.isfinite(self.gamma) or self.shot is not None
+
+    @property
+    def is_gradient(self) -> bool:
+        """Drift ``-U'(v)`` in one dimension with (only) Gaussian additive noise, so that
+        ``p_s ~ exp(-gamma U)`` is the exact stationary law and the weak-noise theory of
+        the paper (optimal paths of a 1-D gradient system) applies."""
+        return self.dimension == 1 and self.shot is None and math.isfinite(self.gamma)
 
     # ------------------------------------------------------------------ units
     @classmethod
@@ -93,7 +257,7 @@ class Model:
                    mass=mass, epsilon=epsilon)
 
     def mechanical(self) -> MechanicalParameters:
-        """Inverse of :meth:`from_mechanical`."""
+        """Inverse of :meth:`from_mechanical` (the paper's model parameters only)."""
         m = self.mass
         return MechanicalParameters(mass=m, alpha=m / self.tau_m, delta_F=m * self.delta,
                                     F=m * self.a, D=m**2 / self.gamma)
@@ -103,8 +267,21 @@ class Model:
         return replace(self, **changes)
 
     def as_dict(self) -> dict:
-        return {"tau_m": self.tau_m, "delta": self.delta, "a": self.a, "gamma": self.gamma,
-                "mass": self.mass, "epsilon": self.epsilon}
+        """JSON-ready parameters; ``Model(**m.as_dict()) == m``.  The extension fields appear
+        only when they differ from their defaults, so the paper's model keeps its keys."""
+        d = {"tau_m": self.tau_m, "delta": self.delta, "a": self.a, "gamma": self.gamma,
+             "mass": self.mass, "epsilon": self.epsilon}
+        if self.cubic != 0:
+            d["cubic"] = self.cubic
+        if self.stribeck is not None:
+            d["stribeck"] = list(self.stribeck)
+        if self.spring != 0:
+            d["spring"] = self.spring
+        if self.x0 != 0:
+            d["x0"] = self.x0
+        if self.shot is not None:
+            d["shot"] = self.shot.as_dict()
+        return d
 
     # ------------------------------------------------------------- derived
     @property
@@ -114,93 +291,196 @@ class Model:
 
     @property
     def noise_intensity(self) -> float:
-        """Velocity-noise intensity ``1/gamma``: ``dv = -U' dt + sqrt(2/gamma) dW``."""
+        """Gaussian velocity-noise intensity ``1/gamma`` (0 when gamma = inf)."""
         return 1.0 / self.gamma
 
     @property
     def velocity_scale(self) -> float:
-        """Thermal-like velocity scale ``sqrt(tau_m/gamma)`` (the Delta = 0 stationary std)."""
-        return math.sqrt(self.tau_m / self.gamma)
+        """Thermal-like velocity scale ``sqrt(tau_m/gamma)`` (the Delta = 0 stationary std);
+        with shot noise the scale ``sqrt(tau_m rate mean^2)`` of its diffusion limit is added
+        in quadrature."""
+        d = self.noise_intensity + (self.shot.intensity if self.shot is not None else 0.0)
+        return math.sqrt(self.tau_m * d)
+
+    @property
+    def static_friction(self) -> float:
+        """``Delta(0)``: the threshold |force| that keeps a resting object stuck."""
+        return self.stribeck[0] if self.stribeck is not None else self.delta
 
     @property
     def regime(self) -> str:
-        """``"stick"`` if |a| < Delta (v = 0 attracts, eq. det_eq case a), else ``"slip"``."""
-        return "stick" if abs(self.a) < self.delta else "slip"
+        """``"stick"`` if |a| < Delta(0) (v = 0 attracts, eq. det_eq case a), else ``"slip"``."""
+        return "stick" if abs(self.a) < self.static_friction else "slip"
 
     @property
     def attractor(self) -> float:
-        """Deterministic attractor: 0 if |a| <= Delta, else ``v_ss = (a - Delta sgn a) tau_m``
-        (eq. v_st, and its mirror for a < -Delta)."""
-        if abs(self.a) <= self.delta:
+        """Deterministic attractor: 0 if |a| <= Delta(0), else ``v_ss = (a - Delta sgn a) tau_m``
+        (eq. v_st, and its mirror for a < -Delta); for the family, the zero of the drift
+        reached from rest.  With a spring every motion ends at rest: 0."""
+        if abs(self.a) <= self.static_friction or self.spring > 0:
             return 0.0
-        return (self.a - math.copysign(self.delta, self.a)) * self.tau_m
+        if self.cubic == 0 and self.stribeck is None:
+            return (self.a - math.copysign(self.delta, self.a)) * self.tau_m
+        sgn = math.copysign(1.0, self.a)
+        # outward speed g(u) = sgn * drift(sgn u): > 0 at u = 0 (|a| > Delta(0)) and <= 0 at
+        # u = |a| tau_m (there the drift is -Delta(v) - cubic v^3 <= 0); take the first zero.
+        def g(u):
+            return sgn * float(self.drift(sgn * u))
+        grid = np.linspace(0.0, abs(self.a) * self.tau_m, 2049)
+        vals = sgn * self.drift(sgn * grid[1:])
+        idx = int(np.flatnonzero(vals <= 0)[0]) + 1
+        if vals[idx - 1] == 0:
+            return sgn * float(grid[idx])
+        return sgn * optimize.brentq(g, grid[idx - 1], grid[idx], xtol=1e-15, rtol=1e-15)
 
     # ---------------------------------------------------------- friction law
-    def coulomb(self, v):
-        """Dry-friction acceleration ``Delta sgn(v)`` (or ``Delta tanh(v/epsilon)``)."""
+    def friction_magnitude(self, v):
+        """``Delta(v)``: Delta, or the Stribeck curve ``Delta + (delta_s - Delta) e^{-|v|/v_s}``."""
         v = np.asarray(v, dtype=float)
-        if self.epsilon > 0:
-            return self.delta * np.tanh(v / self.epsilon)
-        return self.delta * np.sign(v)
+        if self.stribeck is None:
+            return np.full_like(v, self.delta)
+        ds, vs = self.stribeck
+        return self.delta + (ds - self.delta) * np.exp(-np.abs(v) / vs)
 
-    def drift(self, v):
-        """``-U'(v) = -v/tau_m - Delta sgn(v) + a`` (eq. det_eq)."""
+    def coulomb(self, v):
+        """Dry-friction acceleration ``Delta(v) sgn(v)`` (or ``Delta(v) tanh(v/epsilon)``)."""
         v = np.asarray(v, dtype=float)
-        return -v / self.tau_m - self.coulomb(v) + self.a
+        shape = np.tanh(v / self.epsilon) if self.epsilon > 0 else np.sign(v)
+        return self.friction_magnitude(v) * shape
+
+    friction = coulomb
+
+    def drift(self, v, x=0.0):
+        """The force law ``-v/tau_m - cubic v^3 - Delta(v) sgn(v) - spring x + a`` (eq. det_eq
+        for the paper's model, where it is ``-U'(v)``)."""
+        v = np.asarray(v, dtype=float)
+        out = -v / self.tau_m - self.coulomb(v) + self.a
+        if self.cubic:
+            out = out - self.cubic * v**3
+        if self.spring:
+            out = out - self.spring * np.asarray(x, dtype=float)
+        return out
+
+    def _dry_potential(self, v):
+        """``integral_0^v Delta(u) sgn(u) du`` (or with tanh)."""
+        av = np.abs(np.asarray(v, dtype=float))
+        d, eps = self.delta, self.epsilon
+        base = d * eps * _logcosh(av / eps) if eps > 0 else d * av
+        if self.stribeck is None:
+            return base
+        ds, vs = self.stribeck
+        if eps == 0:
+            return base + (ds - d) * vs * -np.expm1(-av / vs)
+        # integral_0^|v| e^{-u/v_s} tanh(u/eps) du: quadrature up to min(|v|, 40 eps), where
+        # tanh = 1 to double precision, then the closed form of the exponential.
+        cut = np.minimum(av, 40.0 * eps)
+        u = cut[..., None] * _GL_NODES
+        head = cut * np.sum(_GL_WEIGHTS * np.exp(-u / vs) * np.tanh(u / eps), axis=-1)
+        tail = vs * (np.exp(-cut / vs) - np.exp(-av / vs))
+        return base + (ds - d) * (head + tail)
 
     def potential(self, v):
-        """Effective potential U(v) (eq. U_pot); with epsilon > 0 the term Delta|v| becomes
-        ``Delta epsilon ln cosh(v/epsilon)``, whose derivative is ``Delta tanh(v/epsilon)``."""
+        """Effective potential U(v) (eq. U_pot) of the velocity equation; with epsilon > 0 the
+        term Delta|v| becomes ``Delta epsilon ln cosh(v/epsilon)``.  For the family:
+        ``+ cubic v^4/4 + (delta_s - Delta) v_s (1 - e^{-|v|/v_s})`` (the spring force is not
+        a function of v: for spring > 0 this is U at x = 0 and the motion is not gradient)."""
         v = np.asarray(v, dtype=float)
-        if self.epsilon > 0:
-            dry = self.delta * self.epsilon * _logcosh(v / self.epsilon)
-        else:
-            dry = self.delta * np.abs(v)
-        return v * v / (2.0 * self.tau_m) + dry - self.a * v
+        u = v * v / (2.0 * self.tau_m) + self._dry_potential(v) - self.a * v
+        if self.cubic:
+            u = u + 0.25 * self.cubic * v**4
+        return u
+
+    def _support_bound(self, level: float = 800.0) -> float:
+        """R with ``gamma (U(v) - min U) > level`` for |v| > R: U >= v^2/(2 tau_m) - |a||v|
+        and min U <= U(0) = 0."""
+        ta = self.tau_m * abs(self.a)
+        return ta + math.sqrt(ta * ta + 2.0 * self.tau_m * level / self.gamma)
 
     def potential_minimum(self) -> float:
-        """Location of the minimum of U (U is strictly convex: U'' >= 1/tau_m)."""
-        if self.epsilon == 0:
-            return self.attractor
-        lo = (self.a - self.delta) * self.tau_m - 1.0
-        hi = (self.a + self.delta) * self.tau_m + 1.0
-        return optimize.brentq(lambda v: -float(self.drift(v)), lo, hi, xtol=1e-15, rtol=1e-15)
+        """Location of the (global) minimum of U.  For the paper's model U is strictly convex
+        (U'' >= 1/tau_m); Stribeck's velocity weakening can make it double-welled."""
+        if self.is_paper or (self.cubic == 0 and self.stribeck is None):
+            if self.epsilon == 0:
+                return self.attractor
+            lo = (self.a - self.delta) * self.tau_m - 1.0
+            hi = (self.a + self.delta) * self.tau_m + 1.0
+            return optimize.brentq(lambda v: -float(self.drift(v)), lo, hi, xtol=1e-15, rtol=1e-15)
+        # U(0) = 0 and U >= v^2/(2 tau_m) - |a||v|, so the minimum lies in |v| <= 2 tau_m |a|.
+        r = 2.0 * self.tau_m * abs(self.a)
+        if r == 0:
+            return 0.0
+        # Candidates: the kink v = 0 and every zero of the drift -U' (bracketed on a grid
+        # that has 0 as a node, so no bracket straddles the jump of the sgn law).
+        grid = np.linspace(-r, r, 8001)
+        f = self.drift(grid)
+        cands = [0.0]
+        for i in np.flatnonzero(np.sign(f[:-1]) * np.sign(f[1:]) <= 0):
+            lo, hi = grid[i], grid[i + 1]
+            if self.epsilon == 0 and (lo == 0.0 or hi == 0.0):
+                continue
+            if f[i] == 0:
+                cands.append(float(lo))
+            elif f[i + 1] == 0:
+                cands.append(float(hi))
+            else:
+                cands.append(optimize.brentq(lambda v: float(self.drift(v)), lo, hi,
+                                             xtol=1e-15, rtol=1e-15))
+        u = [float(self.potential(c)) for c in cands]
+        return cands[int(np.argmin(u))]
+
+    def _require_gradient(self, what: str):
+        if self.shot is not None or self.spring > 0:
+            raise ValueError(f"{what} = exp(-gamma U)/Z holds only for one-dimensional members "
+                             f"with Gaussian noise (spring=0, shot=None); use "
+                             f"analogue.theory.exact for this model")
+        if not math.isfinite(self.gamma):
+            raise ValueError(f"{what} needs noise: gamma must be finite, got {self.gamma!r}")
 
     def log_normaliser(self) -> float:
         """``ln Z`` with ``Z = integral exp(-gamma U(v)) dv`` (so ``p_s = exp(-gamma U)/Z``)."""
+        self._require_gradient("log_normaliser")
         g, tau = self.gamma, self.tau_m
-        if self.epsilon == 0:
+        if self.epsilon == 0 and self.cubic == 0 and self.stribeck is None:
             # integral_0^inf exp(-v^2/(2 s^2) - b v) dv = s sqrt(2 pi) exp(b^2 s^2/2) Phi(-b s)
             s = math.sqrt(tau / g)
             def half(b):
                 return (math.log(s * math.sqrt(2 * math.pi)) + 0.5 * (b * s) ** 2
                         + float(special.log_ndtr(-b * s)))
             return float(np.logaddexp(half(g * (self.delta - self.a)), half(g * (self.delta + self.a))))
-        # Smooth law: U'' >= 1/tau_m, so the density is log-concave with width <= sqrt(tau/g);
-        # integrating 40 widths either side of the mode captures everything.
         v_star = self.potential_minimum()
         u_star = float(self.potential(v_star))
-        w = 40.0 * math.sqrt(tau / g)
+        if self.cubic == 0 and self.stribeck is None:
+            # Smooth law: U'' >= 1/tau_m, so the density is log-concave with width <=
+            # sqrt(tau/g); integrating 40 widths either side of the mode captures everything.
+            w = 40.0 * math.sqrt(tau / g)
+            lo, hi = v_star - w, v_star + w
+        else:
+            r = self._support_bound()
+            lo, hi = -r, r
         pts = sorted({v_star, 0.0, -self.epsilon, self.epsilon})
-        pts = [p for p in pts if v_star - w < p < v_star + w]
+        pts = [p for p in pts if lo < p < hi]
         val, _ = integrate.quad(lambda v: math.exp(-g * (float(self.potential(v)) - u_star)),
-                                v_star - w, v_star + w, points=pts or None, limit=400,
-                                epsabs=0, epsrel=1e-12)
+                                lo, hi, points=pts or None, limit=400, epsabs=0, epsrel=1e-12)
         return math.log(val) - g * u_star
 
     def stationary_pdf(self, v):
         """Normalised stationary density ``p_s = exp(-gamma U)/Z`` (eq. p_stat); exact at every
-        gamma for this 1-D additive-noise model."""
-        return np.exp(-self.gamma * self.potential(v) - self.log_normaliser())
+        gamma for the 1-D additive-Gaussian-noise members."""
+        log_z = self.log_normaliser()  # refuses non-gradient members and gamma = inf first
+        return np.exp(-self.gamma * self.potential(v) - log_z)
 
     # ------------------------------------------------------- deterministic
     def stick_time(self, v0: float) -> float:
         """Time for the noise-free motion from v0 to reach v = 0 (``t_a`` of eq. tbar1), or
-        ``inf`` if it never does.  Only for the exact sgn law."""
+        ``inf`` if it never does.  Exact sgn law (epsilon = 0) only; for the family
+        (cubic, Stribeck) the ODE is integrated numerically."""
         v0 = _finite("v0", v0)
         if v0 == 0:
             return 0.0
         s = 1.0 if v0 > 0 else -1.0
+        if self.cubic or self.stribeck is not None or self.spring:
+            from .theory.deterministic import stick_time
+            return stick_time(self, v0)
         b = (self.delta - s * self.a) * self.tau_m  # relaxation offset on v0's half line
         if b <= 0:
             return math.inf
@@ -213,12 +493,16 @@ class Model:
         ``v(t) = (v0 + (Delta - a) tau_m) e^{-t/tau_m} - (Delta - a) tau_m`` (v > 0) and its
         mirror; v = 0 is reached in the finite time ``t_a`` (eq. tbar1) when |a| < Delta and
         the object then sticks; for |a| > Delta it crosses v = 0 with a kink and relaxes to
-        ``v_ss`` (eq. v_st).  With epsilon > 0 the smooth ODE is integrated numerically.
+        ``v_ss`` (eq. v_st).  With epsilon > 0 the smooth ODE is integrated numerically, and
+        so is every extension (from ``x(0) = x0`` with a spring; velocity returned).
         """
         v0 = _finite("v0", v0)
         t = np.asarray(t, dtype=float)
         if np.any(t < 0) or not np.all(np.isfinite(t)):
             raise ValueError("t must be finite and >= 0")
+        if self.cubic or self.stribeck is not None or self.spring:
+            from .theory.deterministic import flow
+            return flow(self, v0, self.x0, t)[0]
         if self.epsilon > 0:
             return self._deterministic_smooth(v0, t)
         if v0 < 0 or (v0 == 0 and self.a < 0):

@@ -16,13 +16,21 @@ from analogue import Model
     ("mass", -2.0, "mass must be > 0"),
     ("epsilon", -1e-3, "epsilon must be >= 0"),
     ("a", float("nan"), "a must be finite"),
-    ("gamma", float("inf"), "gamma must be finite"),
-    ("delta", "abc", "delta must be a real number"),
+    ("gamma", float("-inf"), "gamma must be finite"),
 ])
 def test_invalid_parameters_name_the_parameter(name, value, needle):
     kw = dict(tau_m=1.0, delta=0.7, a=0.2, gamma=10.0)
     kw[name] = value
     with pytest.raises(ValueError, match=needle):
+        Model(**kw)
+
+
+@pytest.mark.parametrize("name,value", [("delta", "abc"), ("tau_m", "1"), ("gamma", True),
+                                        ("a", None), ("mass", [1.0])])
+def test_wrong_types_raise_type_error_naming_the_parameter(name, value):
+    kw = dict(tau_m=1.0, delta=0.7, a=0.2, gamma=10.0)
+    kw[name] = value
+    with pytest.raises(TypeError, match=f"{name} must be a real number"):
         Model(**kw)
 
 
