@@ -51,9 +51,11 @@ from typing import NamedTuple
 import numpy as np
 from scipy import integrate, optimize, special
 
-from .checks import finite as _finite, nonnegative as _nonnegative, positive as _positive
+from .checks import finite as _finite
+from .checks import nonnegative as _nonnegative
+from .checks import positive as _positive
 
-__all__ = ["Model", "MechanicalParameters", "ShotNoise", "LIMIT", "VELOCITY_LIMIT"]
+__all__ = ["LIMIT", "VELOCITY_LIMIT", "MechanicalParameters", "Model", "ShotNoise"]
 
 #: Largest allowed magnitude of any parameter (see module docstring).
 LIMIT = 1e30
@@ -245,7 +247,7 @@ class Model:
 
     # ------------------------------------------------------------------ units
     @classmethod
-    def from_mechanical(cls, mass, alpha, delta_F, F, D, epsilon=0.0) -> "Model":
+    def from_mechanical(cls, mass, alpha, delta_F, F, D, epsilon=0.0) -> Model:
         """Build from the paper's eq. (model) parameters: tau_m = m/alpha, Delta = Delta_F/m,
         a = F/m, gamma = m^2/D."""
         mass = _positive("mass", mass)
@@ -262,7 +264,7 @@ class Model:
         return MechanicalParameters(mass=m, alpha=m / self.tau_m, delta_F=m * self.delta,
                                     F=m * self.a, D=m**2 / self.gamma)
 
-    def replace(self, **changes) -> "Model":
+    def replace(self, **changes) -> Model:
         """A copy with some parameters changed (validated again)."""
         return replace(self, **changes)
 
