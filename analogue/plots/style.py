@@ -9,7 +9,7 @@ __all__ = ["KIND_COLOURS", "DPI", "new_figure", "save", "VELOCITY", "TIME"]
 
 DPI = 120
 VELOCITY = "velocity v (model units)"
-TIME = "time s (model units)"
+TIME = "time t (units of tau_m)"
 
 # one colour per optimal-path kind, the same in every figure
 KIND_COLOURS = {

@@ -262,7 +262,7 @@ def fig_work_paths(runs: ExperimentRuns, out: Path):
         ax.axhline(w / m.force, color="0.3", ls="--", lw=1, label="$\\tilde v_w$ = w/(m a) (eq. wF)")
         ax.axhline(0, color="0.7", lw=0.7)
         ax.set_title(f"w = {w:g}, $\\tau$ = {tau:g}", fontsize=10)
-        ax.set_xlabel("time within the window (model units)")
+        ax.set_xlabel("time within the window (units of tau_m)")
         ax.set_ylabel(VELOCITY)
         ax.legend(fontsize=7)
         notes.append(f"w={w:g}, tau={tau:g}: {seg.shape[0]} circuit windows")
