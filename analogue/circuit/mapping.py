@@ -54,12 +54,20 @@ from scipy import optimize, special
 from ..model import Model
 from . import validation as val
 from .parts import IDEAL_IS, DiodePart, get_part, ideal_diode, thermal_voltage, PARTS
+from . import nonlinear as nl
 
-__all__ = ["CircuitSpec", "CircuitMapping", "map_model", "COULOMB_KINDS", "DIODES"]
+__all__ = ["CircuitSpec", "CircuitMapping", "map_model", "COULOMB_KINDS", "DIODES",
+           "CUBIC_KINDS", "velocity_range"]
 
 COULOMB_KINDS = ("diode-bridge", "behavioural", "behavioural-sgn")
+CUBIC_KINDS = ("behavioural", "diode-network")
 DIODES = ("ideal", *PARTS)
 METHODS = ("gear", "trap")
+# A realistic quality factor of a ferrite pot-core inductor (datasheets give 100-500 in the
+# 1-100 kHz range, less below; kHz power chokes 10-50): R_s = omega_0 L / Q.
+DEFAULT_INDUCTOR_Q = 100.0
+# Target of the automatic shot pulse width: max|drift| w / mean (see analogue.circuit.shot).
+SHOT_PULSE_TARGET = 1e-3
 # How far the stationary velocity may wander when checking voltage ratings: to where
 # p_s ~ exp(-gamma U) (eq. p_stat) has fallen to exp(-SWING_LEVEL) ~ 1e-14 of its peak; p_s is
 # log-concave, so it keeps falling at least as fast beyond.  Since U'' >= 1/tau_m this is never
@@ -104,6 +112,22 @@ class CircuitSpec:
         Largest accepted estimated bias (relative) from smoothing and noise hold time.
     allow_bias : bool
         Accept mappings whose estimated bias exceeds ``bias_tolerance``.
+    cubic_element : "behavioural" | "diode-network"
+        Realisation of the cubic viscous law (only when ``model.cubic > 0``): a B-source
+        ``g3 V^3`` or a diode-resistor breakpoint network (:mod:`analogue.circuit.nonlinear`).
+    cubic_diode : "ideal" | "1N4148" | "BAT54"
+        Diodes of the breakpoint network.
+    cubic_branches : int
+        Branches (breakpoints) per polarity of the network, 1..16.
+    inductor_q : float
+        Quality factor ``omega_0 L / R_s`` of the spring inductor at the spring's natural
+        frequency ``omega_0 = sqrt(spring)/theta``; sets its series resistance (> 0).
+    inductor_resistance : float or None
+        Series resistance of the spring inductor in ohm (>= 0; 0 = ideal); overrides
+        ``inductor_q``.
+    shot_width : float or None
+        Width of a shot-noise pulse in model time units; None: ``1e-3 mean / max|drift|``
+        (a kick error of 1e-3 of the mean jump, :mod:`analogue.circuit.shot`).
     """
 
     coulomb: str = "diode-bridge"
@@ -120,6 +144,12 @@ class CircuitSpec:
     method: str = "gear"
     bias_tolerance: float = 0.05
     allow_bias: bool = False
+    cubic_element: str = "behavioural"
+    cubic_diode: str = "1N4148"
+    cubic_branches: int = 6
+    inductor_q: float = DEFAULT_INDUCTOR_Q
+    inductor_resistance: float | None = None
+    shot_width: float | None = None
 
     def __post_init__(self):
         if self.coulomb not in COULOMB_KINDS:
@@ -141,6 +171,19 @@ class CircuitSpec:
                 object.__setattr__(self, name, val.positive(getattr(self, name), name))
         if not isinstance(self.allow_bias, bool):
             raise ValueError(f"allow_bias must be True or False, got {self.allow_bias!r}")
+        if self.cubic_element not in CUBIC_KINDS:
+            raise ValueError(f"cubic_element must be one of {CUBIC_KINDS}, got {self.cubic_element!r}")
+        if self.cubic_diode not in DIODES:
+            raise ValueError(f"cubic_diode must be one of {DIODES}, got {self.cubic_diode!r}")
+        b = self.cubic_branches
+        if isinstance(b, bool) or not isinstance(b, int) or not 1 <= b <= 16:
+            raise ValueError(f"cubic_branches must be an integer in [1, 16], got {b!r}")
+        object.__setattr__(self, "inductor_q", val.positive(self.inductor_q, "inductor_q"))
+        if self.inductor_resistance is not None:
+            object.__setattr__(self, "inductor_resistance",
+                               val.nonnegative(self.inductor_resistance, "inductor_resistance"))
+        if self.shot_width is not None:
+            object.__setattr__(self, "shot_width", val.positive(self.shot_width, "shot_width"))
 
     def replace(self, **changes) -> "CircuitSpec":
         return replace(self, **changes)
@@ -188,6 +231,17 @@ class CircuitMapping:
     voltage_swing: float
     model_effective: Model
     bias: dict = field(default_factory=dict)
+    # --- model family (issue 9); zero/None when the extension is off
+    g3: float = 0.0                      # cubic conductance, I = g3 V^3 (A/V^3)
+    cubic_network: nl.DiodeNetwork | None = None  # the breakpoint network, if chosen
+    i_stribeck: float = 0.0              # (delta_s - Delta) C kappa/theta (A)
+    stribeck_volts: float = 0.0          # kappa v_s (V)
+    inductance: float = 0.0              # spring inductor L = theta^2/(spring C) (H)
+    inductor_rs: float = 0.0             # its series resistance (ohm)
+    inductor_ic: float = 0.0             # initial inductor current spring x0 C kappa/theta (A)
+    x_spring_gain: float = 0.0           # readback transresistance (V/A): 1 V per unit x
+    shot_charge: float = 0.0             # charge per unit velocity jump, C kappa (C)
+    shot_width: float = 0.0              # shot pulse width (model time units)
 
     # ---------------------------------------------------------------- derived
     @property
@@ -198,8 +252,33 @@ class CircuitMapping:
 
     @property
     def smoothing_fraction(self) -> float:
-        """epsilon / sqrt(tau_m/gamma) actually realised (0 for the sgn B-source)."""
-        return self.epsilon / self.model.velocity_scale
+        """epsilon / sqrt(tau_m/gamma) actually realised (0 for the sgn B-source); for shot
+        noise, relative to the smaller of sqrt(tau_m/gamma) and the mean jump."""
+        return self.epsilon / _smoothing_scale(self.model)
+
+    @property
+    def i_unit(self) -> float:
+        """Current per unit model acceleration, C kappa/theta (A)."""
+        return self.capacitance * self.kappa / self.theta
+
+    @property
+    def gaussian_noise(self) -> bool:
+        """False when gamma = inf (no trrandom source in the deck)."""
+        return self.noise_stddev > 0
+
+    @property
+    def cubic_element(self) -> str | None:
+        """The cubic conductance in the deck: "behavioural", "diode-network" or None."""
+        if self.model.cubic == 0:
+            return None
+        return "diode-network" if self.cubic_network is not None else "behavioural"
+
+    @property
+    def spring_leak_time(self) -> float:
+        """Relaxation time L/R_s of the spring's inductor current, in model time (inf: ideal)."""
+        if self.inductance == 0 or self.inductor_rs == 0:
+            return math.inf
+        return self.inductance / (self.inductor_rs * self.theta)
 
     @property
     def vntol(self) -> float:
@@ -246,11 +325,25 @@ class CircuitMapping:
     def to_model(self) -> Model:
         """The model the component values implement (inverse of the mapping formulas)."""
         ck = self.capacitance * self.kappa
+        delta = self.theta * self.i_delta_total / ck
+        extra = {}
+        if self.stribeck_volts > 0:
+            extra["stribeck"] = (delta + self.theta * self.i_stribeck / ck,
+                                 self.stribeck_volts / self.kappa)
+        if self.g3 > 0:
+            extra["cubic"] = self.g3 * self.theta * self.kappa**2 / self.capacitance
+        if self.inductance > 0:
+            extra["spring"] = self.theta**2 / (self.inductance * self.capacitance)
+            extra["x0"] = self.inductor_ic * self.theta / (extra["spring"] * ck)
+        if self.model.shot is not None:
+            # the rate and the jump law are drawn in numpy (analogue.circuit.shot); the charge
+            # per unit jump is C kappa by construction
+            extra["shot"] = self.model.shot
         return Model(tau_m=self.r_total * self.capacitance / self.theta,
-                     delta=self.theta * self.i_delta_total / ck,
+                     delta=delta,
                      a=self.theta * self.i_force / ck,
-                     gamma=ck**2 / (self.theta * self.noise_D),
-                     mass=self.model.mass, epsilon=self.eps_volts / self.kappa)
+                     gamma=(ck**2 / (self.theta * self.noise_D) if self.noise_D > 0 else math.inf),
+                     mass=self.model.mass, epsilon=self.eps_volts / self.kappa, **extra)
 
     def table(self) -> list[tuple[str, float, str, str]]:
         """Rows (name, value, unit, meaning) for reports."""
@@ -281,9 +374,161 @@ class CircuitMapping:
         ]
         if self.emission is not None:
             rows.insert(10, ("N", self.emission, "1", "diode emission coefficient"))
+        if self.stribeck_volts > 0:
+            rows += [("I_Stribeck", self.i_stribeck, "A",
+                      "Stribeck excess (delta_s - Delta) C kappa/theta at V = 0"),
+                     ("V_s", self.stribeck_volts, "V", "Stribeck decay voltage kappa v_s")]
+        if self.g3 > 0:
+            rows.append(("g3", self.g3, "A/V^3", "cubic conductance I = g3 V^3; cubic = g3 theta kappa^2/C"))
+            net = self.cubic_network
+            if net is not None:
+                rows.append(("cubic_branches", float(net.branches), "1",
+                             f"diode-network branches per polarity ({net.part.name})"))
+                for j, (r, e) in enumerate(zip(net.resistors, net.biases)):
+                    rows.append((f"R_cubic{j}", r, "ohm", f"breakpoint branch {j} resistor"))
+                    rows.append((f"E_cubic{j}", e, "V", f"breakpoint branch {j} bias (mirrored: -E)"))
+                rows.append(("V_fit", net.v_max, "V", "network fitted on |V| <= V_fit"))
+        if self.inductance > 0:
+            rows += [("L", self.inductance, "H", "spring inductor; spring = theta^2/(L C)"),
+                     ("R_L", self.inductor_rs, "ohm", "inductor series resistance (makes the spring leaky)"),
+                     ("tau_L", self.spring_leak_time, "model time", "leak time L/(R_L theta) of the spring"),
+                     ("I_L0", self.inductor_ic, "A", "initial inductor current spring x0 C kappa/theta"),
+                     ("H_x", self.x_spring_gain, "V/A", "readback: V(xs) = H_x I_L = position (1 V per unit)")]
+        if self.shot_charge > 0:
+            sh = self.model.shot
+            rows += [("shot_rate", sh.rate, "1/model time", "kick rate (numpy Poisson times, seeded)"),
+                     ("shot_mean", sh.mean, "velocity", "mean jump (exponential sizes)"),
+                     ("Q_kick", self.shot_charge, "C", "charge per unit velocity jump, C kappa"),
+                     ("shot_width", self.shot_width, "model time", "triangular pulse width")]
         for key, value in self.bias.items():
             rows.append((f"bias_{key}", value, "1", "estimated relative bias"))
         return rows
+
+
+def _is_plain(model: Model) -> bool:
+    """True for the paper's model (no extension field set): mapped exactly as before issue 9."""
+    return (model.cubic == 0 and model.stribeck is None and model.spring == 0
+            and model.shot is None and math.isfinite(model.gamma))
+
+
+def _friction_amplitudes(model: Model) -> tuple[float, float]:
+    """(Delta(0), max_v Delta(v)) of the (Stribeck) dry-friction law."""
+    if model.stribeck is None:
+        return model.delta, model.delta
+    return model.stribeck[0], max(model.delta, model.stribeck[0])
+
+
+def family_potential(model: Model, v):
+    """``U(v) = v^2/(2 tau_m) + cubic v^4/4 + Delta |v| + (delta_s - Delta) v_s (1 - e^{-|v|/v_s})
+    - a v`` (sgn law; the spring is left out): ``p_s ~ exp(-gamma U)`` for the 1-D Gaussian
+    members (theory notes, "the extensions, in equations")."""
+    v = np.asarray(v, dtype=float)
+    av = np.abs(v)
+    u = v * v / (2.0 * model.tau_m) + model.cubic * v**4 / 4.0 + model.delta * av - model.a * v
+    if model.stribeck is not None:
+        ds, vs = model.stribeck
+        u = u + (ds - model.delta) * vs * (-np.expm1(-av / vs))
+    return u
+
+
+def family_drift(model: Model, v):
+    """``f(v) = -v/tau_m - cubic v^3 - Delta(v) sgn v + a`` (sgn law, spring left out)."""
+    v = np.asarray(v, dtype=float)
+    return (-v / model.tau_m - model.cubic * v**3
+            - nl.stribeck_amplitude(model.delta, model.stribeck, v) * np.sign(v) + model.a)
+
+
+def _gaussian_grid(model: Model, level: float = SWING_LEVEL, points: int = 40001):
+    """Grid (incl. v = 0) covering where gamma (U - U_min) <= level, and gamma (U - U_min) on
+    it.  U >= v^2/(2 tau_m) - |a| |v| and U_min <= U(0) = 0 bound the region by
+    |v| <= tau_m |a| + sqrt(tau_m^2 a^2 + 2 tau_m level/gamma)."""
+    tau, a = model.tau_m, abs(model.a)
+    reach = tau * a + math.sqrt(tau * tau * a * a + 2.0 * tau * level / model.gamma)
+    v = np.unique(np.concatenate([np.linspace(-reach, reach, points), [0.0]]))
+    gu = model.gamma * family_potential(model, v)
+    return v, gu - gu.min()
+
+
+def velocity_range(model: Model, level: float = SWING_LEVEL) -> tuple[float, float]:
+    """Estimated range of the velocity, for part ratings and the cubic network's fit.
+
+    Gaussian 1-D members: where ``p_s ~ exp(-gamma U)`` is within ``exp(-level)`` of its peak
+    (grid search: U need not be convex with velocity weakening).  Spring: the union with the
+    frictionless equilibrium range ``|v| <= sqrt(2 tau_m level/gamma)`` (friction of any law
+    only dissipates).  Shot noise adds ``rate tau_m mean + level mean`` on the kicks' side(s)
+    (the Delta = 0 stationary law is a Gamma law of shape rate tau_m, scale mean; a single
+    jump exceeds level mean with probability e^-level)."""
+    lo = hi = model.attractor if _is_plain(model) else 0.0
+    if math.isfinite(model.gamma):
+        if _is_plain(model):
+            lo, hi = stationary_range(model, level)
+        else:
+            v, gu = _gaussian_grid(model, level)
+            inside = v[gu <= level]
+            lo, hi = float(inside.min()), float(inside.max())
+            if model.spring > 0:
+                r = math.sqrt(2.0 * model.tau_m * level / model.gamma)
+                lo, hi = min(lo, -r), max(hi, r)
+    if model.shot is not None:
+        sh = model.shot
+        reach = sh.rate * model.tau_m * sh.mean + level * sh.mean
+        hi = max(hi, 0.0) + reach
+        if sh.two_sided:
+            lo = min(lo, 0.0) - reach
+    return lo, hi
+
+
+def velocity_std(model: Model) -> float | None:
+    """Stationary velocity standard deviation used by the bias estimates: the closed form for
+    the paper's model; for the Gaussian family members the grid quadrature of exp(-gamma U)
+    (the spring left out: an estimate there); None without Gaussian noise."""
+    if _is_plain(model):
+        return stationary_std(model)
+    if not math.isfinite(model.gamma):
+        return None
+    v, gu = _gaussian_grid(model)
+    p = np.exp(-gu)
+    z = np.trapezoid(p, v)
+    m = np.trapezoid(v * p, v) / z
+    return math.sqrt(float(np.trapezoid((v - m) ** 2 * p, v) / z))
+
+
+def _smoothing_scale(model: Model) -> float:
+    """Velocity scale the smoothing width is a fraction of: sqrt(tau_m/gamma) (the paper's
+    model), the mean jump for shot noise without Gaussian noise, the smaller of both with
+    both."""
+    scales = []
+    if math.isfinite(model.gamma):
+        scales.append(model.velocity_scale)
+    if model.shot is not None:
+        scales.append(model.shot.mean)
+    return min(scales)
+
+
+def _spring_leak(model: Model, tau_leak: float) -> dict:
+    """Bias of the leaky spring (series resistance R_s: the inductor current relaxes with
+    tau_L = L/(R_s theta) in model units, so the spring force obeys dy/dt = v - y/tau_L instead
+    of dx/dt = v).  For the linear part (Delta = 0, cubic = 0) with white noise, the relative
+    change of the stationary variances of v and of the spring's position from the Lyapunov
+    equation, and the creep: the mean velocity a_eff/(spring tau_L + 1/tau_m) (zero for an
+    ideal spring) in units of the velocity spread."""
+    if not math.isfinite(tau_leak):
+        return {"spring_leak_time": math.inf, "spring_leak_var_v": 0.0, "spring_leak_var_x": 0.0,
+                "spring_creep": 0.0}
+    from scipy.linalg import solve_continuous_lyapunov
+    tau, k = model.tau_m, model.spring
+    bb = np.array([[1.0, 0.0], [0.0, 0.0]])  # the noise drives v only; intensity cancels
+    ideal = solve_continuous_lyapunov(np.array([[-1 / tau, -k], [1.0, 0.0]]), -bb)
+    leaky = solve_continuous_lyapunov(np.array([[-1 / tau, -k], [1.0, -1 / tau_leak]]), -bb)
+    a_eff = model.a + (model.shot.rate * model.shot.mean
+                       if model.shot is not None and not model.shot.two_sided else 0.0)
+    creep = abs(a_eff) / (k * tau_leak + 1.0 / tau)
+    # frictionless velocity spread sqrt(tau_m/gamma) (Gaussian), else the mean jump
+    spread = model.velocity_scale if math.isfinite(model.gamma) else model.shot.mean
+    return {"spring_leak_time": tau_leak,
+            "spring_leak_var_v": abs(leaky[0, 0] / ideal[0, 0] - 1.0),
+            "spring_leak_var_x": abs(leaky[1, 1] / ideal[1, 1] - 1.0),
+            "spring_creep": creep / spread}
 
 
 def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
@@ -294,18 +539,24 @@ def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
     element: see the module docstring).  Raises ValueError (naming the parameter and the
     limit) when a real part could not do it (current, reverse voltage, smoothing too coarse)
     or when the estimated bias exceeds ``spec.bias_tolerance`` and ``allow_bias`` is False.
+
+    Model family (issue 9): ``cubic`` -> a nonlinear conductance ``g3 V^3`` (B-source or diode
+    network), ``stribeck`` -> the friction element's amplitude ``Delta(V)``, ``spring`` -> an
+    inductor ``L = theta^2/(spring C)`` from the velocity node to ground (series resistance
+    ``R_s``), ``shot`` -> a seeded PWL pulse source, ``gamma = inf`` -> no Gaussian source.
     """
     if not isinstance(model, Model):
         raise ValueError(f"model must be an analogue.Model, got {type(model).__name__}")
     spec = CircuitSpec() if spec is None else spec
     if not isinstance(spec, CircuitSpec):
         raise ValueError(f"spec must be a CircuitSpec, got {type(spec).__name__}")
+    plain = _is_plain(model)
     theta, cap = spec.time_scale, spec.capacitance
-    vs = model.velocity_scale
-    eps_target = spec.smoothing * vs
+    eps_target = spec.smoothing * _smoothing_scale(model)
     vt = thermal_voltage()
+    delta0, delta_max = _friction_amplitudes(model)
     # Delta = 0: no Coulomb element at all (module docstring), so no part and no smoothing.
-    element = spec.coulomb if model.delta > 0 else None
+    element = spec.coulomb if delta_max > 0 else None
     real = element == "diode-bridge" and spec.diode != "ideal"
     part = get_part(spec.diode) if real else None
 
@@ -313,8 +564,9 @@ def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
     if spec.volts_per_velocity is not None:
         kappa = spec.volts_per_velocity
     elif real:
-        # eps_V = 2 N V_T + RS (I0 + 2 IS) with I0 ~ Delta C kappa/theta; solve eps_V = kappa eps.
-        rs_width = part.RS * model.delta * cap / theta
+        # eps_V = 2 N V_T + RS (I0 + 2 IS) with I0 ~ Delta(0) C kappa/theta at the kink;
+        # solve eps_V = kappa eps.
+        rs_width = part.RS * delta0 * cap / theta
         room = eps_target - rs_width
         if not room > 0:
             raise ValueError(f"smoothing={spec.smoothing} is unreachable with {part.name}: its series "
@@ -326,26 +578,31 @@ def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
     else:
         kappa = 1.0
     ck = cap * kappa
-    i_delta_total = model.delta * ck / theta
-    i_force = model.a * ck / theta
+    i_unit = ck / theta  # current per unit acceleration
+    i_delta_total = model.delta * i_unit
+    i_stribeck = 0.0 if model.stribeck is None else (model.stribeck[0] - model.delta) * i_unit
+    i_peak = delta_max * i_unit
+    i_force = model.a * i_unit
 
     if element is None:
         i_delta, emission, eps_volts = 0.0, None, 0.0
     elif element == "diode-bridge":
         if real:
             i_delta = i_delta_total - 2.0 * part.IS
-            if not i_delta > 0:
-                raise ValueError(f"Delta={model.delta} needs I_Delta={i_delta_total:.3g} A, not above the "
+            if not i_peak - 2.0 * part.IS > 0:
+                what = "Delta" if model.stribeck is None else "max(Delta, delta_s)"
+                raise ValueError(f"{what}={delta_max} needs I_Delta={i_peak:.3g} A, not above the "
                                  f"reverse current 2 IS={2 * part.IS:.3g} A of {part.name}; raise "
                                  f"capacitance or volts_per_velocity, lower time_scale, use "
                                  f"diode='ideal', or set Delta=0 (no friction element)")
             emission = part.N
-            eps_volts = part.smoothing_volts(i_delta)
+            eps_volts = part.smoothing_volts(delta0 * i_unit - 2.0 * part.IS)
         else:
             # The ideal diode's IS is ours to choose: keep 2 IS a negligible part of the
             # amplitude (so the source current stays positive) even for tiny Delta.
+            i_small = i_delta_total if plain else min(x for x in (delta0, delta_max) if x > 0) * i_unit
             part = ideal_diode(eps_target * kappa / (2.0 * vt),
-                               saturation_current=min(IDEAL_IS, 1e-6 * i_delta_total))
+                               saturation_current=min(IDEAL_IS, 1e-6 * i_small))
             emission = part.N
             i_delta = i_delta_total - 2.0 * part.IS
             eps_volts = 2.0 * emission * vt
@@ -368,9 +625,11 @@ def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
 
     # --- noise: node nz carries the held noise in model units (std sqrt(2/(gamma dt)) so that
     # its intensity is 1/gamma); the VCCS C kappa/theta turns it into the current I_n.
+    # gamma = inf: no Gaussian source (noise_stddev = D_I = 0).
     noise_dt = spec.noise_dt if spec.noise_dt is not None else model.tau_m / 100.0
     noise_ts = noise_dt * theta
-    noise_stddev = math.sqrt(2.0 / (model.gamma * noise_dt))
+    gaussian = math.isfinite(model.gamma)
+    noise_stddev = math.sqrt(2.0 / (model.gamma * noise_dt)) if gaussian else 0.0
     noise_gain = ck / theta
     noise_D = (noise_gain * noise_stddev) ** 2 * noise_ts / 2.0
 
@@ -380,27 +639,84 @@ def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
     g_x = cap_x * x_volts_per_unit / (kappa * theta)
 
     model_eff = model.replace(epsilon=epsilon)
-    voltage_swing = kappa * max(abs(b) for b in stationary_range(model_eff))
-    std = stationary_std(model)
-    # Relaxation time of the velocity: var = D t_rel for OU (t_rel = tau_m); in the stick
-    # regime at weak noise the peak at v = 0 relaxes much faster, in ~ gamma std^2.
-    t_rel = min(model.tau_m, model.gamma * std * std)
-    bias = {
-        # relative bias of the stationary probability of the central histogram bin
-        # |v| < std/20: the tanh law only changes p_s within |v| ~ epsilon.
-        "smoothing": central_bin_bias(model, epsilon, std),
-        # sup |ln p_eps - ln p_0| before normalisation, reached for |v| >> epsilon where it is a
-        # constant absorbed by the normaliser: gamma Delta eps ln 2 (recorded, not enforced).
-        "smoothing_log_density": model.gamma * model.delta * epsilon * math.log(2.0),
-        # smoothing width against the stationary spread (in the stick regime at weak noise
-        # this is far narrower than sqrt(tau_m/gamma)).
-        "smoothing_width": epsilon / std,
-        # held noise: first-order drop of the stationary velocity variance, TS/(3 t_rel)
-        # (exact to first order for OU, where t_rel = tau_m; an estimate otherwise).
-        "noise": noise_dt / (3.0 * t_rel),
-    }
+    v_lo, v_hi = velocity_range(model_eff if plain else model)
+    voltage_swing = kappa * max(abs(v_lo), abs(v_hi))
+    std = velocity_std(model)
+    bias = {}
+    if std is not None:
+        # Relaxation time of the velocity: var = D t_rel for OU (t_rel = tau_m); in the stick
+        # regime at weak noise the peak at v = 0 relaxes much faster, in ~ gamma std^2.
+        t_rel = min(model.tau_m, model.gamma * std * std)
+        # near v = 0 (the central bin) the cubic term is negligible and Delta(v) ~ Delta(0):
+        # the paper's model with Delta(0) is the local estimate for every family member.
+        local = model if plain else Model(tau_m=model.tau_m, delta=delta0, a=model.a,
+                                          gamma=model.gamma, mass=model.mass)
+        bias.update({
+            # relative bias of the stationary probability of the central histogram bin
+            # |v| < std/20: the tanh law only changes p_s within |v| ~ epsilon.
+            "smoothing": central_bin_bias(local, epsilon, std),
+            # sup |ln p_eps - ln p_0| before normalisation, reached for |v| >> epsilon where it
+            # is a constant absorbed by the normaliser: gamma Delta eps ln 2 (recorded only).
+            "smoothing_log_density": model.gamma * delta0 * epsilon * math.log(2.0),
+            # smoothing width against the stationary spread (in the stick regime at weak noise
+            # this is far narrower than sqrt(tau_m/gamma)).
+            "smoothing_width": epsilon / std,
+            # held noise: first-order drop of the stationary velocity variance, TS/(3 t_rel)
+            # (exact to first order for OU, where t_rel = tau_m; an estimate otherwise).
+            "noise": noise_dt / (3.0 * t_rel),
+        })
+    else:
+        # shot noise alone: the atom at v = 0 becomes the tanh law's fixed point
+        # eps atanh(a/Delta(0)), a shift of order epsilon: compare with the mean jump.
+        bias.update({"smoothing": epsilon / model.shot.mean, "smoothing_width": epsilon / model.shot.mean,
+                     "noise": 0.0})
     if part is not None and not part.ideal:
         bias["junction_capacitance"] = 2.0 * part.CJO / cap
+    if model.stribeck is not None and epsilon > 0:
+        # the tanh must switch well inside the Stribeck decay length
+        bias["stribeck_smoothing"] = epsilon / model.stribeck[1]
+
+    # --- cubic viscous law: I = g3 V^3
+    g3 = model.cubic * cap / (theta * kappa * kappa)
+    network = None
+    if model.cubic > 0 and spec.cubic_element == "diode-network":
+        npart = get_part(spec.cubic_diode) if spec.cubic_diode != "ideal" else ideal_diode(1.0)
+        # fit a little beyond the swing so that the edge of the range is inside the fit
+        network = nl.design_cubic_network(npart, g3, 1.05 * voltage_swing, spec.cubic_branches)
+        bias["cubic_force"] = network.max_error
+        if gaussian and model.spring == 0:
+            rest = model.replace(cubic=0.0)
+            bias["cubic_variance"] = abs(nl.cubic_budget(
+                network, kappa, i_unit, lambda v: family_potential(rest, v), model.gamma,
+                (v_lo, v_hi)))
+
+    # --- spring: L from v to ground; the inductor current is the spring force current
+    inductance = inductor_rs = inductor_ic = x_spring_gain = 0.0
+    if model.spring > 0:
+        inductance = theta * theta / (model.spring * cap)
+        omega0 = math.sqrt(model.spring) / theta
+        inductor_rs = (spec.inductor_resistance if spec.inductor_resistance is not None
+                       else omega0 * inductance / spec.inductor_q)
+        inductor_ic = model.spring * model.x0 * i_unit
+        x_spring_gain = 1.0 / (model.spring * i_unit)  # V per A: 1 V per unit x
+        tau_leak = inductance / (inductor_rs * theta) if inductor_rs > 0 else math.inf
+        bias.update(_spring_leak(model, tau_leak))
+
+    # --- shot noise: charge C kappa per unit jump, triangular pulses of width w
+    shot_charge = shot_width = 0.0
+    if model.shot is not None:
+        sh = model.shot
+        shot_charge = ck
+        vgrid = np.linspace(v_lo, v_hi, 2001)
+        drift_max = float(np.max(np.abs(family_drift(model, vgrid)))) + delta_max
+        if model.spring > 0:
+            drift_max += model.spring * (abs(model.x0) + delta_max / model.spring + 8.0 * sh.mean
+                                         + (math.sqrt(2 * SWING_LEVEL * model.tau_m / model.gamma)
+                                            if gaussian else 0.0))
+        shot_width = (spec.shot_width if spec.shot_width is not None
+                      else SHOT_PULSE_TARGET * sh.mean / drift_max)
+        bias["shot_pulse"] = drift_max * shot_width / sh.mean
+        bias["shot_overlap"] = sh.rate * shot_width
 
     mapping = CircuitMapping(
         model=model, spec=spec, theta=theta, capacitance=cap, kappa=kappa,
@@ -409,8 +725,12 @@ def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
         noise_D=noise_D, part=part if element == "diode-bridge" else None, emission=emission,
         eps_volts=eps_volts, epsilon=epsilon, cap_x=cap_x, g_x=g_x,
         x_volts_per_unit=x_volts_per_unit, voltage_swing=voltage_swing,
-        model_effective=model_eff, bias=bias)
+        model_effective=model_eff, bias=bias, g3=g3, cubic_network=network,
+        i_stribeck=i_stribeck, stribeck_volts=(kappa * model.stribeck[1] if model.stribeck else 0.0),
+        inductance=inductance, inductor_rs=inductor_rs, inductor_ic=inductor_ic,
+        x_spring_gain=x_spring_gain, shot_charge=shot_charge, shot_width=shot_width)
     _check_part(mapping)
+    _check_network(mapping)
     _check_bias(mapping)
     return mapping
 
@@ -557,3 +877,52 @@ def _check_bias(m: CircuitMapping) -> None:
         raise ValueError(f"noise_dt={m.noise_dt:.3g} gives an estimated variance bias noise_dt/(3 t_rel)="
                          f"{m.bias['noise']:.3g} (velocity relaxation time t_rel={t_rel:.3g}) above "
                          f"bias_tolerance={tol}; lower noise_dt below {3 * tol * t_rel:.3g} or set allow_bias")
+    _check_family_bias(m)
+
+
+def _check_network(m: CircuitMapping) -> None:
+    """Ratings of the cubic breakpoint network's diodes: forward current of the busiest branch
+    at the edge of the fitted swing, and the reverse voltage V_fit + max bias seen by a branch
+    of the other polarity."""
+    net = m.cubic_network
+    if net is None or net.part.name == "ideal":
+        return
+    part = net.part
+    i_max = net.max_branch_current(net.v_max)
+    if i_max > part.max_forward_current:
+        raise ValueError(f"cubic={m.model.cubic}: the diode network's busiest branch carries {i_max:.3g} A at "
+                         f"the swing edge, above the {part.name} rating {part.max_forward_current:.3g} A; "
+                         f"lower capacitance or raise time_scale (g3 = cubic C/(theta kappa^2)), "
+                         f"raise cubic_branches, or use cubic_element='behavioural'")
+    v_rev = net.v_max + max(abs(e) for e in net.biases)
+    if v_rev >= part.max_reverse_voltage:
+        raise ValueError(f"cubic_diode={part.name}: the network's diodes see up to {v_rev:.3g} V in reverse "
+                         f"(swing {net.v_max:.3g} V + bias), at or above the rating "
+                         f"{part.max_reverse_voltage:.3g} V; lower volts_per_velocity or use cubic_diode='ideal'")
+
+
+def _check_family_bias(m: CircuitMapping) -> None:
+    """Enforced budget terms of the family's elements (each names the parameter to change)."""
+    spec, b = m.spec, m.bias
+    if spec.allow_bias:
+        return
+    tol = spec.bias_tolerance
+    key = "cubic_variance" if "cubic_variance" in b else "cubic_force"
+    if key in b and b[key] > tol:
+        raise ValueError(f"cubic_branches={spec.cubic_branches}: the diode network's {key} error "
+                         f"{b[key]:.3g} exceeds bias_tolerance={tol}; raise cubic_branches, use "
+                         f"cubic_element='behavioural', or set allow_bias")
+    for key in ("spring_leak_var_v", "spring_leak_var_x", "spring_creep"):
+        if key in b and b[key] > tol:
+            raise ValueError(f"inductor_q={spec.inductor_q} (R_L={m.inductor_rs:.3g} ohm, leak time "
+                             f"{m.spring_leak_time:.3g}): estimated {key} {b[key]:.3g} exceeds "
+                             f"bias_tolerance={tol}; raise inductor_q, lower inductor_resistance, or "
+                             f"set allow_bias")
+    if "shot_pulse" in b and b["shot_pulse"] > tol:
+        raise ValueError(f"shot_width={m.shot_width:.3g}: estimated kick error max|drift| w/mean="
+                         f"{b['shot_pulse']:.3g} exceeds bias_tolerance={tol}; lower shot_width below "
+                         f"{m.shot_width * tol / b['shot_pulse']:.3g} or set allow_bias")
+    if "stribeck_smoothing" in b and b["stribeck_smoothing"] > tol:
+        raise ValueError(f"smoothing={spec.smoothing}: epsilon/v_s={b['stribeck_smoothing']:.3g} exceeds "
+                         f"bias_tolerance={tol} (the tanh must switch inside the Stribeck decay); "
+                         f"lower smoothing or set allow_bias")

@@ -12,6 +12,20 @@ One replica ``i`` (subcircuit ``replica``, pins ``v<i> x<i> nz<i>``):
   SDE integrator can be fed the same sequence; it costs one node and no extra breakpoints);
 - node ``x<i>``: the integrator ``g_x V(v<i>)`` into ``C_x`` (V(x) = 1 V per unit position).
 
+Model family (issue 9; see :mod:`analogue.circuit.nonlinear` and :mod:`analogue.circuit.shot`):
+
+- cubic viscous law: a B-source ``g3 V^3`` or the subcircuit ``cubicnet`` (diode-resistor
+  breakpoint branches, diode model ``dcubic``) from ``v<i>`` to ground;
+- Stribeck law: the friction element's amplitude becomes ``Delta(V)`` (B-source expression;
+  inside the diode bridge, its current source becomes a B-source of the terminal voltage);
+- spring: the inductor ``Lspring`` (initial current = spring force at x0) in series with its
+  resistance ``R_L`` and a 0 V sense source from ``v<i>`` to ground; a CCVS turns the sensed
+  current into node ``xs<i>`` = the spring's position in model units (1 V per unit), saved as
+  ``vectors["x_spring"]``; the integrator node ``x<i>`` stays (it carries the work);
+- shot noise: a top-level ``pwl`` current source ``Ishot<i>`` into ``v<i>`` (seeded kicks drawn
+  in numpy; ``Deck.kicks`` holds them);
+- gamma = inf: no ``trrandom`` source, no ``nz<i>`` node.
+
 Initial conditions by ``.ic`` with ``.tran ... uic`` (no operating point is needed, so the
 integrator node needs no leak resistor and has no bias); the bridge's inner nodes get
 consistent DC values in the ``.ic`` line as well.  ``trrandom`` with
@@ -27,11 +41,14 @@ from PySpice.Spice.Netlist import Circuit, SubCircuit
 
 from . import validation as val
 from .mapping import CircuitMapping
+from .nonlinear import branch_current, stribeck_amplitude
 from .parts import bridge_node_voltages
+from .shot import deck_kicks, pulse_pwl
 
 __all__ = ["Deck", "build_deck", "replica_subcircuit", "bridge_subcircuit"]
 
 _MODEL_NAME = "dcoulomb"
+_CUBIC_MODEL = "dcubic"
 _SEED_MAX = 2**31 - 1
 
 
@@ -56,6 +73,9 @@ class Deck:
     noise_dt: float = 0.0
     t_end: float = 0.0
     sample_dt: float = 0.0
+    # shot noise: per replica (effective kick times = pulse centres, signed jumps), model units
+    kicks: tuple = ()
+    x_spring_initial: float = 0.0  # value of vectors["x_spring"] at t = 0 (x0)
 
 
 def _n(x, what="value") -> str:
@@ -70,7 +90,11 @@ def bridge_subcircuit(mapping: CircuitMapping) -> SubCircuit:
     sub.D("2", sub.gnd, "p", model=_MODEL_NAME)
     sub.D("3", "n", "t", model=_MODEL_NAME)
     sub.D("4", "n", sub.gnd, model=_MODEL_NAME)
-    sub.I("delta", "p", "n", _n(mapping.i_delta, "I_Delta"))
+    if mapping.stribeck_volts > 0:
+        # Stribeck: the source follows Delta(V_t) (behavioural: see analogue.circuit.nonlinear)
+        sub.BehavioralSource("delta", "p", "n", current_expression=_amplitude_expr(mapping, "t"))
+    else:
+        sub.I("delta", "p", "n", _n(mapping.i_delta, "I_Delta"))
     part = mapping.part
     if part.rp:
         # The vendor models' parallel resistor across each diode.
@@ -81,28 +105,96 @@ def bridge_subcircuit(mapping: CircuitMapping) -> SubCircuit:
     return sub
 
 
+def _amplitude_expr(m: CircuitMapping, node: str) -> str:
+    """Friction amplitude as a B-source expression of V(node): ``I_Delta`` or, with the
+    Stribeck law, ``I_Delta + I_s exp(-|V|/V_s)``."""
+    base = _n(m.i_delta, "I_Delta")
+    if m.stribeck_volts <= 0:
+        return base
+    return (f"{base}+{_n(m.i_stribeck, 'I_Stribeck')}*exp(-abs(V({node}))/"
+            f"{_n(m.stribeck_volts, 'V_s')})")
+
+
+def _friction_expr(m: CircuitMapping, law: str, node: str = "v") -> str:
+    amp = _amplitude_expr(m, node)
+    if m.stribeck_volts > 0:
+        amp = f"({amp})"
+    if law == "tanh":
+        return f"{amp}*tanh(V({node})/{_n(m.eps_volts, 'eps_V')})"
+    return f"{amp}*sgn(V({node}))"
+
+
+def cubic_subcircuit(mapping: CircuitMapping) -> SubCircuit:
+    """The breakpoint network (pin t): per branch j, ``t -- R -- D -- +E_j`` (conducts for
+    V > E_j + drop) and its mirror ``t -- R -- D(reversed) -- -E_j``."""
+    net = mapping.cubic_network
+    sub = SubCircuit("cubicnet", "t")
+    for j, (r, e) in enumerate(zip(net.resistors, net.biases)):
+        sub.R(f"{j}p", "t", f"a{j}", _n(r, f"R_cubic{j}"))
+        sub.D(f"{j}p", f"a{j}", f"b{j}", model=_CUBIC_MODEL)
+        sub.V(f"{j}p", f"b{j}", sub.gnd, _n(e, f"E_cubic{j}"))
+        sub.R(f"{j}n", "t", f"c{j}", _n(r, f"R_cubic{j}"))
+        sub.D(f"{j}n", f"d{j}", f"c{j}", model=_CUBIC_MODEL)
+        sub.V(f"{j}n", f"d{j}", sub.gnd, _n(-e, f"E_cubic{j}"))
+    return sub
+
+
+def replica_pins(mapping: CircuitMapping) -> tuple:
+    """Pins of the replica subcircuit: v, x, then nz (Gaussian noise) and xs (spring) when
+    present."""
+    pins = ["v", "x"]
+    if mapping.gaussian_noise:
+        pins.append("nz")
+    if mapping.inductance > 0:
+        pins.append("xs")
+    return tuple(pins)
+
+
 def replica_subcircuit(mapping: CircuitMapping) -> SubCircuit:
-    """One replica: pins (v, x, nz)."""
+    """One replica: pins :func:`replica_pins` (v, x, nz for the paper's model)."""
     m = mapping
-    sub = SubCircuit("replica", "v", "x", "nz")
+    sub = SubCircuit("replica", *replica_pins(m))
     sub.C("m", "v", sub.gnd, _n(m.capacitance, "C"))
     sub.R("visc", "v", sub.gnd, _n(m.resistance, "R"))
     sub.I("force", sub.gnd, "v", _n(m.i_force, "I_F"))  # current flows 0 -> source -> v
-    sub.VCCS("noise", sub.gnd, "v", "nz", sub.gnd, _n(m.noise_gain, "noise_gain"))
-    sub.V("noise", "nz", sub.gnd,
-          f"dc 0 trrandom(2 {_n(m.noise_ts, 'noise_ts')} 0 {_n(m.noise_stddev, 'noise_stddev')} 0)")
+    if m.gaussian_noise:
+        sub.VCCS("noise", sub.gnd, "v", "nz", sub.gnd, _n(m.noise_gain, "noise_gain"))
+        sub.V("noise", "nz", sub.gnd,
+              f"dc 0 trrandom(2 {_n(m.noise_ts, 'noise_ts')} 0 {_n(m.noise_stddev, 'noise_stddev')} 0)")
     element = m.coulomb_element
     if element == "diode-bridge":
         sub.X("coulomb", "bridge", "v")
     elif element == "behavioural":
-        sub.BehavioralSource("coulomb", "v", sub.gnd, current_expression=(
-            f"{_n(m.i_delta, 'I_Delta')}*tanh(V(v)/{_n(m.eps_volts, 'eps_V')})"))
+        sub.BehavioralSource("coulomb", "v", sub.gnd, current_expression=_friction_expr(m, "tanh"))
     elif element == "behavioural-sgn":
-        sub.BehavioralSource("coulomb", "v", sub.gnd,
-                             current_expression=f"{_n(m.i_delta, 'I_Delta')}*sgn(V(v))")
+        sub.BehavioralSource("coulomb", "v", sub.gnd, current_expression=_friction_expr(m, "sgn"))
+    if m.cubic_element == "behavioural":
+        sub.BehavioralSource("cubic", "v", sub.gnd,
+                             current_expression=f"{_n(m.g3, 'g3')}*V(v)*V(v)*V(v)")
+    elif m.cubic_element == "diode-network":
+        sub.X("cubic", "cubicnet", "v")
+    if m.inductance > 0:
+        # L (initial current = spring force at x0) -- R_L -- 0 V sense source -- ground
+        end = "ls" if m.inductor_rs > 0 else "lg"
+        sub.raw_spice += (f"Lspring v {end} {_n(m.inductance, 'L')} "
+                          f"ic={_n(m.inductor_ic, 'I_L0')}\n")
+        if m.inductor_rs > 0:
+            sub.R("leak", "ls", "lg", _n(m.inductor_rs, "R_L"))
+        sub.V("sense", "lg", sub.gnd, "0")
+        sub.CCVS("xs", "xs", sub.gnd, "vsense", _n(m.x_spring_gain, "H_x"))
     sub.VCCS("x", sub.gnd, "x", "v", sub.gnd, _n(m.g_x, "g_x"))
     sub.C("x", "x", sub.gnd, _n(m.cap_x, "C_x"))
     return sub
+
+
+def _pwl_lines(name: str, node: str, times, currents) -> list[str]:
+    """A pwl current source into ``node``, 6 pairs per continuation line."""
+    pairs = [f"{_n(t, 'pwl time')} {_n(i, 'pwl current')}" for t, i in zip(times, currents)]
+    out = [f"I{name} 0 {node} pwl("]
+    for k in range(0, len(pairs), 6):
+        out.append("+ " + " ".join(pairs[k:k + 6]))
+    out.append("+ )")
+    return out
 
 
 def _check_int(value, what, lo, hi) -> int:
@@ -158,33 +250,67 @@ def build_deck(mapping: CircuitMapping, *, replicas: int, v0, t_end: float, seed
     if bridge:
         circuit.model(_MODEL_NAME, "D", **{k: _n(v, k) for k, v in part.model})
         circuit.subcircuit(bridge_subcircuit(mapping))
+    net = mapping.cubic_network
+    if net is not None:
+        circuit.model(_CUBIC_MODEL, "D", **{k: _n(v, k) for k, v in net.part.model})
+        circuit.subcircuit(cubic_subcircuit(mapping))
     circuit.subcircuit(replica_subcircuit(mapping))
+    pins = replica_pins(mapping)
     for i in range(replicas):
-        circuit.X(f"r{i}", "replica", f"v{i}", f"x{i}", f"nz{i}")
+        circuit.X(f"r{i}", "replica", *[f"{p}{i}" for p in pins])
 
     lines = [str(circuit).rstrip("\n")]
+    kicks = ()
+    if mapping.model.shot is not None:
+        # seeded kicks (analogue.circuit.shot): triangles of area C kappa z, width w
+        w = mapping.shot_width
+        starts = deck_kicks(mapping.model, t_end, seed, replicas)
+        for i, (t_k, z_k) in enumerate(starts):
+            times, amps = pulse_pwl(t_k * theta, mapping.shot_charge * z_k, w * theta)
+            lines += _pwl_lines(f"shot{i}", f"v{i}", times, amps)
+        kicks = tuple((t_k + 0.5 * w, z_k) for t_k, z_k in starts)
     volts = mapping.kappa * v0
     ic = [f"v(v{i})={_n(volts[i], 'v0')} v(x{i})=0" for i in range(replicas)]
     if bridge:
         # uic skips the operating point, so the bridge's inner nodes need consistent starting
         # values too (else D1 starts forward biased by the whole of V and the first step fails).
-        vp, vn = bridge_node_voltages(part, mapping.i_delta, volts)
+        if mapping.stribeck_volts > 0:
+            i0 = (mapping.i_delta + mapping.i_stribeck
+                  * np.exp(-np.abs(volts) / mapping.stribeck_volts))
+            vpn = [bridge_node_voltages(part, i0[i], volts[i:i + 1]) for i in range(replicas)]
+            vp = np.array([a[0] for a, _ in vpn])
+            vn = np.array([b[0] for _, b in vpn])
+        else:
+            vp, vn = bridge_node_voltages(part, mapping.i_delta, volts)
         ic += [f"v(xr{i}.xcoulomb.p)={_n(vp[i])} v(xr{i}.xcoulomb.n)={_n(vn[i])}"
                for i in range(replicas)]
+    if net is not None:
+        # consistent inner nodes of the breakpoint branches: V - R i (and V + R i mirrored)
+        for i in range(replicas):
+            for j, (r, e) in enumerate(zip(net.resistors, net.biases)):
+                ip = float(branch_current(net.part, r, e, volts[i]))
+                im = float(branch_current(net.part, r, e, -volts[i]))
+                ic.append(f"v(xr{i}.xcubic.a{j})={_n(volts[i] - r * ip)} "
+                          f"v(xr{i}.xcubic.c{j})={_n(volts[i] + r * im)}")
     lines.append(".ic " + " ".join(ic))
     lines.append(f".options seed={seed} reltol={_n(spec.reltol)} abstol={_n(spec.abstol)} "
                  f"vntol={_n(mapping.vntol)} method={spec.method} temp=27 tnom=27")
     vectors = {"v": [f"v(v{i})" for i in range(replicas)],
                "x": [f"v(x{i})" for i in range(replicas)],
-               "noise": [f"v(nz{i})" for i in range(replicas)]}
-    lines.append(".save " + " ".join(vectors["v"] + vectors["x"] + vectors["noise"]))
+               "noise": [f"v(nz{i})" for i in range(replicas)] if mapping.gaussian_noise else []}
+    saved = vectors["v"] + vectors["x"] + vectors["noise"]
+    if mapping.inductance > 0:
+        vectors["x_spring"] = [f"v(xs{i})" for i in range(replicas)]
+        saved += vectors["x_spring"]
+    lines.append(".save " + " ".join(saved))
     lines.append(f".tran {_n(sample_dt * theta)} {_n(t_end * theta)} 0 {_n(max_step * theta)} uic")
     lines.append(".end")
     text = "\n".join(lines) + "\n"
     return Deck(text=text, vectors=vectors, to_model_v=mapping.to_model_v,
                 to_model_x=mapping.to_model_x, time_scale=theta, seed=seed, replicas=replicas,
                 sha256=hashlib.sha256(text.encode()).hexdigest(), to_model_noise=1.0,
-                noise_dt=mapping.noise_dt, t_end=t_end, sample_dt=sample_dt)
+                noise_dt=mapping.noise_dt if mapping.gaussian_noise else 0.0, t_end=t_end,
+                sample_dt=sample_dt, kicks=kicks, x_spring_initial=float(mapping.model.x0))
 
 
 def bridge_dc_deck(mapping: CircuitMapping, v_max: float, points: int = 201) -> str:
@@ -205,15 +331,40 @@ def bridge_dc_deck(mapping: CircuitMapping, v_max: float, points: int = 201) -> 
         circuit.subcircuit(bridge_subcircuit(mapping))
         circuit.X("coulomb", "bridge", "t")
     elif element == "behavioural":
-        circuit.BehavioralSource("coulomb", "t", circuit.gnd, current_expression=(
-            f"{_n(mapping.i_delta)}*tanh(V(t)/{_n(mapping.eps_volts)})"))
+        circuit.BehavioralSource("coulomb", "t", circuit.gnd,
+                                 current_expression=_friction_expr(mapping, "tanh", "t"))
     else:
         circuit.BehavioralSource("coulomb", "t", circuit.gnd,
-                                 current_expression=f"{_n(mapping.i_delta)}*sgn(V(t))")
+                                 current_expression=_friction_expr(mapping, "sgn", "t"))
     circuit.V("s", "t", circuit.gnd, "dc 0")
     step = 2.0 * v_max / (points - 1)
     lines = [str(circuit).rstrip("\n"),
              # tight tolerances: the test compares with the closed form to 1e-5 of I_Delta
              f".options reltol=1e-9 abstol=1e-18 vntol=1e-12 temp=27 tnom=27",
+             f".dc vs {_n(-v_max)} {_n(v_max + 0.5 * step)} {_n(step)}", ".end"]
+    return "\n".join(lines) + "\n"
+
+
+def cubic_dc_deck(mapping: CircuitMapping, v_max: float, points: int = 201) -> str:
+    """A ``.dc`` deck sweeping the voltage across the cubic conductance (B-source or diode
+    network) from ``-v_max`` to ``v_max`` volts; the element's current is ``-i(vs)``."""
+    if not isinstance(mapping, CircuitMapping):
+        raise ValueError(f"mapping must be a CircuitMapping, got {type(mapping).__name__}")
+    v_max = val.positive(v_max, "v_max")
+    points = _check_int(points, "points", 3, 100_001)
+    if mapping.cubic_element is None:
+        raise ValueError("mapping has no cubic element to sweep (cubic = 0); map a model with cubic > 0")
+    circuit = Circuit("cubicdc")
+    if mapping.cubic_element == "diode-network":
+        circuit.model(_CUBIC_MODEL, "D", **{k: _n(v, k) for k, v in mapping.cubic_network.part.model})
+        circuit.subcircuit(cubic_subcircuit(mapping))
+        circuit.X("cubic", "cubicnet", "t")
+    else:
+        circuit.BehavioralSource("cubic", "t", circuit.gnd,
+                                 current_expression=f"{_n(mapping.g3, 'g3')}*V(t)*V(t)*V(t)")
+    circuit.V("s", "t", circuit.gnd, "dc 0")
+    step = 2.0 * v_max / (points - 1)
+    lines = [str(circuit).rstrip("\n"),
+             ".options reltol=1e-9 abstol=1e-18 vntol=1e-12 temp=27 tnom=27",
              f".dc vs {_n(-v_max)} {_n(v_max + 0.5 * step)} {_n(step)}", ".end"]
     return "\n".join(lines) + "\n"

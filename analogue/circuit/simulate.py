@@ -45,7 +45,8 @@ log = logging.getLogger(__name__)
 # microseconds per replica-step.
 DEFAULT_REPLICAS_PER_DECK = 16
 DEFAULT_TIMEOUT = 3600.0
-_EXTRA = ("replicas_per_deck", "store", "progress", "timeout", "scheduler", "return_noise")
+_EXTRA = ("replicas_per_deck", "store", "progress", "timeout", "scheduler", "return_noise",
+          "return_records")
 # ngspice parses `.options seed=` as a C int; seeds above 2**31 - 1 are ignored with a warning.
 _SEED_MAX = 2**31 - 1
 
@@ -163,6 +164,8 @@ class BatchTask:
     noise_names: tuple | None = None        # held-noise vectors, if the deck records them
     noise_dt: float = 0.0                   # their hold time (model units)
     to_model_noise: float = 1.0
+    xs_names: tuple | None = None           # spring: position read back from the inductor
+    xs_initial: float = 0.0                 # its value at t = 0 (x0, model units)
 
 
 def held_values(t_raw, rows, t_end, hold) -> np.ndarray:
@@ -206,6 +209,9 @@ def run_batch(task: BatchTask) -> dict:
     info = {"wall_time": res.wall_time, "raw_points": int(res.plot.n_points),
             "ngspice_version": res.version, "warnings": warnings[:20]}
     out = {"v": v, "x": x, "info": info}
+    if task.xs_names:
+        out["x_spring"] = _ng.resample(res.plot, task.xs_names, t_s,
+                                       initial=np.full(len(task.xs_names), task.xs_initial))
     if task.noise_names and task.noise_dt > 0:
         out["noise"] = held_values(res.plot["time"], res.plot.columns(task.noise_names),
                                    float(t_s[-1]), task.noise_dt * task.time_scale) \
@@ -266,7 +272,7 @@ def _executor(workers, scheduler, n_tasks):
 
 
 def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, progress=None,
-              timeout=DEFAULT_TIMEOUT):
+              timeout=DEFAULT_TIMEOUT, records=None):
     """Run (or load from the store) a list of decks and stack their replicas.
 
     ``decks``: objects with the netlist.Deck interface (``text``, ``vectors``, ``to_model_v``,
@@ -275,7 +281,8 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
     Returns ``(v, x, noise, info)`` with v, x of shape (replicas, n_t), noise (replicas, n_hold)
     the held velocity noise of each hold interval in model units (None if the decks do not
     record it) and info a JSON-safe dict (store keys, per-deck wall times, how many decks came
-    from the store).
+    from the store).  ``records``: an optional dict, filled with ``"x_spring"`` (replicas, n_t)
+    when the decks read the spring's position back from its inductor.
     """
     times = np.asarray(times, dtype=float)
     if workers is None:
@@ -299,7 +306,9 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
                                v0=np.asarray(v0[offsets[b]:offsets[b + 1]], dtype=float),
                                timeout=timeout, group=group, noise_names=noise_names,
                                noise_dt=float(getattr(deck, "noise_dt", 0.0) or 0.0),
-                               to_model_noise=float(getattr(deck, "to_model_noise", 1.0))))
+                               to_model_noise=float(getattr(deck, "to_model_noise", 1.0)),
+                               xs_names=tuple(vec["x_spring"]) if vec.get("x_spring") else None,
+                               xs_initial=float(getattr(deck, "x_spring_initial", 0.0))))
         keys.append(batch_key(deck.text, times, version))
     if offsets[-1] != len(v0):
         raise ValueError(f"v0 has {len(v0)} entries but the decks hold {offsets[-1]} replicas")
@@ -311,7 +320,8 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
             hit = st.get(key)
             if hit is not None:
                 arrays, meta = hit
-                results[b] = {**{k: arrays[k] for k in ("v", "x", "noise") if k in arrays},
+                results[b] = {**{k: arrays[k] for k in ("v", "x", "noise", "x_spring")
+                                 if k in arrays},
                               "info": meta.get("info", {})}
                 from_store += 1
     todo = [t for t in tasks if results[t.index] is None]
@@ -342,7 +352,7 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
                                 worker_version, version)
                 elif st is not None:
                     # Written as each deck finishes: an interrupted call resumes from here.
-                    arrays = {k: out[k] for k in ("v", "x", "noise") if k in out}
+                    arrays = {k: out[k] for k in ("v", "x", "noise", "x_spring") if k in out}
                     st.put(keys[task.index], {**arrays, "t": times},
                            _batch_meta(task, version, out["info"]))
                 if bar is not None:
@@ -368,6 +378,8 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
         noise = np.vstack([r["noise"] for r in results])
     else:
         noise = None
+    if records is not None and results and all("x_spring" in r for r in results):
+        records["x_spring"] = np.vstack([r["x_spring"] for r in results])
     info = {"ngspice_version": version, "store": str(st.root) if st is not None else None,
             "store_keys": keys, "from_store": from_store, "ran": len(todo), "wall_time": wall,
             "deck_wall_times": [r["info"].get("wall_time") for r in results],
@@ -426,7 +438,8 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
         $ANALOGUE_STORE or ~/.cache/analogue/runs), ``progress`` (bool; default: a tqdm bar
         when stderr is a terminal), ``timeout`` (seconds per deck, default 3600),
         ``scheduler`` ("tcp://host:port" or a distributed.Client: run on a Dask cluster),
-        ``return_noise`` (bool, default False: see Returns).
+        ``return_noise`` (bool, default False: see Returns), ``return_records`` (bool, default
+        False: see Returns).
 
     Returns
     -------
@@ -437,6 +450,11 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
     meta["noise_dt"]``: the velocity-noise increment over hold k is ``sqrt(2 h/gamma) z[:, k]``
     (the convention of ``analogue.montecarlo.simulate_sde(..., dt=h, noise=z)``, so an SDE
     integrator can be driven by the very same noise).
+    With ``return_records=True``: ``(ensemble, records)``, a dict with ``"x_spring"`` (replicas,
+    n_t) the spring's position read back from the inductor current (spring models; it differs
+    from ``x0 + x`` by the inductor's leak, see the mapping's budget) and ``"kicks"`` (shot
+    noise): per replica ``(times, jumps)`` of the kicks that drove it (model units; times are
+    the pulse centres), so a Monte Carlo can be driven by the same realisation.
     """
     unknown = sorted(set(extra) - set(_EXTRA))
     if unknown:
@@ -462,6 +480,11 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
     return_noise = extra.get("return_noise", False)
     if not isinstance(return_noise, bool):
         raise ValueError(f"return_noise must be True or False, got {return_noise!r}")
+    return_records = extra.get("return_records", False)
+    if not isinstance(return_records, bool):
+        raise ValueError(f"return_records must be True or False, got {return_records!r}")
+    if return_noise and return_records:
+        raise ValueError("return_noise and return_records cannot both be True")
     open_store(extra.get("store"))  # validates the store argument early
     _check_scheduler(extra.get("scheduler"))
 
@@ -480,8 +503,10 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
                         t_end=t_end, seed=seeds[b], sample_dt=sample_dt)
              for b in range(n_decks)]
     t0 = _time.perf_counter()
+    records = {}
     v, x, noise, info = run_decks(decks, times, v0_arr, store=extra.get("store"), workers=workers,
-                           scheduler=extra.get("scheduler"), progress=progress, timeout=timeout)
+                           scheduler=extra.get("scheduler"), progress=progress, timeout=timeout,
+                           records=records)
     table = mapping.table() if hasattr(mapping, "table") else None
     meta = {
         "source": "circuit",
@@ -501,7 +526,13 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
         **info,
         "wall_time": _time.perf_counter() - t0,
     }
+    if mapping.model.shot is not None:
+        meta["shot_width"] = mapping.shot_width
     ens = Ensemble(times, v, x, _jsonable(meta))
+    if return_records:
+        if mapping.model.shot is not None:
+            records["kicks"] = [k for d in decks for k in d.kicks]
+        return ens, records
     if not return_noise:
         return ens
     if noise is None:
