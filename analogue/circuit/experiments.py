@@ -52,7 +52,8 @@ NETLISTS_DIR = REPO_ROOT / "netlists"
 
 _TOP_KEYS = {"name", "description", "model", "circuit", "experiment", "netlist", "report"}
 # [report] is read by analogue.report.plan (what the report measures; never reaches a deck).
-_MODEL_KEYS = {"tau_m", "delta", "a", "gamma", "mass", "epsilon"}
+_MODEL_KEYS = {"tau_m", "delta", "a", "gamma", "mass", "epsilon",
+               "cubic", "stribeck", "spring", "x0", "shot"}  # (the last five: issue 9)
 _MODEL_REQUIRED = {"tau_m", "delta", "a", "gamma"}
 _EXPERIMENT_KEYS = {"v0", "replicas", "t_end", "sample_dt", "seed", "burn_in",
                     "histogram_times", "work_taus"}
@@ -146,8 +147,23 @@ def experiment_from_dict(data: dict, where: str = "experiment", source: Path | N
 
     mdata = _table(data, "model", _MODEL_KEYS, where)
     _require(mdata, _MODEL_REQUIRED, "model", where)
+    mdata = dict(mdata)
     for key, value in mdata.items():
-        val.finite(value, f"{where}: model.{key}")
+        if key == "gamma" and value == float("inf"):
+            continue  # gamma = inf: no Gaussian noise (shot noise alone)
+        if key not in ("stribeck", "shot"):
+            val.finite(value, f"{where}: model.{key}")
+    if "stribeck" in mdata:  # [delta_s, v_s]
+        st = mdata["stribeck"]
+        if not isinstance(st, list) or len(st) != 2:
+            raise ValueError(f"{where}: model.stribeck must be a list [delta_s, v_s]")
+        mdata["stribeck"] = tuple(val.finite(x, f"{where}: model.stribeck[{i}]") for i, x in enumerate(st))
+    if "shot" in mdata:  # [model.shot] rate, mean, two_sided
+        from ..model import ShotNoise
+        sh = mdata["shot"]
+        if not isinstance(sh, dict) or not {"rate", "mean"} <= set(sh) <= {"rate", "mean", "two_sided"}:
+            raise ValueError(f"{where}: [model.shot] must be a table with rate, mean and optional two_sided")
+        mdata["shot"] = ShotNoise(**sh)
     model = Model(**mdata)
 
     cdata = _table(data, "circuit", set(CircuitSpec.__dataclass_fields__), where)

@@ -16,7 +16,8 @@ Cubic viscous law ``cubic v^3`` (issue 9): the conductance ``I = g3 V^3`` with
   (the diodes' exponential knees).  Branch law (exact for the Shockley diode, solved with the
   Wright omega function): ``V - E_k = (R_k + RS) i + N V_T ln(1 + i/IS)``.  The values
   ``(R_k, E_k)`` are fitted (least squares, diode law included) to ``g3 V^3`` over the
-  stationary swing ``|V| <= V_max``; the remaining error is reported in the mapping's budget
+  stationary swing ``|V| <= V_max``, the resistors then rounded to E96 values and the biases
+  refitted and set to 0.1 mV; the remaining error is reported in the mapping's budget
   (``cubic_force``: max |I - g3 V^3| over the swing relative to ``g3 V_max^3``;
   ``cubic_variance``: relative change of the stationary velocity variance under
   ``p_s ~ exp(-gamma U)`` with the network's law in U, when that law applies).  The vendor
@@ -57,7 +58,7 @@ from scipy import optimize, special
 
 from .parts import DiodePart, thermal_voltage
 
-__all__ = ["DiodeNetwork", "design_cubic_network", "network_current", "branch_current",
+__all__ = ["DiodeNetwork", "design_cubic_network", "network_current", "branch_current", "e96",
            "stribeck_amplitude", "cubic_budget"]
 
 
@@ -115,6 +116,17 @@ def network_current(part: DiodePart, resistors, biases, volts):
     return out
 
 
+def e96(values):
+    """Nearest values of the E96 (1 %) resistor series: ``round(10^(i/96), 2)`` per decade
+    (this formula reproduces every E96 value)."""
+    values = np.asarray(values, dtype=float)
+    dec = np.floor(np.log10(values))
+    mant = values / 10.0**dec
+    grid = np.round(10.0 ** (np.arange(97) / 96.0), 2)
+    pick = grid[np.argmin(np.abs(np.log(mant[..., None] / grid)), axis=-1)]
+    return np.round(pick * 10.0**dec, 6)
+
+
 def _forward_drop(part: DiodePart, current: float) -> float:
     return part.N * thermal_voltage() * math.log1p(current / part.IS) + part.RS * current
 
@@ -152,8 +164,14 @@ def design_cubic_network(part: DiodePart, g3: float, v_max: float, branches: int
 
     sol = optimize.least_squares(resid, np.concatenate([np.log(r0), e0]), method="lm",
                                  xtol=1e-12, ftol=1e-12, max_nfev=4000)
-    r = np.exp(sol.x[:k])
-    e = sol.x[k:]
+    # Real parts: resistors from the E96 (1 %) series, then the biases (trimmed voltages, as
+    # on an analogue computer's potentiometers) refitted for those resistors and set to
+    # 0.1 mV.  This also keeps the deck text independent of the last bits of the optimiser.
+    r = e96(np.exp(sol.x[:k]))
+    log_r = np.log(r)
+    sol = optimize.least_squares(lambda e: resid(np.concatenate([log_r, e])), sol.x[k:],
+                                 method="lm", xtol=1e-12, ftol=1e-12, max_nfev=4000)
+    e = np.round(sol.x, 4)
     order = np.argsort(e)
     r, e = r[order], e[order]
     fine = np.linspace(-v_max, v_max, 2001)
