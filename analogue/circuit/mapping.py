@@ -446,6 +446,11 @@ def _gaussian_grid(model: Model, level: float = SWING_LEVEL, points: int = 40001
     reach = tau * a + math.sqrt(tau * tau * a * a + 2.0 * tau * level / model.gamma)
     v = np.unique(np.concatenate([np.linspace(-reach, reach, points), [0.0]]))
     gu = model.gamma * family_potential(model, v)
+    # second pass on the region found (at weak noise it is far narrower than the bound)
+    inside = np.flatnonzero(gu - gu.min() <= level)
+    lo, hi = v[max(inside[0] - 1, 0)], v[min(inside[-1] + 1, v.size - 1)]
+    v = np.unique(np.concatenate([np.linspace(lo, hi, points), [0.0]]))
+    gu = model.gamma * family_potential(model, v)
     return v, gu - gu.min()
 
 
@@ -463,7 +468,7 @@ def velocity_range(model: Model, level: float = SWING_LEVEL) -> tuple[float, flo
         if _is_plain(model):
             lo, hi = stationary_range(model, level)
         else:
-            v, gu = _gaussian_grid(model, level)
+            v, gu = _gaussian_grid(_one_dimensional(model), level)
             inside = v[gu <= level]
             lo, hi = float(inside.min()), float(inside.max())
             if model.spring > 0:
@@ -481,16 +486,26 @@ def velocity_range(model: Model, level: float = SWING_LEVEL) -> tuple[float, flo
 def velocity_std(model: Model) -> float | None:
     """Stationary velocity standard deviation used by the bias estimates: the closed form for
     the paper's model; for the Gaussian family members the grid quadrature of exp(-gamma U)
-    (the spring left out: an estimate there); None without Gaussian noise."""
+    (with a spring: of the a = 0 spring-free member, an estimate); None without Gaussian
+    noise."""
     if _is_plain(model):
         return stationary_std(model)
     if not math.isfinite(model.gamma):
         return None
-    v, gu = _gaussian_grid(model)
+    v, gu = _gaussian_grid(_one_dimensional(model))
     p = np.exp(-gu)
     z = np.trapezoid(p, v)
     m = np.trapezoid(v * p, v) / z
     return math.sqrt(float(np.trapezoid((v - m) ** 2 * p, v) / z))
+
+
+def _one_dimensional(model: Model) -> Model:
+    """The 1-D stand-in for the bias estimates: with a spring, the force a is balanced by the
+    spring on average (<v> = 0), so the velocity law is estimated by the a = 0, spring-free
+    member."""
+    if model.spring > 0:
+        return model.replace(a=0.0, spring=0.0, x0=0.0)
+    return model
 
 
 def _smoothing_scale(model: Model) -> float:

@@ -243,6 +243,11 @@ def build_deck(mapping: CircuitMapping, *, replicas: int, v0, t_end: float, seed
 
     spec, theta = mapping.spec, mapping.theta
     max_step = spec.max_step if spec.max_step is not None else mapping.noise_dt
+    if spec.max_step is None and mapping.inductance > 0:
+        # gear (BDF2) damps an oscillator numerically when its steps are long against the
+        # period: a Coulomb ring-down (tau_m = 1000, period 2 pi) with steps up to noise_dt =
+        # 10 lost 0.005 more swing per half period than with steps <= 0.01; cap at period/200.
+        max_step = min(max_step, 2.0 * np.pi / np.sqrt(mapping.model.spring) / 200.0)
     max_step = min(max_step, t_end)
 
     circuit = Circuit(title)
