@@ -57,7 +57,7 @@ from .parts import IDEAL_IS, DiodePart, get_part, ideal_diode, thermal_voltage, 
 from . import nonlinear as nl
 
 __all__ = ["CircuitSpec", "CircuitMapping", "map_model", "COULOMB_KINDS", "DIODES",
-           "CUBIC_KINDS", "velocity_range"]
+           "CUBIC_KINDS", "velocity_range", "velocity_std"]
 
 COULOMB_KINDS = ("diode-bridge", "behavioural", "behavioural-sgn")
 CUBIC_KINDS = ("behavioural", "diode-network")
@@ -407,8 +407,7 @@ class CircuitMapping:
 
 def _is_plain(model: Model) -> bool:
     """True for the paper's model (no extension field set): mapped exactly as before issue 9."""
-    return (model.cubic == 0 and model.stribeck is None and model.spring == 0
-            and model.shot is None and math.isfinite(model.gamma))
+    return model.is_paper
 
 
 def _friction_amplitudes(model: Model) -> tuple[float, float]:
@@ -418,24 +417,10 @@ def _friction_amplitudes(model: Model) -> tuple[float, float]:
     return model.stribeck[0], max(model.delta, model.stribeck[0])
 
 
-def family_potential(model: Model, v):
-    """``U(v) = v^2/(2 tau_m) + cubic v^4/4 + Delta |v| + (delta_s - Delta) v_s (1 - e^{-|v|/v_s})
-    - a v`` (sgn law; the spring is left out): ``p_s ~ exp(-gamma U)`` for the 1-D Gaussian
-    members (theory notes, "the extensions, in equations")."""
-    v = np.asarray(v, dtype=float)
-    av = np.abs(v)
-    u = v * v / (2.0 * model.tau_m) + model.cubic * v**4 / 4.0 + model.delta * av - model.a * v
-    if model.stribeck is not None:
-        ds, vs = model.stribeck
-        u = u + (ds - model.delta) * vs * (-np.expm1(-av / vs))
-    return u
-
-
-def family_drift(model: Model, v):
-    """``f(v) = -v/tau_m - cubic v^3 - Delta(v) sgn v + a`` (sgn law, spring left out)."""
-    v = np.asarray(v, dtype=float)
-    return (-v / model.tau_m - model.cubic * v**3
-            - nl.stribeck_amplitude(model.delta, model.stribeck, v) * np.sign(v) + model.a)
+def _sgn_law(model: Model) -> Model:
+    """The member with the exact sgn law and no spring: its ``potential`` is the U of the
+    issue's equations (``analogue.Model.potential``) and its ``drift`` the 1-D force law."""
+    return model.replace(epsilon=0.0, spring=0.0, x0=0.0)
 
 
 def _gaussian_grid(model: Model, level: float = SWING_LEVEL, points: int = 40001):
@@ -445,12 +430,13 @@ def _gaussian_grid(model: Model, level: float = SWING_LEVEL, points: int = 40001
     tau, a = model.tau_m, abs(model.a)
     reach = tau * a + math.sqrt(tau * tau * a * a + 2.0 * tau * level / model.gamma)
     v = np.unique(np.concatenate([np.linspace(-reach, reach, points), [0.0]]))
-    gu = model.gamma * family_potential(model, v)
+    sgn = _sgn_law(model)
+    gu = model.gamma * sgn.potential(v)
     # second pass on the region found (at weak noise it is far narrower than the bound)
     inside = np.flatnonzero(gu - gu.min() <= level)
     lo, hi = v[max(inside[0] - 1, 0)], v[min(inside[-1] + 1, v.size - 1)]
     v = np.unique(np.concatenate([np.linspace(lo, hi, points), [0.0]]))
-    gu = model.gamma * family_potential(model, v)
+    gu = model.gamma * sgn.potential(v)
     return v, gu - gu.min()
 
 
@@ -517,6 +503,9 @@ def _smoothing_scale(model: Model) -> float:
         scales.append(model.velocity_scale)
     if model.shot is not None:
         scales.append(model.shot.mean)
+    if not scales:
+        # noise-free (gamma = inf, no shot): the deterministic velocity scale of the motion
+        return max(model.static_friction, model.delta, abs(model.a)) * model.tau_m or 1.0
     return min(scales)
 
 
@@ -682,8 +671,10 @@ def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
         })
     else:
         # shot noise alone: the atom at v = 0 becomes the tanh law's fixed point
-        # eps atanh(a/Delta(0)), a shift of order epsilon: compare with the mean jump.
-        bias.update({"smoothing": epsilon / model.shot.mean, "smoothing_width": epsilon / model.shot.mean,
+        # eps atanh(a/Delta(0)), a shift of order epsilon: compare with the mean jump (or,
+        # noise-free, with the deterministic velocity scale).
+        scale = _smoothing_scale(model)
+        bias.update({"smoothing": epsilon / scale, "smoothing_width": epsilon / scale,
                      "noise": 0.0})
     if part is not None and not part.ideal:
         bias["junction_capacitance"] = 2.0 * part.CJO / cap
@@ -702,8 +693,7 @@ def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
         if gaussian and model.spring == 0:
             rest = model.replace(cubic=0.0)
             bias["cubic_variance"] = abs(nl.cubic_budget(
-                network, kappa, i_unit, lambda v: family_potential(rest, v), model.gamma,
-                (v_lo, v_hi)))
+                network, kappa, i_unit, _sgn_law(rest).potential, model.gamma, (v_lo, v_hi)))
 
     # --- spring: L from v to ground; the inductor current is the spring force current
     inductance = inductor_rs = inductor_ic = x_spring_gain = 0.0
@@ -723,7 +713,7 @@ def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
         sh = model.shot
         shot_charge = ck
         vgrid = np.linspace(v_lo, v_hi, 2001)
-        drift_max = float(np.max(np.abs(family_drift(model, vgrid)))) + delta_max
+        drift_max = float(np.max(np.abs(_sgn_law(model).drift(vgrid)))) + delta_max
         if model.spring > 0:
             drift_max += model.spring * (abs(model.x0) + delta_max / model.spring + 8.0 * sh.mean
                                          + (math.sqrt(2 * SWING_LEVEL * model.tau_m / model.gamma)

@@ -41,7 +41,7 @@ from PySpice.Spice.Netlist import Circuit, SubCircuit
 
 from . import validation as val
 from .mapping import CircuitMapping
-from .nonlinear import branch_current, stribeck_amplitude
+from .nonlinear import branch_current
 from .parts import bridge_node_voltages
 from .shot import deck_kicks, pulse_pwl
 

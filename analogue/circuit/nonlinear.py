@@ -59,7 +59,7 @@ from scipy import optimize, special
 from .parts import DiodePart, thermal_voltage
 
 __all__ = ["DiodeNetwork", "design_cubic_network", "network_current", "branch_current", "e96",
-           "stribeck_amplitude", "cubic_budget"]
+           "cubic_budget"]
 
 
 @dataclass(frozen=True)
@@ -179,15 +179,6 @@ def design_cubic_network(part: DiodePart, g3: float, v_max: float, branches: int
     return DiodeNetwork(part=part, g3=float(g3), v_max=float(v_max),
                         resistors=tuple(float(x) for x in r), biases=tuple(float(x) for x in e),
                         max_error=err)
-
-
-def stribeck_amplitude(delta: float, stribeck, v):
-    """``Delta(v) = Delta + (delta_s - Delta) exp(-|v|/v_s)`` (constant Delta if None)."""
-    v = np.asarray(v, dtype=float)
-    if stribeck is None:
-        return np.full_like(v, delta)
-    delta_s, v_s = stribeck
-    return delta + (delta_s - delta) * np.exp(-np.abs(v) / v_s)
 
 
 def cubic_budget(network: DiodeNetwork, kappa: float, i_unit: float, potential_rest, gamma: float,
