@@ -16,13 +16,18 @@ Two ngspice 39 facts shape this module (see shared/theory.md):
 """
 from __future__ import annotations
 
+import atexit
 import functools
+import os
 import re
 import shutil
+import signal
+import socket
 import subprocess
 import tempfile
 import threading
 import time as _time
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -30,20 +35,56 @@ import numpy as np
 
 from .rawfile import RawPlot, read_raw
 
-__all__ = ["NgspiceError", "NgspiceNotFoundError", "RunResult", "find_ngspice",
-           "ngspice_version", "run_deck", "terminate_group", "resample", "interp_rows"]
+__all__ = ["NgspiceError", "NgspiceNotFoundError", "RunInterrupted", "RunResult", "find_ngspice",
+           "ngspice_version", "run_deck", "check_deck", "terminate_group", "terminate_all",
+           "interrupt_guard", "resample", "interp_rows"]
 
 INSTALL_HINT = ("install it with your package manager, e.g. `sudo apt-get install ngspice` "
                 "(Debian/Ubuntu), `brew install ngspice` (macOS) or `conda install -c "
                 "conda-forge ngspice`, or put the ngspice executable on PATH")
 
+#: seconds allowed for ``ngspice -v`` (it takes ~50 ms; a wrapper that hangs must not block).
+VERSION_TIMEOUT = 20.0
+#: longest error message quoted from ngspice (characters); it is one line.
+MESSAGE_MAX = 1000
+#: bytes of ngspice's stdout/stderr kept in memory (the end of each: that is where errors are).
+LOG_TAIL_BYTES = 256 * 1024
+TMP_PREFIX = "analogue-ngspice-"
+
 
 class NgspiceError(RuntimeError):
-    """ngspice failed (non-zero exit, timeout, missing or incomplete output)."""
+    """ngspice failed (non-zero exit, timeout, missing or incomplete output).  The message is
+    one line and quotes ngspice's own error lines joined by `` | ``."""
 
 
 class NgspiceNotFoundError(NgspiceError, FileNotFoundError):
     """No ngspice executable on PATH."""
+
+
+class RunInterrupted(KeyboardInterrupt):
+    """A run was stopped by SIGINT, SIGTERM or SIGHUP: the ngspice process groups were killed
+    and their temporary directories removed; decks that had finished are in the run store.
+
+    A KeyboardInterrupt (``except Exception`` does not swallow it).  ``signum`` is the signal,
+    ``exit_code`` the shell convention 128 + signum (130 for SIGINT, 143 for SIGTERM) that the
+    CLI exits with; ``str()`` is a one-line message."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = int(signum)
+        self.exit_code = 128 + self.signum
+
+    def __str__(self) -> str:
+        return (f"interrupted by {_signal_name(self.signum)}: the running ngspice processes "
+                f"were stopped and their temporary files removed; finished decks are kept in "
+                f"the run store, so running the same command again resumes")
+
+
+def _signal_name(signum: int) -> str:
+    try:
+        return signal.Signals(signum).name
+    except ValueError:
+        return f"signal {signum}"
 
 
 def find_ngspice() -> str:
@@ -55,18 +96,112 @@ def find_ngspice() -> str:
     return exe
 
 
+def _one_line(text: str, limit: int = MESSAGE_MAX) -> str:
+    """Non-empty lines of ``text`` joined by " | " (whitespace collapsed, consecutive
+    duplicates dropped); longer than ``limit``: its start and its end around " ... "."""
+    out = []
+    for ln in text.splitlines():
+        ln = " ".join(ln.split())
+        if ln and (not out or out[-1] != ln):
+            out.append(ln)
+    joined = " | ".join(out)
+    if len(joined) > limit:
+        half = (limit - 5) // 2
+        joined = joined[:half].rstrip() + " ... " + joined[-half:].lstrip()
+    return joined
+
+
+# ngspice chatter that is never the reason of a failure
+_NOISE = re.compile(r"^\s*(note: no resource usage|or no active circuit available|"
+                    r"note: no compatibility mode selected)", re.IGNORECASE)
+
+
+def _said(stdout: str, stderr: str) -> str:
+    """ngspice's own error lines, as one line: all of stderr (minus known chatter), or the
+    stdout lines mentioning an error when stderr is empty."""
+    lines = [ln for ln in stderr.splitlines() if not _NOISE.match(ln)]
+    if not any(ln.strip() for ln in lines):
+        lines = [ln for ln in stdout.splitlines() if re.search(r"error|abort|fatal", ln, re.I)]
+    return _one_line("\n".join(lines))
+
+
+def _with_said(msg: str, said: str) -> str:
+    return f"{msg}; ngspice said: {said}" if said else msg
+
+
+def _read_tail(path: Path) -> str:
+    """The last LOG_TAIL_BYTES of a log file as text (missing file: "")."""
+    try:
+        with open(path, "rb") as fh:
+            fh.seek(0, os.SEEK_END)
+            size = fh.tell()
+            fh.seek(max(0, size - LOG_TAIL_BYTES))
+            data = fh.read()
+    except OSError:
+        return ""
+    return data.decode("utf-8", errors="replace")
+
+
+# --------------------------------------------------------------------- supervised processes
+# Every ngspice runs in its own session (process group), so that a timeout or an interrupt
+# kills it and everything it started (a wrapper script's children included).  Its output
+# goes to files, not pipes: a child that inherited stdout can never make us wait for EOF.
+_ACTIVE: dict = {}          # group -> set of Popen
+_CANCELLED: set = set()
+_ACTIVE_LOCK = threading.Lock()
+
+
+def _kill_tree(proc) -> None:
+    """SIGKILL the process group led by ``proc`` (its session), ignoring a group already gone.
+    Safe after ``proc`` was reaped: a process-group id stays reserved while any member lives."""
+    try:
+        os.killpg(proc.pid, signal.SIGKILL)
+    except (ProcessLookupError, PermissionError):
+        pass
+    except OSError:
+        pass
+
+
+def _spawn(argv, cwd, stdout, stderr):
+    return subprocess.Popen(argv, cwd=cwd, stdin=subprocess.DEVNULL, stdout=stdout,
+                            stderr=stderr, start_new_session=True)
+
+
+def _wait(proc, timeout: float) -> int:
+    """Wait for ``proc``; on timeout or any interruption kill its group (and reap it)."""
+    try:
+        return proc.wait(timeout=timeout)
+    except BaseException:
+        _kill_tree(proc)
+        proc.wait()
+        raise
+    finally:
+        _kill_tree(proc)  # stray children of a wrapper that exited: never left running
+
+
 @functools.lru_cache(maxsize=8)
 def _version_of(executable: str) -> str:
-    try:
-        out = subprocess.run([executable, "-v"], capture_output=True, text=True, timeout=30,
-                             stdin=subprocess.DEVNULL)
-    except (OSError, subprocess.TimeoutExpired) as exc:
-        raise NgspiceError(f"could not run `{executable} -v`: {exc}") from exc
-    text = out.stdout + out.stderr
+    with tempfile.TemporaryDirectory(prefix=_tmp_prefix()) as tmp:
+        out_p, err_p = Path(tmp) / "stdout.txt", Path(tmp) / "stderr.txt"
+        try:
+            with open(out_p, "wb") as out, open(err_p, "wb") as err:
+                proc = _spawn([executable, "-v"], tmp, out, err)
+            _track(proc, None)
+            try:
+                _wait(proc, VERSION_TIMEOUT)
+            finally:
+                _untrack(proc, None)
+        except subprocess.TimeoutExpired:
+            raise NgspiceError(f"`{executable} -v` did not answer within {VERSION_TIMEOUT:g} s "
+                               f"(is it a working ngspice?)") from None
+        except OSError as exc:
+            raise NgspiceError(f"could not run `{executable} -v`: {exc}") from None
+        text = _read_tail(out_p) + "\n" + _read_tail(err_p)
     # "** ngspice-39 : Circuit level simulation program" (newer builds: "ngspice-42.1 ...")
     m = re.search(r"ngspice-(\d+(?:\.\d+)*\+?)", text)
     if m is None:
-        raise NgspiceError(f"cannot parse the ngspice version from `{executable} -v`:\n{text.strip()}")
+        raise NgspiceError(f"cannot parse the ngspice version from `{executable} -v`, which "
+                           f"printed: {_one_line(text) or '(nothing)'}")
     return m.group(1)
 
 
@@ -87,21 +222,26 @@ class RunResult:
     version: str
 
 
-def _tail(text: str, lines: int = 25) -> str:
-    kept = [ln for ln in text.strip().splitlines() if ln.strip()]
-    return "\n".join(kept[-lines:])
+def _track(proc, group) -> None:
+    with _ACTIVE_LOCK:
+        _ACTIVE.setdefault(group, set()).add(proc)
+        cancelled = group is not None and group in _CANCELLED
+    if cancelled:
+        _kill_tree(proc)  # its run was given up while this deck was being prepared
 
 
-# Running ngspice processes by caller-chosen group, so that a caller whose run failed or was
-# interrupted can stop the processes it started (and only those) instead of letting them run on.
-_ACTIVE: dict = {}
-_CANCELLED: set = set()
-_ACTIVE_LOCK = threading.Lock()
+def _untrack(proc, group) -> None:
+    with _ACTIVE_LOCK:
+        live = _ACTIVE.get(group)
+        if live is not None:
+            live.discard(proc)
+            if not live:
+                del _ACTIVE[group]
 
 
 def terminate_group(group) -> int:
-    """Kill the ngspice processes still running for ``group`` (and any it would start later);
-    returns how many were killed."""
+    """Kill the ngspice process groups still running for ``group`` (and any it would start
+    later); returns how many were killed."""
     with _ACTIVE_LOCK:
         procs = list(_ACTIVE.pop(group, ()))
         if group is not None:
@@ -109,9 +249,154 @@ def terminate_group(group) -> int:
     killed = 0
     for proc in procs:
         if proc.poll() is None:
-            proc.kill()
             killed += 1
+        _kill_tree(proc)
     return killed
+
+
+def terminate_all() -> int:
+    """Kill every ngspice process group this process started and that still runs (used by the
+    signal handlers and at interpreter exit); returns how many were running."""
+    with _ACTIVE_LOCK:
+        procs = [p for group in _ACTIVE.values() for p in group]
+    killed = 0
+    for proc in procs:
+        if proc.poll() is None:
+            killed += 1
+        _kill_tree(proc)
+    return killed
+
+
+# Interpreter exit (a Dask worker closing, sys.exit in a script): kill our ngspice groups
+# *before* the thread pools are joined, so that exiting never waits for a deck to finish.
+# threading's exit hooks run in reverse order of registration, before atexit's.
+try:
+    threading._register_atexit(terminate_all)  # type: ignore[attr-defined]
+except (AttributeError, RuntimeError):  # pragma: no cover - other interpreters
+    atexit.register(terminate_all)
+
+
+# ------------------------------------------------------------------------- signal handling
+_GUARD_LOCK = threading.RLock()
+_GUARD = {"depth": 0, "previous": {}, "raised": False}
+_GUARDED_SIGNALS = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP")
+                         if hasattr(signal, n))
+
+
+def _on_signal(signum, frame):
+    terminate_all()  # first of all: no ngspice keeps running while we unwind
+    prev = _GUARD["previous"].get(signum)
+    if callable(prev) and prev is not signal.default_int_handler:
+        prev(signum, frame)  # the caller's own handler (chained)
+        return
+    if _GUARD["raised"]:
+        return  # already unwinding: the processes are dead, let the clean-up finish
+    _GUARD["raised"] = True
+    raise RunInterrupted(signum)
+
+
+@contextmanager
+def interrupt_guard():
+    """While active (main thread only; elsewhere a no-op), SIGINT, SIGTERM and SIGHUP kill
+    every ngspice process group of this process and raise :class:`RunInterrupted` in the main
+    thread, so that ``finally`` blocks and temporary directories are cleaned up instead of the
+    process dying on the spot.  Signals set to be ignored stay ignored; a handler the caller
+    installed is chained (called after the kill).  Re-entrant; restores the previous handlers."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    with _GUARD_LOCK:
+        if _GUARD["depth"] == 0:
+            _GUARD["raised"] = False
+            _GUARD["previous"] = {}
+            for sig in _GUARDED_SIGNALS:
+                prev = signal.getsignal(sig)
+                if prev is signal.SIG_IGN:
+                    continue  # e.g. nohup: the user asked for this signal to be ignored
+                _GUARD["previous"][sig] = prev
+                signal.signal(sig, _on_signal)
+        _GUARD["depth"] += 1
+    try:
+        yield
+    finally:
+        with _GUARD_LOCK:
+            _GUARD["depth"] -= 1
+            if _GUARD["depth"] == 0:
+                for sig, prev in _GUARD["previous"].items():
+                    signal.signal(sig, prev if prev is not None else signal.SIG_DFL)
+                _GUARD["previous"] = {}
+
+
+# ------------------------------------------------------------------------- temporary dirs
+def _tmp_prefix() -> str:
+    """``analogue-ngspice-<host>.<pid>-``: lets a later run recognise directories left by a
+    process that was killed outright (SIGKILL) and remove them."""
+    host = re.sub(r"[^A-Za-z0-9_-]", "_", socket.gethostname())[:40] or "host"
+    return f"{TMP_PREFIX}{host}.{os.getpid()}-"
+
+
+_SWEPT = set()
+
+
+def sweep_stale_tmp(min_age: float = 60.0) -> int:
+    """Remove ``analogue-ngspice-*`` directories in the temporary directory that belong to a
+    process of this host that no longer exists (killed by SIGKILL or the OOM killer) and are
+    older than ``min_age`` seconds; returns how many were removed."""
+    root = Path(tempfile.gettempdir())
+    host = re.sub(r"[^A-Za-z0-9_-]", "_", socket.gethostname())[:40] or "host"
+    removed = 0
+    try:
+        candidates = list(root.glob(f"{TMP_PREFIX}{host}.*-*"))
+    except OSError:
+        return 0
+    now = _time.time()
+    for d in candidates:
+        m = re.fullmatch(re.escape(f"{TMP_PREFIX}{host}.") + r"(\d+)-.*", d.name)
+        if not m or int(m.group(1)) == os.getpid():
+            continue
+        try:
+            os.kill(int(m.group(1)), 0)
+            continue  # its process is alive
+        except ProcessLookupError:
+            pass
+        except (PermissionError, OverflowError):
+            continue
+        try:
+            if now - d.lstat().st_mtime < min_age or not d.is_dir() or d.is_symlink():
+                continue
+        except OSError:
+            continue
+        shutil.rmtree(d, ignore_errors=True)
+        removed += 1
+    return removed
+
+
+# ---------------------------------------------------------------------------- deck screen
+# A deck is a program: `.control` blocks run commands (`shell`), `.include`/`.lib` read other
+# files, `.osdi` loads compiled code, and a first line `*ng_script` turns the file into a
+# script.  Decks built by analogue contain none of these; refusing them here protects every
+# caller of run_deck, not only the experiment loader.
+_FORBIDDEN = re.compile(r"^\s*(\.control|\.endc|\.inc\w*|\.lib\b|\.endl|\.osdi|\.exec|"
+                        r"shell\b)", re.IGNORECASE)
+
+
+def check_deck(text: str) -> str:
+    """``text`` if it is a complete deck without commands, includes or libraries; else
+    ValueError naming the offending line.  The first line is the title (never executed)."""
+    if not isinstance(text, str) or not text.strip():
+        raise ValueError("text must be a non-empty SPICE deck string")
+    if not text.rstrip().lower().endswith(".end"):
+        raise ValueError("text must be a complete deck ending with '.end'")
+    lines = text.splitlines()
+    if lines and lines[0].strip().lower().startswith("*ng_script"):
+        raise ValueError("deck refused: its first line '*ng_script' makes it an ngspice script")
+    for no, line in enumerate(lines[1:], start=2):
+        m = _FORBIDDEN.match(line)
+        if m:
+            raise ValueError(f"deck refused: line {no} starts with '{m.group(1)}' (control "
+                             f"blocks, shell commands, includes and libraries are not allowed "
+                             f"in decks run by analogue)")
+    return text
 
 
 def run_deck(text: str, *, timeout: float = 3600.0, t_stop: float | None = None,
@@ -120,81 +405,72 @@ def run_deck(text: str, *, timeout: float = 3600.0, t_stop: float | None = None,
 
     Parameters
     ----------
-    text : the deck.
-    timeout : seconds before the ngspice process is killed (NgspiceError).
+    text : the deck (screened by :func:`check_deck`).
+    timeout : seconds before the ngspice process group is killed (NgspiceError).  Holds
+        whatever ngspice does: it runs in its own session and writes to files, so neither a
+        child that keeps its output open nor a wrapper script can delay the kill.
     t_stop : if given (seconds), the transient plot must reach this time, else the run is
         reported as incomplete (ngspice 39 exits 0 after some aborted analyses).
     keep_dir : if given, the deck, raw file and logs are written there and kept (debugging);
         otherwise a temporary directory is used and removed.
     group : any hashable; the process can be stopped by :func:`terminate_group` (group).
     """
-    if not isinstance(text, str) or not text.strip():
-        raise ValueError("text must be a non-empty SPICE deck string")
-    if not text.rstrip().lower().endswith(".end"):
-        raise ValueError("text must be a complete deck ending with '.end'")
-    if not (isinstance(timeout, (int, float)) and timeout > 0):
+    check_deck(text)
+    if isinstance(timeout, bool) or not isinstance(timeout, (int, float)) \
+            or not (timeout > 0 and np.isfinite(timeout)):
         raise ValueError(f"timeout must be a number of seconds > 0, got {timeout!r}")
     exe = find_ngspice()
     version = _version_of(exe)
-    with tempfile.TemporaryDirectory(prefix="analogue-ngspice-") as tmp:
+    if not _SWEPT:
+        _SWEPT.add(True)
+        sweep_stale_tmp()
+    with tempfile.TemporaryDirectory(prefix=_tmp_prefix()) as tmp:
         work = Path(keep_dir) if keep_dir is not None else Path(tmp)
         work.mkdir(parents=True, exist_ok=True)
         (work / "deck.cir").write_text(text)
         raw = work / "out.raw"
+        out_p, err_p = work / "stdout.txt", work / "stderr.txt"
         t0 = _time.perf_counter()
-        proc = subprocess.Popen([exe, "-b", "-r", raw.name, "deck.cir"], cwd=work,
-                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                                stdin=subprocess.DEVNULL)
-        with _ACTIVE_LOCK:
-            _ACTIVE.setdefault(group, set()).add(proc)
-            if group in _CANCELLED:
-                proc.kill()  # its run was given up while this deck was being prepared
+        with open(out_p, "wb") as out, open(err_p, "wb") as err:
+            proc = _spawn([exe, "-b", "-r", raw.name, "deck.cir"], work, out, err)
+        _track(proc, group)
         try:
-            stdout, stderr = proc.communicate(timeout=timeout)
+            returncode = _wait(proc, timeout)
         except subprocess.TimeoutExpired:
-            proc.kill()
-            _, stderr = proc.communicate()
-            raise NgspiceError(f"ngspice did not finish within timeout={timeout} s"
-                               + (f"; it said:\n{_tail(stderr)}" if stderr.strip() else "")) from None
-        except BaseException:
-            proc.kill()  # interrupted while waiting: do not leave the process behind
-            proc.communicate()
-            raise
+            raise NgspiceError(_with_said(f"ngspice did not finish within timeout={timeout} s",
+                                          _said(_read_tail(out_p), _read_tail(err_p)))) from None
         finally:
-            with _ACTIVE_LOCK:
-                live = _ACTIVE.get(group)
-                if live is not None:
-                    live.discard(proc)
-                    if not live:
-                        del _ACTIVE[group]
+            _untrack(proc, group)
         wall = _time.perf_counter() - t0
-        if keep_dir is not None:
-            (work / "stdout.txt").write_text(stdout)
-            (work / "stderr.txt").write_text(stderr)
-        if proc.returncode != 0:
-            said = _tail(stderr) or _tail(stdout)
-            if proc.returncode < 0:
-                raise NgspiceError(f"ngspice was stopped by signal {-proc.returncode}"
-                                   + (f"; it said:\n{said}" if said else ""))
-            raise NgspiceError(f"ngspice exited with status {proc.returncode}; it said:\n{said}")
+        stdout, stderr = _read_tail(out_p), _read_tail(err_p)
+        said = _said(stdout, stderr)
+        if returncode != 0:
+            if returncode < 0:
+                raise NgspiceError(_with_said(f"ngspice was stopped by signal {-returncode} "
+                                              f"({_signal_name(-returncode)})", said))
+            raise NgspiceError(_with_said(f"ngspice exited with status {returncode}", said))
         if not raw.exists():
-            raise NgspiceError("ngspice wrote no raw file; it said:\n"
-                               + (_tail(stderr) or _tail(stdout)))
+            raise NgspiceError(_with_said("ngspice wrote no raw file", said))
         try:
             plots = read_raw(raw)
-        except ValueError as exc:
-            raise NgspiceError(f"unreadable raw file ({exc}); ngspice said:\n"
-                               + _tail(stderr)) from None
+        except (ValueError, OSError) as exc:
+            raise NgspiceError(_with_said(f"unreadable raw file ({_one_line(str(exc))})",
+                                          said)) from None
     tran = [p for p in plots if "transient" in p.plotname.lower()]
     if not tran:
-        raise NgspiceError("the raw file holds no transient plot (plots: "
-                           f"{[p.plotname for p in plots]}); ngspice said:\n{_tail(stderr)}")
+        raise NgspiceError(_with_said("the raw file holds no transient plot (plots: "
+                                      f"{[p.plotname for p in plots]})", said))
     plot = tran[-1]
+    if "time" in plot.names and plot.n_points:
+        t = plot["time"]
+        if not (np.all(np.isfinite(t)) and np.all(np.diff(t) >= 0)):
+            raise NgspiceError(_with_said("the raw file's time vector is not finite and "
+                                          "non-decreasing (damaged output)", said))
     if t_stop is not None:
         reached = float(plot["time"][-1]) if plot.n_points else 0.0
         if reached < t_stop * (1.0 - 1e-9):
-            raise NgspiceError(f"transient stopped at t = {reached:.6g} s before t_stop = "
-                               f"{t_stop:.6g} s; ngspice said:\n{_tail(stderr)}")
+            raise NgspiceError(_with_said(f"transient stopped at t = {reached:.6g} s before "
+                                          f"t_stop = {t_stop:.6g} s", said))
     return RunResult(plot=plot, stdout=stdout, stderr=stderr, wall_time=wall, version=version)
 
 

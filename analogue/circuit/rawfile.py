@@ -50,12 +50,34 @@ class RawPlot:
         return self.values[:, [self.index(n) for n in names]].T
 
 
+# A raw file written by ngspice for this project has a few hundred vectors; 10**6 is far beyond
+# any real deck and keeps a damaged header from making the reader loop or allocate for ever.
+MAX_VARIABLES = 1_000_000
+_HEADER_MAX = 64 * 1024 * 1024  # bytes of ASCII header we are willing to scan for one plot
+
+
+def _count(fields: dict, key: str, label: str, lo: int, hi: int | None = None) -> int:
+    """A header count as an int in [lo, hi], else ValueError naming the field."""
+    raw = fields.get(key)
+    if raw is None:
+        raise ValueError(f"raw file header has no '{label}:' line")
+    try:
+        n = int(raw)
+    except ValueError:
+        raise ValueError(f"raw file header: '{label}: {raw[:40]}' is not an integer") from None
+    if n < lo or (hi is not None and n > hi):
+        raise ValueError(f"raw file header: '{label}: {n}' is outside [{lo}, {hi if hi is not None else 'inf'}]")
+    return n
+
+
 def _parse_header(buf: bytes, pos: int):
-    """Parse one ASCII header starting at ``pos``; return (fields, names, data_start)."""
+    """Parse one ASCII header starting at ``pos``; return (fields, names, data_start).
+    Every count is checked before use and every step moves forward in ``buf``."""
     fields = {}
     names = []
+    limit = min(len(buf), pos + _HEADER_MAX)
     while True:
-        end = buf.find(b"\n", pos)
+        end = buf.find(b"\n", pos, limit)
         if end < 0:
             raise ValueError("raw file header is truncated (no 'Binary:' line)")
         line = buf[pos:end].decode("ascii", errors="replace").rstrip("\r")
@@ -63,38 +85,48 @@ def _parse_header(buf: bytes, pos: int):
         key, _, value = line.partition(":")
         key = key.strip().lower()
         if key == "binary":
+            if not names:
+                raise ValueError("raw file header has no 'Variables:' table")
             return fields, names, pos
         if key == "values":
             raise ValueError("ASCII raw files are not supported; run ngspice with -r "
                              "(binary is its default for batch output)")
         if key == "variables":
-            n = int(fields.get("no. variables", "0"))
+            # each table line is at least "\t0\tt\tt\n": 4 bytes; more lines than the file
+            # can hold is a damaged header
+            n = _count(fields, "no. variables", "No. Variables", 1,
+                       min(MAX_VARIABLES, (len(buf) - pos) // 4))
             for _ in range(n):
-                end = buf.find(b"\n", pos)
+                end = buf.find(b"\n", pos, limit)
                 if end < 0:
                     raise ValueError("raw file variable table is truncated")
                 parts = buf[pos:end].decode("ascii", errors="replace").split()
                 pos = end + 1
-                if len(parts) < 2:
-                    raise ValueError(f"malformed variable line in raw file: {parts!r}")
+                if len(parts) < 2 or parts[1].lower() in ("binary:", "values:"):
+                    raise ValueError(f"malformed variable line in raw file (declared {n} "
+                                     f"variables): {' '.join(parts)[:60]!r}")
                 names.append(parts[1].lower())
             continue
         fields[key] = value.strip()
 
 
 def read_raw(path) -> list[RawPlot]:
-    """All plots of an ngspice binary raw file (real or complex data)."""
+    """All plots of an ngspice binary raw file (real or complex data).
+
+    The header is validated against the file: counts must be integers in range (a negative or
+    absurd ``No. Points`` / ``No. Variables`` raises ValueError naming the field), the variable
+    table must list as many vectors as declared, and the data read is clipped to what the file
+    holds (an aborted run), so the reader never loops or allocates beyond the file's size.
+    """
     buf = Path(path).read_bytes()
     plots = []
     pos = 0
-    while pos < len(buf) and buf[pos:].strip():
+    while pos < len(buf) and buf[pos:pos + 4096].strip():
         fields, names, start = _parse_header(buf, pos)
         nvar = len(names)
-        if nvar == 0:
-            raise ValueError(f"raw file {path} declares no variables")
         flags = fields.get("flags", "real").lower()
         width = 2 if "complex" in flags else 1
-        declared = int(fields.get("no. points", "0"))
+        declared = _count(fields, "no. points", "No. Points", 0)
         point_bytes = 8 * nvar * width
         available = (len(buf) - start) // point_bytes
         npts = min(declared, available)
@@ -104,7 +136,8 @@ def read_raw(path) -> list[RawPlot]:
             block = block[:, 0::2] + 1j * block[:, 1::2]
         plots.append(RawPlot(title=fields.get("title", ""), plotname=fields.get("plotname", ""),
                              flags=flags, names=tuple(names), values=np.array(block)))
-        pos = start + npts * point_bytes
-        if npts < declared:
-            break  # truncated file: nothing sensible follows
+        new_pos = start + npts * point_bytes
+        if npts < declared or new_pos <= pos:
+            break  # truncated file (nothing sensible follows), or no progress
+        pos = new_pos
     return plots
