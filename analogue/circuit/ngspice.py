@@ -35,9 +35,21 @@ import numpy as np
 
 from .rawfile import RawPlot, read_raw
 
-__all__ = ["NgspiceError", "NgspiceNotFoundError", "RunInterrupted", "RunResult", "find_ngspice",
-           "ngspice_version", "run_deck", "check_deck", "terminate_group", "terminate_all",
-           "interrupt_guard", "resample", "interp_rows"]
+__all__ = [
+    "NgspiceError",
+    "NgspiceNotFoundError",
+    "RunInterrupted",
+    "RunResult",
+    "check_deck",
+    "find_ngspice",
+    "interp_rows",
+    "interrupt_guard",
+    "ngspice_version",
+    "resample",
+    "run_deck",
+    "terminate_all",
+    "terminate_group",
+]
 
 INSTALL_HINT = ("install it with your package manager, e.g. `sudo apt-get install ngspice` "
                 "(Debian/Ubuntu), `brew install ngspice` (macOS) or `conda install -c "
@@ -121,7 +133,7 @@ def _said(stdout: str, stderr: str) -> str:
     stdout lines mentioning an error when stderr is empty."""
     lines = [ln for ln in stderr.splitlines() if not _NOISE.match(ln)]
     if not any(ln.strip() for ln in lines):
-        lines = [ln for ln in stdout.splitlines() if re.search(r"error|abort|fatal", ln, re.I)]
+        lines = [ln for ln in stdout.splitlines() if re.search(r"error|abort|fatal", ln, re.IGNORECASE)]
     return _one_line("\n".join(lines))
 
 
