@@ -37,6 +37,7 @@ __all__ = ["simulate", "run_decks", "BatchTask", "run_batch", "deck_seeds", "tim
            "initial_velocities"]
 
 log = logging.getLogger(__name__)
+store_log = logging.getLogger("analogue.circuit.store")
 
 # Replicas share the simulator's time steps: every replica's diode switching near v = 0 forces
 # small steps on all of them, so the cost per replica-step grows again for large decks while
@@ -232,6 +233,36 @@ def _jsonable(obj):
     return json.loads(json.dumps(obj, default=default))
 
 
+def _n_hold(task: BatchTask) -> int:
+    """Number of noise hold intervals run_batch records for ``task`` (see held_values)."""
+    t_end = float(task.times[-1]) * task.time_scale
+    return int(math.floor(t_end / (task.noise_dt * task.time_scale) + 1e-9))
+
+
+def _entry_problem(task: BatchTask, version: str, arrays: dict, meta: dict) -> str | None:
+    """Why a stored entry is not the result of ``task`` (one line), or None: the deck it
+    records must be the requested deck, on the same grid and ngspice, with every array this
+    deck produces in the right shape (finiteness and the checksum are the store's checks)."""
+    if meta.get("deck_text") != task.text:
+        return "it records another deck than the one requested"
+    if meta.get("ngspice_version") != version or meta.get("schema_version") != SCHEMA_VERSION:
+        return "it records another ngspice version or schema"
+    r, n_t = task.v0.shape[0], task.times.size
+    need = {"t": (n_t,), "v": (r, n_t), "x": (r, n_t)}
+    if task.noise_names and task.noise_dt > 0:
+        need["noise"] = (r, _n_hold(task))
+    if task.xs_names:
+        need["x_spring"] = (r, n_t)
+    for name, shape in need.items():
+        if name not in arrays:
+            return f"array {name!r} is missing"
+        if arrays[name].shape != shape:
+            return f"array {name!r} has shape {arrays[name].shape}, expected {shape}"
+    if not np.array_equal(arrays["t"], task.times):
+        return "it was sampled on another time grid"
+    return None
+
+
 def _batch_meta(task: BatchTask, version: str, info: dict) -> dict:
     """Provenance stored with one batch."""
     return {"schema_version": SCHEMA_VERSION, "ngspice_version": version,
@@ -316,8 +347,13 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
     results: list = [None] * len(tasks)
     from_store = 0
     if st is not None:
+        try:
+            st.clean_tmp()
+        except OSError:
+            pass
         for b, key in enumerate(keys):
-            hit = st.get(key)
+            task = tasks[b]
+            hit = st.get(key, check=lambda a, m, task=task: _entry_problem(task, version, a, m))
             if hit is not None:
                 arrays, meta = hit
                 results[b] = {**{k: arrays[k] for k in ("v", "x", "noise", "x_spring")
@@ -338,6 +374,7 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
             bar = tqdm(total=len(todo), desc="ngspice decks", unit="deck")
         futures = {}
         failed = True
+        store_ok = True
         try:
             futures = {ex.submit(run_batch, t): t for t in todo}
             for fut in cf.as_completed(futures):
@@ -350,11 +387,18 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
                     # would file its numbers under the wrong key.
                     log.warning("deck %d ran on ngspice %s, not %s: not stored", task.index,
                                 worker_version, version)
-                elif st is not None:
+                elif st is not None and store_ok:
                     # Written as each deck finishes: an interrupted call resumes from here.
                     arrays = {k: out[k] for k in ("v", "x", "noise", "x_spring") if k in out}
-                    st.put(keys[task.index], {**arrays, "t": times},
-                           _batch_meta(task, version, out["info"]))
+                    try:
+                        st.put(keys[task.index], {**arrays, "t": times},
+                               _batch_meta(task, version, out["info"]))
+                    except OSError as exc:
+                        # Read-only or full: the results are still good; say so once.
+                        store_ok = False
+                        store_log.warning("analogue: run store %s is not writable (%s): results "
+                                          "are returned but not stored", st.root,
+                                          " ".join(f"{type(exc).__name__}: {exc}".split())[:200])
                 if bar is not None:
                     bar.update(1)
             failed = False
