@@ -124,7 +124,7 @@ def e96(values):
     mant = values / 10.0**dec
     grid = np.round(10.0 ** (np.arange(97) / 96.0), 2)
     pick = grid[np.argmin(np.abs(np.log(mant[..., None] / grid)), axis=-1)]
-    return np.round(pick * 10.0**dec, 6)
+    return pick * 10.0**dec
 
 
 def _forward_drop(part: DiodePart, current: float) -> float:
