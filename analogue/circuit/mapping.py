@@ -42,6 +42,36 @@ Bias estimates (``CircuitMapping.bias``; the two enforced ones are refused above
 - ``smoothing_log_density``: ``gamma Delta eps ln 2``, the largest change of ``gamma U``
   (a constant beyond |v| ~ 20 eps, absorbed by normalisation; recorded only).
 - ``smoothing_width``: epsilon / std (recorded only).
+
+The model family (issue 9; force-current analogy, current per unit acceleration
+``I_unit = C kappa/theta``):
+
+- ``cubic``: the conductance ``I = g3 V^3``, ``g3 = cubic C/(theta kappa^2)`` (B-source, or
+  the fitted diode-resistor network of :mod:`analogue.circuit.nonlinear`); budget
+  ``cubic_force`` (max force error over the swing / ``g3 V_max^3``) and ``cubic_variance``
+  (relative change of the stationary variance under exp(-gamma U), 1-D Gaussian members),
+  enforced (change ``cubic_branches`` or ``cubic_element``).
+- ``stribeck``: the friction element's amplitude ``I_unit Delta(V/kappa)``; budget
+  ``stribeck_smoothing`` = epsilon / v_s (enforced: the tanh must switch inside the decay).
+- ``spring``: an inductor ``L = theta^2/(spring C)`` from the velocity node to ground (its
+  current ``kappa theta x/L`` is the spring force current ``spring x I_unit``), initial
+  current ``spring x0 I_unit``, read back as the position through a 0 V sense source and a
+  CCVS of ``1/(spring I_unit)`` V/A.  Its series resistance ``R_L = omega_0 L/Q``
+  (``omega_0 = sqrt(spring)/theta``, ``inductor_q``) or ``inductor_resistance`` makes the
+  spring leaky: the inductor current relaxes in ``tau_L = L/(R_L theta) = Q/sqrt(spring)``
+  model time units, i.e. the spring acts on ``y`` with ``dy/dt = v - y/tau_L``.  Budget from
+  the linear part (Delta = 0): ``spring_leak_var_v``, ``spring_leak_var_x`` (relative change of
+  the stationary variances, Lyapunov equation) and ``spring_creep`` (mean velocity
+  ``a/(spring tau_L + 1/tau_m)`` in units of the velocity spread), enforced (change
+  ``inductor_q`` or ``inductor_resistance``).
+- ``shot``: seeded triangular current pulses of charge ``C kappa z`` and width ``shot_width``
+  (:mod:`analogue.circuit.shot`); budget ``shot_pulse`` (max|drift| w/mean, enforced) and
+  ``shot_overlap``.  With ``gamma = inf`` the deck has no Gaussian source, and the smoothing
+  is a fraction of the mean jump instead of sqrt(tau_m/gamma).
+- Bias estimates that need the stationary spread use the exact 1-D law exp(-gamma U) on a
+  grid (with a spring: of the a = 0, spring-free member, an estimate); the central-bin
+  smoothing estimate uses the paper's model with Delta(0) (near v = 0 the cubic term is
+  negligible and Delta(v) ~ delta_s).
 """
 from __future__ import annotations
 
