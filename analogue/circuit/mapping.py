@@ -365,7 +365,7 @@ class CircuitMapping:
         if self.inductance > 0:
             extra["spring"] = self.theta**2 / (self.inductance * self.capacitance)
             extra["x0"] = self.inductor_ic * self.theta / (extra["spring"] * ck)
-        if self.model.shot is not None:
+        if self.shot_charge > 0:
             # the rate and the jump law are drawn in numpy (analogue.circuit.shot); the charge
             # per unit jump is C kappa by construction
             extra["shot"] = self.model.shot
@@ -374,6 +374,12 @@ class CircuitMapping:
                      a=self.theta * self.i_force / ck,
                      gamma=(ck**2 / (self.theta * self.noise_D) if self.noise_D > 0 else math.inf),
                      mass=self.model.mass, epsilon=self.eps_volts / self.kappa, **extra)
+
+    def without_noise(self) -> "CircuitMapping":
+        """The same circuit (components, parts) with every noise source off: the Gaussian
+        source's amplitude zero (the deck then has no trrandom source) and no shot kicks; the
+        noise-free motion of these very components (paper Fig. 1)."""
+        return replace(self, noise_stddev=0.0, noise_D=0.0, shot_charge=0.0)
 
     def table(self) -> list[tuple[str, float, str, str]]:
         """Rows (name, value, unit, meaning) for reports."""

@@ -184,3 +184,12 @@ def test_toml_family_keys():
     bad = {**doc, "model": {**BASE, "stribeck": [1.0]}}
     with pytest.raises(ValueError, match="stribeck"):
         experiment_from_dict(bad)
+
+
+def test_without_noise_removes_every_noise_source():
+    for model in (SHOT, SHOT.replace(gamma=10.0), SPRING):
+        quiet = map_model(model, CircuitSpec(time_scale=1e-4)).without_noise()
+        d = build_deck(quiet, replicas=2, v0=np.zeros(2), t_end=5.0, seed=1, sample_dt=0.01)
+        assert "trrandom" not in d.text and "pwl(" not in d.text and d.kicks == ()
+        back = quiet.to_model()
+        assert back.gamma == math.inf and back.shot is None
