@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import re
 import subprocess
 import tempfile
 import time
@@ -106,7 +105,7 @@ def shot_sources(quick: bool) -> None:
                       sample_dt=0.01)
     mean_ex, var_ex, low_ex = exact_averages()
     print(f"exact: mean {mean_ex:.4f} var {var_ex:.4f} P(|v|<0.05) {low_ex:.4f}")
-    grid = np.arange(int(round(t_end / 0.01)) + 1) * 0.01
+    grid = np.arange(round(t_end / 0.01) + 1) * 0.01
     for label, text in [("pwl", deck.text)] + [
             (f"trrandom TS={ts}", trrandom_deck(deck.text, m, replicas, ts)) for ts in (0.01, 0.001)]:
         wall, plot = run(text)
@@ -115,7 +114,7 @@ def shot_sources(quick: bool) -> None:
         v = v[:, grid >= burn]
         per_mean, per_var = v.mean(axis=1), ((v - v.mean()) ** 2).mean(axis=1)
         low = (np.abs(v) < 0.05).mean(axis=1)
-        se = lambda x: x.std(ddof=1) / math.sqrt(x.size)  # noqa: E731
+        se = lambda x: x.std(ddof=1) / math.sqrt(x.size)
         print(f"{label:18s} wall {wall:6.2f} s  points {plot.n_points:7d}  "
               f"mean {per_mean.mean():.4f} (z {(per_mean.mean() - mean_ex) / se(per_mean):+.2f})  "
               f"var {per_var.mean():.4f} (z {(per_var.mean() - var_ex) / se(per_var):+.2f})  "

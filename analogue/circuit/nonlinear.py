@@ -58,8 +58,14 @@ from scipy import optimize, special
 
 from .parts import DiodePart, thermal_voltage
 
-__all__ = ["DiodeNetwork", "design_cubic_network", "network_current", "branch_current", "e96",
-           "cubic_budget"]
+__all__ = [
+    "DiodeNetwork",
+    "branch_current",
+    "cubic_budget",
+    "design_cubic_network",
+    "e96",
+    "network_current",
+]
 
 
 @dataclass(frozen=True)

@@ -48,7 +48,7 @@ import math
 
 import numpy as np
 
-__all__ = ["replica_kicks", "deck_kicks", "pulse_pwl", "KICK_STREAM"]
+__all__ = ["KICK_STREAM", "deck_kicks", "pulse_pwl", "replica_kicks"]
 
 KICK_STREAM = 2  # SeedSequence spawn_key prefix of the kick streams (0: v0 draws, 1: decks)
 

@@ -5,7 +5,6 @@ cubic I = g3 V^3 with g3 = cubic C/(theta kappa^2); Stribeck I = I_unit Delta(V/
 with Delta(v) = Delta + (delta_s - Delta) exp(-|v|/v_s) and c = tanh(V/eps_V) (B-source) or
 the diode bridge's tanh(V/(2 N V_T)) with amplitude + 2 IS.
 """
-import math
 import subprocess
 
 import numpy as np

@@ -82,8 +82,8 @@ def euler_spring(model, v0, t_end, burn_in, dt, replicas, seed):
     rng = np.random.default_rng(seed)
     v = np.full(replicas, v0, dtype=float)
     x = np.full(replicas, model.x0, dtype=float)
-    n = int(round(t_end / dt))
-    n0 = int(round(burn_in / dt))
+    n = round(t_end / dt)
+    n0 = round(burn_in / dt)
     acc = {k: np.zeros(replicas) for k in ("v", "v2", "x", "x2", "stuck")}
     amp = math.sqrt(2 * dt / model.gamma)
     for i in range(n):

@@ -13,7 +13,7 @@ from analogue.circuit import CircuitSpec, build_deck, map_model
 from analogue.circuit.experiments import experiment_from_dict
 from analogue.circuit.shot import pulse_pwl, replica_kicks
 
-BASE = dict(tau_m=1.0, delta=0.5, a=0.2, gamma=10.0)
+BASE = {"tau_m": 1.0, "delta": 0.5, "a": 0.2, "gamma": 10.0}
 CUBIC = Model(**BASE, cubic=1.0)
 STRIBECK = Model(tau_m=2.0, delta=0.3, a=0.7, gamma=10.0, stribeck=(1.0, 0.2))
 SPRING = Model(tau_m=3.0, delta=0.5, a=0.1, gamma=20.0, spring=2.0, x0=0.7)
@@ -119,25 +119,25 @@ def deck(model, spec=None, replicas=3, seed=4, t_end=20.0):
 
 def test_cubic_deck_elements():
     d = deck(CUBIC, CircuitSpec(coulomb="behavioural"))
-    assert re.search(r"^Bcubic v 0 i=[0-9.e+-]+\*V\(v\)\*V\(v\)\*V\(v\)$", d.text, re.M)
+    assert re.search(r"^Bcubic v 0 i=[0-9.e+-]+\*V\(v\)\*V\(v\)\*V\(v\)$", d.text, re.MULTILINE)
     n = deck(CUBIC, CircuitSpec(cubic_element="diode-network", cubic_branches=4))
-    assert len(re.findall(r"^D\d[pn] ", n.text, re.M)) == 8
+    assert len(re.findall(r"^D\d[pn] ", n.text, re.MULTILINE)) == 8
     assert ".model dcubic D" in n.text and "xcubic" in n.text.lower()
 
 
 def test_spring_deck_elements():
     d = deck(SPRING, CircuitSpec(time_scale=1e-4))
-    assert re.search(r"^Lspring v ls [0-9.e+-]+ ic=[0-9.e+-]+$", d.text, re.M)
+    assert re.search(r"^Lspring v ls [0-9.e+-]+ ic=[0-9.e+-]+$", d.text, re.MULTILINE)
     assert "Hxs xs 0 vsense" in d.text and d.vectors["x_spring"] == ["v(xs0)", "v(xs1)", "v(xs2)"]
     assert d.x_spring_initial == 0.7
     ideal = deck(SPRING, CircuitSpec(time_scale=1e-4, inductor_resistance=0.0))
-    assert re.search(r"^Lspring v lg ", ideal.text, re.M) and "Rleak" not in ideal.text
+    assert re.search(r"^Lspring v lg ", ideal.text, re.MULTILINE) and "Rleak" not in ideal.text
 
 
 def test_shot_deck_pwl_and_kicks():
     d = deck(SHOT, replicas=3, seed=4)
     assert "trrandom" not in d.text and d.vectors["noise"] == []
-    assert len(re.findall(r"^Ishot\d pwl|^Ishot\d 0 v\d pwl\($", d.text, re.M)) == 3
+    assert len(re.findall(r"^Ishot\d pwl|^Ishot\d 0 v\d pwl\($", d.text, re.MULTILINE)) == 3
     assert deck(SHOT, replicas=3, seed=4).text == d.text          # reproducible
     assert deck(SHOT, replicas=3, seed=5).text != d.text          # and seeded
     assert len(d.kicks) == 3 and all(len(t) == len(z) for t, z in d.kicks)
