@@ -19,8 +19,56 @@ EXIT_USAGE = 2
 EXIT_FAILURE = 1
 
 
+def _short_help(cmd: click.Command) -> str:
+    """A command's whole first paragraph (click's default stops at the first full stop, which
+    cut "Draw the paper's theory figures (Figs." in the middle of a parenthesis)."""
+    if cmd.short_help:
+        return cmd.short_help
+    first = (cmd.help or "").strip().split("\n\n")[0]
+    return " ".join(w for w in first.split() if w != "\b")
+
+
+_NB_HYPHEN = "\u2011"
+
+
+class _Formatter(click.HelpFormatter):
+    """Help text that never wraps inside a hyphenated word ("self-\\ncontained",
+    "rate-\\nfunction"): hyphens are non-breaking while the text is wrapped."""
+
+    def _unbreakable(self, method, *args):
+        start = len(self.buffer)
+        method(*(a.replace("-", _NB_HYPHEN) if isinstance(a, str) else
+                 [tuple(x.replace("-", _NB_HYPHEN) for x in row) for row in a]
+                 if isinstance(a, list) else a for a in args))
+        self.buffer[start:] = [b.replace(_NB_HYPHEN, "-") for b in self.buffer[start:]]
+
+    def write_text(self, text):
+        self._unbreakable(super().write_text, text)
+
+    def write_dl(self, rows, col_max=30, col_spacing=2):
+        self._unbreakable(super().write_dl, list(rows), col_max, col_spacing)
+
+
+class _Context(click.Context):
+    formatter_class = _Formatter
+
+
+class _Command(click.Command):
+    context_class = _Context
+
+
 class _Group(click.Group):
     """Turn expected failures into one clear line and a non-zero exit code."""
+
+    context_class = _Context
+    command_class = _Command
+
+    def format_commands(self, ctx, formatter):
+        rows = [(name, _short_help(cmd)) for name in self.list_commands(ctx)
+                if (cmd := self.get_command(ctx, name)) is not None and not cmd.hidden]
+        if rows:
+            with formatter.section("Commands"):
+                formatter.write_dl(rows)
 
     def invoke(self, ctx):
         try:
@@ -171,38 +219,74 @@ def export(experiment, out, report_dir, workers, scheduler, store, quick, progre
 
 
 # ------------------------------------------------------------------------------- theory
-QUANTITIES = ("stationary", "deterministic", "action", "path", "boundaries", "propagator",
-              "rate-function", "fluctuation-relation", "scgf", "work-pdf")
+def _theory_help() -> str:
+    from .theory.query import QUANTITIES
+    names = {"t": "--t", "v": "--v", "v0": "--v0", "w": "--w", "k": "--k", "tau": "--tau",
+             "points": "--points"}
+    lines = []
+    for q in QUANTITIES.values():
+        opts = " ".join(names[o] for o in q.options)
+        opts += "".join(f" [{names[o]}]" for o in q.optional)
+        kinds = f"  --kind {'|'.join(q.kinds)}" if len(q.kinds) > 1 else ""
+        lines.append(f"  {q.name:<22}{q.summary}")
+        lines.append(f"  {'':<22}uses: {opts or '(model only)'}{kinds}")
+    return "\n".join(lines)
 
 
-@main.command()
-@click.argument("quantity", type=click.Choice(QUANTITIES))
-@click.option("--experiment", default=None, help="Take model parameters from circuits/<name>.toml.")
+THEORY_HELP = """Query theory values: QUANTITY for the model given by --experiment and/or
+the model options.  Options a quantity does not use, and theories (--kind) it does not offer,
+are refused; values that do not exist print as n/a with the reason (null in --json).
+
+\b
+QUANTITY is one of:
+{quantities}
+
+\b
+Examples:
+  analogue theory action --tau-m 1 --delta 0.7 --a 0.2 --gamma 10 --v0 2 --t 3 --v -0.5,0.5
+  analogue theory path --experiment stick --v0 2 --t 3 --v 0.2 --points 20
+  analogue theory boundaries --experiment stick --v0 2 --t 1,2,3
+  analogue theory stationary --experiment stick --json
+  analogue theory rate-function --tau-m 1 --delta 1 --a 0.5 --gamma 100 --w -1,0,1
+"""
+
+
+@main.command(help=THEORY_HELP.format(quantities=_theory_help()),
+              short_help="Query theory values: propagator, action, optimal paths, boundaries, "
+                         "rate function and more.")
+@click.argument("quantity", metavar="QUANTITY",
+                type=click.Choice(("stationary", "deterministic", "action", "path", "boundaries",
+                                   "propagator", "rate-function", "fluctuation-relation", "scgf",
+                                   "work-pdf")))
+@click.option("--experiment", default=None, metavar="EXPERIMENT",
+              help="Take model parameters from an experiment (a name in circuits/ or a TOML path).")
 @click.option("--tau-m", type=float, default=None, help="tau_m = m/alpha (> 0).")
 @click.option("--delta", type=float, default=None, help="Delta = Delta_F/m (>= 0).")
 @click.option("--a", "a", type=float, default=None, help="a = F/m.")
 @click.option("--gamma", type=float, default=None, help="gamma = m^2/D (> 0).")
 @click.option("--mass", type=float, default=None, help="m (> 0, default 1).")
 @click.option("--epsilon", type=float, default=None, help="tanh width (>= 0, default 0 = sgn).")
-@click.option("--v", "v", multiple=True, help="Final velocities, comma-separated (or repeat the option).")
-@click.option("--t", "t", multiple=True, help="Times, comma-separated (or repeat the option).")
+@click.option("--v", "v", multiple=True, metavar="V[,V...]",
+              help="Final velocities, comma-separated (or repeat the option).")
+@click.option("--t", "t", multiple=True, metavar="T[,T...]",
+              help="Times, comma-separated (or repeat the option).")
 @click.option("--v0", type=float, default=None, help="Initial velocity.")
-@click.option("--w", "w", multiple=True, help="Work rates, comma-separated (or repeat the option).")
-@click.option("--k", "k", multiple=True, help="Tilts for the SCGF, comma-separated (or repeat the option).")
+@click.option("--w", "w", multiple=True, metavar="W[,W...]",
+              help="Work rates, comma-separated (or repeat the option).")
+@click.option("--k", "k", multiple=True, metavar="K[,K...]",
+              help="Tilts for the SCGF, comma-separated (or repeat the option).")
 @click.option("--tau", type=float, default=None, help="Work time window.")
-@click.option("--kind", type=click.Choice(["exact", "weak-noise", "limit"]), default="exact",
-              show_default=True, help="Which theory for propagator / rate-function.")
-@click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
+@click.option("--points", type=int, default=None,
+              help="Points along an optimal path (path only; default 50).")
+@click.option("--kind", type=click.Choice(["exact", "weak-noise", "limit"]), default=None,
+              help="Which theory, where a quantity offers a choice (default: the first listed): "
+                   "exact = finite-noise Fokker-Planck numerics; weak-noise = the paper's "
+                   "formulas; limit = gamma -> infinity limit of the exact rate function.")
+@click.option("--json", "as_json", is_flag=True,
+              help="Machine-readable output (strict JSON: null with a reason, never NaN).")
 def theory(quantity, experiment, tau_m, delta, a, gamma, mass, epsilon, v, t, v0, w, k, tau,
-           kind, as_json):
-    """Query theory values, e.g.
-
-    \b
-      analogue theory action --tau-m 1 --delta 0.7 --a 0.2 --gamma 10 --v0 2 --t 3 --v -0.5,0.5
-      analogue theory stationary --experiment stick --json
-      analogue theory rate-function --tau-m 1 --delta 1 --a 0.5 --gamma 100 --w -1,0,1
-    """
-    from .theory.query import theory_rows
+           points, kind, as_json):
+    from .theory.query import theory_table
     params = {}
     if experiment:
         from .circuit.experiments import load_experiment
@@ -214,17 +298,13 @@ def theory(quantity, experiment, tau_m, delta, a, gamma, mass, epsilon, v, t, v0
         raise click.UsageError("missing model parameter(s): "
                                + ", ".join("--" + m.replace("_", "-") for m in missing))
     model = Model(**params)
-    header, rows = theory_rows(model, quantity, v=_floats(v, "--v"), t=_floats(t, "--t"), v0=v0,
-                               w=_floats(w, "--w"), k=_floats(k, "--k"), tau=tau, kind=kind)
+    tab = theory_table(model, quantity, v=_floats(v, "--v"), t=_floats(t, "--t"), v0=v0,
+                       w=_floats(w, "--w"), k=_floats(k, "--k"), tau=tau, points=points,
+                       kind=kind)
     if as_json:
-        click.echo(json.dumps({"model": model.as_dict(), "quantity": quantity, "kind": kind,
-                               "rows": [dict(zip(header, r)) for r in rows]}, indent=2))
-        return
-    widths = [max(len(str(h)), 12) for h in header]
-    click.echo("  ".join(str(h).rjust(wd) for h, wd in zip(header, widths)))
-    for r in rows:
-        click.echo("  ".join((f"{c:.6g}" if isinstance(c, float) else str(c)).rjust(wd)
-                             for c, wd in zip(r, widths)))
+        click.echo(json.dumps(tab.as_json(model), indent=2, allow_nan=False))
+    else:
+        click.echo(tab.as_text())
 
 
 if __name__ == "__main__":  # pragma: no cover
