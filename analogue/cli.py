@@ -112,12 +112,15 @@ def main():
 
 # ------------------------------------------------------------------------------ netlist
 @main.command()
+@click.argument("experiment", required=False)
 @click.option("--check", is_flag=True, help="Only check that committed decks are up to date "
               "(exit 1 if any is stale).")
-def netlist(check):
-    """Regenerate the SPICE decks in netlists/ from circuits/*.toml."""
+def netlist(experiment, check):
+    """Regenerate the SPICE decks in netlists/ from circuits/*.toml (only EXPERIMENT's, when
+    given; a TOML file outside circuits/ gets its deck beside it, <stem>.cir)."""
     from .circuit.experiments import regenerate_netlists
-    paths = regenerate_netlists(check=check)
+    paths = regenerate_netlists(check=check,
+                                experiments=None if experiment is None else [experiment])
     if check:
         if paths:
             for p in paths:
@@ -233,8 +236,8 @@ def _theory_help() -> str:
     return "\n".join(lines)
 
 
-THEORY_HELP = """Query theory values: QUANTITY for the model given by --experiment and/or
-the model options.  Options a quantity does not use, and theories (--kind) it does not offer,
+THEORY_HELP = """Query theory values: QUANTITY for the model of EXPERIMENT (a name in
+circuits/ or a TOML path, as for every command) and/or the model options, which override it.  Options a quantity does not use, and theories (--kind) it does not offer,
 are refused; values that do not exist print as n/a with the reason (null in --json).
 
 \b
@@ -244,9 +247,9 @@ QUANTITY is one of:
 \b
 Examples:
   analogue theory action --tau-m 1 --delta 0.7 --a 0.2 --gamma 10 --v0 2 --t 3 --v -0.5,0.5
-  analogue theory path --experiment stick --v0 2 --t 3 --v 0.2 --points 20
-  analogue theory boundaries --experiment stick --v0 2 --t 1,2,3
-  analogue theory stationary --experiment stick --json
+  analogue theory path stick --v0 2 --t 3 --v 0.2 --points 20
+  analogue theory boundaries stick --v0 2 --t 1,2,3
+  analogue theory stationary stick --json
   analogue theory rate-function --tau-m 1 --delta 1 --a 0.5 --gamma 100 --w -1,0,1
 """
 
@@ -258,8 +261,10 @@ Examples:
                 type=click.Choice(("stationary", "deterministic", "action", "path", "boundaries",
                                    "propagator", "rate-function", "fluctuation-relation", "scgf",
                                    "work-pdf")))
+@click.argument("experiment_arg", metavar="[EXPERIMENT]", required=False)
 @click.option("--experiment", default=None, metavar="EXPERIMENT",
-              help="Take model parameters from an experiment (a name in circuits/ or a TOML path).")
+              help="Same as the EXPERIMENT argument: take the model parameters from an "
+                   "experiment (a name in circuits/ or a TOML path).")
 @click.option("--tau-m", type=float, default=None, help="tau_m = m/alpha (> 0).")
 @click.option("--delta", type=float, default=None, help="Delta = Delta_F/m (>= 0).")
 @click.option("--a", "a", type=float, default=None, help="a = F/m.")
@@ -284,9 +289,13 @@ Examples:
                    "formulas; limit = gamma -> infinity limit of the exact rate function.")
 @click.option("--json", "as_json", is_flag=True,
               help="Machine-readable output (strict JSON: null with a reason, never NaN).")
-def theory(quantity, experiment, tau_m, delta, a, gamma, mass, epsilon, v, t, v0, w, k, tau,
+def theory(quantity, experiment_arg, experiment, tau_m, delta, a, gamma, mass, epsilon, v, t, v0, w, k, tau,
            points, kind, as_json):
     from .theory.query import theory_table
+    if experiment_arg and experiment and experiment_arg != experiment:
+        raise click.UsageError(f"two experiments given: {experiment_arg!r} and --experiment "
+                               f"{experiment!r}")
+    experiment = experiment_arg or experiment
     params = {}
     if experiment:
         from .circuit.experiments import load_experiment

@@ -48,7 +48,7 @@ def test_theory_help_lists_quantities_without_breaking_them(cli, width):
     r = cli.invoke(main, ["theory", "--help"], terminal_width=width)
     assert r.exit_code == 0
     lines = r.output.splitlines()
-    assert lines[0].endswith(" theory [OPTIONS] QUANTITY")
+    assert lines[0].endswith(" theory [OPTIONS] QUANTITY [EXPERIMENT]")
     for name in QUANTITIES:
         assert any(line.split()[:1] == [name] for line in lines), name
     for line in lines:
