@@ -133,7 +133,8 @@ def _said(stdout: str, stderr: str) -> str:
     stdout lines mentioning an error when stderr is empty."""
     lines = [ln for ln in stderr.splitlines() if not _NOISE.match(ln)]
     if not any(ln.strip() for ln in lines):
-        lines = [ln for ln in stdout.splitlines() if re.search(r"error|abort|fatal", ln, re.IGNORECASE)]
+        lines = [ln for ln in stdout.splitlines()
+                 if re.search(r"error|abort|fatal", ln, re.IGNORECASE)]
     return _one_line("\n".join(lines))
 
 

@@ -66,7 +66,8 @@ def _count(fields: dict, key: str, label: str, lo: int, hi: int | None = None) -
     except ValueError:
         raise ValueError(f"raw file header: '{label}: {raw[:40]}' is not an integer") from None
     if n < lo or (hi is not None and n > hi):
-        raise ValueError(f"raw file header: '{label}: {n}' is outside [{lo}, {hi if hi is not None else 'inf'}]")
+        top = hi if hi is not None else "inf"
+        raise ValueError(f"raw file header: '{label}: {n}' is outside [{lo}, {top}]")
     return n
 
 

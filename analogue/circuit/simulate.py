@@ -30,11 +30,19 @@ import numpy as np
 
 from ..ensemble import Ensemble
 from ..model import Model
+from . import limits
 from . import ngspice as _ng
 from .store import SCHEMA_VERSION, batch_key, open_store
 
-__all__ = ["simulate", "run_decks", "BatchTask", "run_batch", "deck_seeds", "time_grid",
-           "initial_velocities"]
+__all__ = [
+    "BatchTask",
+    "deck_seeds",
+    "initial_velocities",
+    "run_batch",
+    "run_decks",
+    "simulate",
+    "time_grid",
+]
 
 log = logging.getLogger(__name__)
 store_log = logging.getLogger("analogue.circuit.store")
@@ -73,14 +81,30 @@ def _real(name, value, *, positive=True) -> float:
     return value
 
 
+def _grid_intervals(t_end: float, sample_dt: float, dt_label: str = "") -> int:
+    """Number of sample intervals t_end/sample_dt, refused (one line, naming both) when it is
+    not a finite count that fits in memory: checked before any array is made."""
+    n = t_end / sample_dt
+    mem, why = limits.memory_limit()
+    max_points = mem / 8.0  # the grid alone, one float64 per point
+    if not math.isfinite(n) or n + 1 > max_points:
+        raise ValueError(f"t_end={t_end:g} with sample_dt={sample_dt:g}{dt_label} gives "
+                         f"{limits.format_count(n + 1)} time points; at most "
+                         f"{limits.format_count(max_points)} fit in the memory "
+                         f"limit of {limits.format_bytes(mem)} ({why}); reduce t_end or raise "
+                         f"sample_dt")
+    return round(n)
+
+
 def time_grid(t_end, sample_dt) -> np.ndarray:
     """Uniform grid ``0, sample_dt, ..., t_end`` (model units); t_end must be a whole number of
-    sample intervals (to 1e-6 relative)."""
+    sample intervals (to 1e-6 relative), and the grid must fit in memory (see
+    :mod:`analogue.circuit.limits`)."""
     t_end = _real("t_end", t_end)
     sample_dt = _real("sample_dt", sample_dt)
     if sample_dt > t_end:
         raise ValueError(f"sample_dt must be <= t_end (= {t_end!r}), got {sample_dt!r}")
-    n = round(t_end / sample_dt)
+    n = _grid_intervals(t_end, sample_dt)
     if abs(n * sample_dt - t_end) > 1e-6 * t_end:
         raise ValueError(f"t_end must be a whole number of sample_dt intervals; t_end/sample_dt "
                          f"= {t_end / sample_dt!r} (choose e.g. sample_dt = {t_end / max(n, 1)!r})")
@@ -367,52 +391,56 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
              f"{workers} ngspice processes" if scheduler is None else repr(scheduler))
     t0 = _time.perf_counter()
     if todo:
-        ex, closer = _executor(workers, scheduler, len(todo))
-        bar = None
-        if _progress_enabled(progress, len(todo)):
-            from tqdm.auto import tqdm
-            bar = tqdm(total=len(todo), desc="ngspice decks", unit="deck")
-        futures = {}
-        failed = True
-        store_ok = True
-        try:
-            futures = {ex.submit(run_batch, t): t for t in todo}
-            for fut in cf.as_completed(futures):
-                task = futures[fut]
-                out = fut.result()
-                results[task.index] = out
-                worker_version = out["info"].get("ngspice_version")
-                if st is not None and worker_version != version:
-                    # The key names this machine's ngspice; a worker with another version
-                    # would file its numbers under the wrong key.
-                    log.warning("deck %d ran on ngspice %s, not %s: not stored", task.index,
-                                worker_version, version)
-                elif st is not None and store_ok:
-                    # Written as each deck finishes: an interrupted call resumes from here.
-                    arrays = {k: out[k] for k in ("v", "x", "noise", "x_spring") if k in out}
-                    try:
-                        st.put(keys[task.index], {**arrays, "t": times},
-                               _batch_meta(task, version, out["info"]))
-                    except OSError as exc:
-                        # Read-only or full: the results are still good; say so once.
-                        store_ok = False
-                        store_log.warning("analogue: run store %s is not writable (%s): results "
-                                          "are returned but not stored", st.root,
-                                          " ".join(f"{type(exc).__name__}: {exc}".split())[:200])
+        # SIGINT/SIGTERM/SIGHUP kill the ngspice groups and unwind through the finally
+        # below (temporary directories removed, finished decks kept in the store).
+        with _ng.interrupt_guard():
+            ex, closer = _executor(workers, scheduler, len(todo))
+            bar = None
+            if _progress_enabled(progress, len(todo)):
+                from tqdm.auto import tqdm
+                bar = tqdm(total=len(todo), desc="ngspice decks", unit="deck")
+            futures = {}
+            failed = True
+            store_ok = True
+            try:
+                futures = {ex.submit(run_batch, t): t for t in todo}
+                for fut in cf.as_completed(futures):
+                    task = futures[fut]
+                    out = fut.result()
+                    results[task.index] = out
+                    worker_version = out["info"].get("ngspice_version")
+                    if st is not None and worker_version != version:
+                        # The key names this machine's ngspice; a worker with another version
+                        # would file its numbers under the wrong key.
+                        log.warning("deck %d ran on ngspice %s, not %s: not stored", task.index,
+                                    worker_version, version)
+                    elif st is not None and store_ok:
+                        # Written as each deck finishes: an interrupted call resumes from here.
+                        arrays = {k: out[k] for k in ("v", "x", "noise", "x_spring") if k in out}
+                        try:
+                            st.put(keys[task.index], {**arrays, "t": times},
+                                   _batch_meta(task, version, out["info"]))
+                        except OSError as exc:
+                            # Read-only or full: the results are still good; say so once.
+                            store_ok = False
+                            store_log.warning(
+                                "analogue: run store %s is not writable (%s): results are "
+                                "returned but not stored", st.root,
+                                " ".join(f"{type(exc).__name__}: {exc}".split())[:200])
+                    if bar is not None:
+                        bar.update(1)
+                failed = False
+            finally:
+                if failed:
+                    for f in futures:
+                        f.cancel()
+                    if scheduler is None:
+                        _ng.terminate_group(group)  # our own ngspice processes still running
                 if bar is not None:
-                    bar.update(1)
-            failed = False
-        finally:
-            if failed:
-                for f in futures:
-                    f.cancel()
-                if scheduler is None:
-                    _ng.terminate_group(group)  # our own ngspice processes still running
-            if bar is not None:
-                bar.close()
-            ex.shutdown(wait=True)
-            if closer is not None:
-                closer()
+                    bar.close()
+                ex.shutdown(wait=True)
+                if closer is not None:
+                    closer()
     wall = _time.perf_counter() - t0
     if todo:
         log.info("analogue.simulate: %d decks ran in %.2f s", len(todo), wall)
@@ -448,9 +476,41 @@ def _spec(circuit):
 
 
 def _default_sample_dt(model: Model, t_end: float) -> float:
-    """About tau_m/100, adjusted so that t_end is a whole number of intervals."""
-    n = max(1, math.ceil(t_end / (model.tau_m / 100.0) - 1e-9))
-    return t_end / n
+    """About tau_m/100, adjusted so that t_end is a whole number of intervals (refused in one
+    line when t_end/(tau_m/100) is not a count that fits in memory)."""
+    n = _grid_intervals(t_end, model.tau_m / 100.0, " (default: tau_m/100)")
+    return t_end / max(1, n)
+
+
+def _check_sizes(*, mapping, replicas, per_deck, workers, t_end, sample_dt, dt_label,
+                 store) -> None:
+    """Refuse (ValueError, one line naming the parameters and the limit) a run whose arrays,
+    raw files or stored bytes cannot fit: see :mod:`analogue.circuit.limits`."""
+    n_times = t_end / sample_dt + 1.0
+    noise_dt = getattr(mapping, "noise_dt", None) or 0.0
+    n_hold = t_end / noise_dt if noise_dt and math.isfinite(noise_dt) else 0.0
+    spec = getattr(mapping, "spec", None)
+    max_step = getattr(spec, "max_step", None) or noise_dt
+    raw_points = t_end / min(max_step, t_end) if max_step and math.isfinite(max_step) else 0.0
+    n_decks = -(-replicas // per_deck)
+    est = limits.estimate(replicas=replicas, n_times=n_times, n_hold=n_hold, per_deck=per_deck,
+                          workers=workers or os.cpu_count() or 1, raw_points=raw_points,
+                          n_decks=n_decks)
+    what = (f"replicas={replicas} with t_end={t_end:g} and sample_dt={sample_dt:g}{dt_label} "
+            f"({limits.format_count(n_times)} time points each)")
+    mem, why = limits.memory_limit()
+    if est.memory > mem:
+        raise ValueError(f"{what} needs at least {limits.format_bytes(est.memory)} of memory, "
+                         f"more than the limit of {limits.format_bytes(mem)} ({why}); reduce "
+                         f"replicas or t_end, or raise sample_dt")
+    st = open_store(store)
+    if st is not None:
+        cap, why = limits.store_limit(st.root)
+        if est.stored > cap:
+            raise ValueError(f"the run store {st.root} would receive at least "
+                             f"{limits.format_bytes(est.stored)} for {what}, more than the limit "
+                             f"of {limits.format_bytes(cap)} ({why}); reduce the run, use a store "
+                             f"on a larger disk, or pass store=False (results in memory only)")
 
 
 def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, workers=None,
@@ -478,12 +538,21 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
     workers : int, optional
         ngspice processes run at once locally; default ``os.cpu_count()``.
     **extra
-        ``replicas_per_deck`` (default 16, the measured optimum), ``store`` (directory, False to disable; default
-        $ANALOGUE_STORE or ~/.cache/analogue/runs), ``progress`` (bool; default: a tqdm bar
-        when stderr is a terminal), ``timeout`` (seconds per deck, default 3600),
+        ``replicas_per_deck`` (default 16, the measured optimum), ``store`` (directory, False
+        to disable; default $ANALOGUE_STORE or ~/.cache/analogue/runs), ``progress`` (bool;
+        default: a tqdm bar when stderr is a terminal), ``timeout`` (seconds per deck, default
+        3600: the deck's ngspice process group is killed and NgspiceError raised),
         ``scheduler`` ("tcp://host:port" or a distributed.Client: run on a Dask cluster),
         ``return_noise`` (bool, default False: see Returns), ``return_records`` (bool, default
         False: see Returns).
+
+    A request whose arrays or stored bytes cannot fit is refused before anything runs
+    (ValueError naming the parameters and the limit; see :mod:`analogue.circuit.limits`).
+    Stored decks are verified when read; damaged ones are quarantined and re-run (see
+    :mod:`analogue.circuit.store`).  SIGINT, SIGTERM and SIGHUP during the run kill the
+    running ngspice processes, remove their temporary directories and raise
+    :class:`analogue.circuit.ngspice.RunInterrupted` (a KeyboardInterrupt with ``exit_code`` =
+    128 + signal); decks finished before are in the store, so calling again resumes.
 
     Returns
     -------
@@ -509,10 +578,12 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
     replicas = _int("replicas", replicas, 1)
     seed = _int("seed", seed, 0)
     t_end = _real("t_end", t_end)
+    dt_label = ""
     if sample_dt is None:
         sample_dt = _default_sample_dt(model, t_end)
-    times = time_grid(t_end, sample_dt)
-    sample_dt = float(times[1] - times[0])
+        dt_label = " (default: tau_m/100)"
+    sample_dt = _real("sample_dt", sample_dt)
+    _grid_intervals(t_end, sample_dt, dt_label)  # a count that fits, before anything else
     if workers is not None:
         workers = _int("workers", workers, 1)
     per_deck = _int("replicas_per_deck", extra.get("replicas_per_deck",
@@ -536,6 +607,11 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
     from .mapping import map_model
     from .netlist import build_deck
     mapping = map_model(model, spec)
+    # Before allocating anything: replicas x time points x decks, and the bytes to be stored.
+    _check_sizes(mapping=mapping, replicas=replicas, per_deck=per_deck, workers=workers,
+                 t_end=t_end, sample_dt=sample_dt, dt_label=dt_label, store=extra.get("store"))
+    times = time_grid(t_end, sample_dt)
+    sample_dt = float(times[1] - times[0])
     model_eff = mapping.model_effective
     v0_arr = initial_velocities(model_eff, v0, replicas, seed)
 

@@ -95,12 +95,16 @@ DAMAGE = {
     "bitflip-directory": lambda p, k, keys, root: _flip(p, 0.995),
     "not-a-zip": lambda p, k, keys, root: p.write_text("hello, I am not an entry\n"),
     "swapped": lambda p, k, keys, root: shutil.copyfile(RunStore(root).path(keys[0]), p),
-    "nan": lambda p, k, keys, root: _rewrite(p, k, lambda a, m: a["v"].__setitem__((0, 5), np.nan)),
-    "inf-x": lambda p, k, keys, root: _rewrite(p, k, lambda a, m: a["x"].__setitem__((0, 5), np.inf)),
+    "nan": lambda p, k, keys, root: _rewrite(
+        p, k, lambda a, m: a["v"].__setitem__((0, 5), np.nan)),
+    "inf-x": lambda p, k, keys, root: _rewrite(
+        p, k, lambda a, m: a["x"].__setitem__((0, 5), np.inf)),
     "missing-x": lambda p, k, keys, root: _rewrite(p, k, lambda a, m: a.pop("x")),
     "missing-noise": lambda p, k, keys, root: _rewrite(p, k, lambda a, m: a.pop("noise")),
-    "wrong-shape": lambda p, k, keys, root: _rewrite(p, k, lambda a, m: a.__setitem__("v", a["v"][:, :50])),
-    "wrong-grid": lambda p, k, keys, root: _rewrite(p, k, lambda a, m: a.__setitem__("t", a["t"] * 2)),
+    "wrong-shape": lambda p, k, keys, root: _rewrite(
+        p, k, lambda a, m: a.__setitem__("v", a["v"][:, :50])),
+    "wrong-grid": lambda p, k, keys, root: _rewrite(
+        p, k, lambda a, m: a.__setitem__("t", a["t"] * 2)),
     "other-deck": lambda p, k, keys, root: _rewrite(
         p, k, lambda a, m: m.__setitem__("deck_text", m["deck_text"].replace("seed=", "seed=1"))),
 }
