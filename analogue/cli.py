@@ -221,6 +221,87 @@ def export(experiment, out, report_dir, workers, scheduler, store, quick, progre
         click.echo(f"wrote {p}")
 
 
+# -------------------------------------------------------------------------------- store
+@main.group(cls=_Group)
+def store():
+    """See and bound the run store: ls (by experiment), du (sizes), prune (delete entries)."""
+
+
+_store_option = click.option(
+    "--store", "store_dir", type=click.Path(file_okay=False, path_type=Path), default=None,
+    help="Run-store directory (default $ANALOGUE_STORE or ~/.cache/analogue/runs).")
+
+
+def _when(t) -> str:
+    if not t:
+        return "-"
+    from datetime import datetime, timezone
+    return datetime.fromtimestamp(float(t), timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+
+
+@store.command("ls")
+@_store_option
+def store_ls(store_dir):
+    """List the store by experiment: its runs, entries, size and last run."""
+    from .circuit.store_index import format_size, usage
+    u = usage(store_dir)
+    click.echo(f"run store {u.root}")
+    rows = [["experiment", "entries", "size", "last run", "runs"]]
+    for name, e in sorted(u.experiments.items()):
+        rows.append([name, str(e["entries"]), format_size(e["bytes"]), _when(e["updated"]),
+                     ", ".join(e["runs"])])
+    rows.append(["(not indexed)", str(u.unindexed_entries), format_size(u.unindexed_bytes),
+                 "-", "simulate() calls outside an experiment, or older runs"])
+    rows.append(["(quarantine)", str(u.quarantined), format_size(u.quarantined_bytes), "-",
+                 "damaged entries moved aside"])
+    widths = [max(len(r[j]) for r in rows) for j in range(4)]
+    for r in rows:
+        click.echo("  ".join([r[0].ljust(widths[0]), r[1].rjust(widths[1]),
+                              r[2].rjust(widths[2]), r[3].ljust(widths[3]), r[4]]).rstrip())
+
+
+@store.command("du")
+@_store_option
+def store_du(store_dir):
+    """Disk usage of the store: total, per experiment, not indexed, quarantine."""
+    from .circuit.store_index import format_size, usage
+    u = usage(store_dir)
+    rows = [(u.total_bytes, u.total_entries, f"total  {u.root}")]
+    rows += [(e["bytes"], e["entries"], name) for name, e in sorted(u.experiments.items())]
+    rows += [(u.unindexed_bytes, u.unindexed_entries, "(not indexed)"),
+             (u.quarantined_bytes, u.quarantined, "(quarantine)")]
+    for size, n, what in rows:
+        click.echo(f"{format_size(size):>9}  {n:>6} entries  {what}")
+
+
+@store.command("prune")
+@_store_option
+@click.option("--experiment", "experiments", multiple=True, metavar="NAME",
+              help="Delete the entries of this experiment (repeatable).")
+@click.option("--unindexed", is_flag=True, help="Delete entries no experiment index names.")
+@click.option("--older-than", type=float, default=None, metavar="DAYS",
+              help="Delete entries last used more than DAYS ago.")
+@click.option("--max-size", default=None, metavar="SIZE",
+              help="Then delete the least recently used entries until the store holds at most "
+                   "SIZE (e.g. 500M, 2G).")
+@click.option("--quarantine", is_flag=True, help="Empty the quarantine directory.")
+@click.option("--dry-run", is_flag=True, help="Only say what would be deleted.")
+def store_prune(store_dir, experiments, unindexed, older_than, max_size, quarantine, dry_run):
+    """Delete store entries (the next run recomputes whatever it needs)."""
+    from .circuit.store_index import format_size, parse_size, prune
+    if not (experiments or unindexed or older_than is not None or max_size is not None
+            or quarantine):
+        raise click.UsageError("prune needs a criterion: --experiment, --unindexed, "
+                               "--older-than, --max-size or --quarantine")
+    max_bytes = None if max_size is None else parse_size(max_size)
+    r = prune(store_dir, experiments=experiments, unindexed=unindexed,
+              older_than_days=older_than, max_bytes=max_bytes, quarantine=quarantine,
+              dry_run=dry_run)
+    verb = "would delete" if dry_run else "deleted"
+    click.echo(f"{verb} {r['entries']} entries ({format_size(r['bytes'])}) and "
+               f"{r['quarantined']} quarantined entries")
+
+
 # ------------------------------------------------------------------------------- theory
 def _theory_help() -> str:
     from .theory.query import QUANTITIES

@@ -23,7 +23,8 @@ from pathlib import Path
 
 from .ensemble import Ensemble
 
-__all__ = ["ROLES", "export_experiment", "find_metrics", "load_runs", "metrics_rows"]
+__all__ = ["ROLES", "export_experiment", "find_metrics", "load_runs", "metrics_rows",
+           "runs_by_role"]
 
 ROLES = ("transition_v0=<v0>", "stationary", "noise_free", "check_transition", "check_stationary")
 
@@ -62,14 +63,19 @@ def load_runs(experiment, *, quick: bool = False, store=None, workers: int | Non
                       store=None if store is None else Path(store), quick=quick,
                       progress=progress)
     runs = run_experiment_runs(exp, opts)
-    named = {_role_transition(v0): ens for v0, ens in runs.transition.items()}
-    named.update(stationary=runs.stationary, noise_free=runs.noise_free,
-                 check_transition=runs.check_transition, check_stationary=runs.check_stationary)
     out = {}
-    for role, ens in named.items():
+    for role, ens in runs_by_role(runs).items():
         meta = {**ens.meta, "experiment": exp.name, "role": role, "quick": quick}
         out[role] = Ensemble(ens.t, ens.v, ens.x, meta, ens.noise)
     return out
+
+
+def runs_by_role(runs) -> dict[str, Ensemble]:
+    """The ensembles of an :class:`~analogue.report.runs.ExperimentRuns`, named by role."""
+    named = {_role_transition(v0): ens for v0, ens in runs.transition.items()}
+    named.update(stationary=runs.stationary, noise_free=runs.noise_free,
+                 check_transition=runs.check_transition, check_stationary=runs.check_stationary)
+    return named
 
 
 # --------------------------------------------------------------------------- metrics.csv

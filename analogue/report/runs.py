@@ -137,7 +137,20 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
                                 replicas=n1, seed=seeds["stationary"], sample_dt=exp.sample_dt,
                                 circuit=tight, **kw)
     _check_coupled(stationary, check_stationary, "stationary check")
-    return ExperimentRuns(exp=exp, settings=settings, quick=opts.quick, transition=transition,
-                          stationary=stationary, noise_free=noise_free,
-                          check_transition=check_transition, check_stationary=check_stationary,
-                          wall_time=time.perf_counter() - t_start, seeds=seeds)
+    return _indexed(ExperimentRuns(exp=exp, settings=settings, quick=opts.quick,
+                                   transition=transition, stationary=stationary,
+                                   noise_free=noise_free, check_transition=check_transition,
+                                   check_stationary=check_stationary,
+                                   wall_time=time.perf_counter() - t_start, seeds=seeds))
+
+
+def _indexed(runs: ExperimentRuns) -> ExperimentRuns:
+    """Record the runs' store keys under the experiment's name (``analogue store ls``)."""
+    from ..circuit.store_index import record_runs
+    from ..export import runs_by_role
+    try:
+        record_runs(runs.exp.name, runs_by_role(runs), quick=runs.quick)
+    except OSError as exc:  # a read-only store still serves the runs; only the index is lost
+        import logging
+        logging.getLogger(__name__).warning("run store index not written: %s", exc)
+    return runs

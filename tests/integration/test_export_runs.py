@@ -84,6 +84,13 @@ def test_export_writes_every_run_and_metrics_csv(tiny, tmp_path):
     assert runs["noise_free"].meta["model"]["gamma"] >= 1e6
     np.testing.assert_array_equal(np.sort(runs["noise_free"].v[:, 0]), [-1.5, 1.0])
 
+    # the runs are indexed under the experiment's name (analogue store ls)
+    from analogue.circuit.store_index import usage
+    keys = {k for ens in runs.values() for k in ens.meta["store_keys"]}
+    u = usage(store)
+    assert u.experiments["tiny"]["entries"] == len(keys) == u.total_entries
+    assert u.unindexed_entries == 0
+
     rows = list(csv.DictReader((out / "metrics.csv").open()))
     assert len(rows) == 1 and rows[0]["experiment"] == "tiny"
     assert rows[0]["observable"] == "variance" and float(rows[0]["budget_smoothing"]) == 0.001
