@@ -267,7 +267,7 @@ def build_deck(mapping: CircuitMapping, *, replicas: int, v0, t_end: float, seed
     lines = [str(circuit).rstrip("\n")]
     kicks = ()
     if mapping.shot_charge > 0:
-        # seeded kicks (analogue.circuit.shot): triangles of area C kappa z, width w
+        # seeded kicks (analogue.circuit.shot): flat-topped pulses of area C kappa z, width w
         w = mapping.shot_width
         starts = deck_kicks(mapping.model, t_end, seed, replicas)
         for i, (t_k, z_k) in enumerate(starts):
