@@ -1,0 +1,285 @@
+"""Scaling the model onto a buildable board: rails, machine unit, E-series parts.
+
+The board is an inverting integrator (op-amp U1, virtual ground ``sj``) whose feedback holds
+the mass capacitor ``C``, the viscous resistor ``R`` and the Coulomb element (a diode bridge fed
+by two rail-referenced current sources, :mod:`analogue.board.friction`).  With
+``u = V(sj) - V(out)`` (the capacitor voltage; the output is ``-u``) Kirchhoff at ``sj`` is
+
+    C du/dt_c = -u/R - I_0 tanh(u/w) + V_F/R_F + V_n(t_c)/R_N,
+
+the paper's eq. (bm) with ``u = kappa v`` and ``t_c = theta t`` (compare
+:mod:`analogue.circuit.mapping`):
+
+    tau_m = R C/theta,   Delta = theta I_0/(C kappa),   a = theta V_F/(R_F C kappa),
+    1/gamma = theta D_I/(C kappa)^2,   D_I = (s_dac/R_N)^2 TS/2,   epsilon = w/kappa.
+
+Scaling (issue 13): +-15 V rails, machine unit 10 V, ``kappa`` chosen so that the stationary
+standard deviation is about 1 V and the largest velocity the experiment needs (initial
+velocities, the stationary range where p_s ~ exp(-gamma U) has fallen by e^-32) stays inside
+the machine unit.  Every resistor is rounded to E96 (1 %) or E24, capacitors to E12/E6; the
+*rounded* values define the model the board really implements (:attr:`BoardDesign.realised`),
+and the difference from the requested model enters the error budget term by term.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import eseries
+
+from ..circuit import validation as val
+from ..circuit.mapping import stationary_range, stationary_std
+from ..circuit.parts import get_part, thermal_voltage
+from ..model import Model
+from .opamp import get_opamp
+
+__all__ = [
+    "DIELECTRIC_ADVICE",
+    "SERIES",
+    "BoardDesign",
+    "BoardSpec",
+    "design_board",
+    "round_to_series",
+]
+
+SERIES = {"E6": eseries.E6, "E12": eseries.E12, "E24": eseries.E24, "E96": eseries.E96,
+          "E192": eseries.E192}
+DIELECTRIC_ADVICE = (
+    "C0G/NP0 ceramic (0 +- 30 ppm/K, no voltage coefficient, dielectric absorption < 0.1 %) or "
+    "polypropylene film (-200 ppm/K, absorption ~0.01 %) for the mass and integrator capacitors. "
+    "Not X7R/Y5V: their capacitance moves by 10-50 % with DC bias and 15 % over temperature and "
+    "their dielectric absorption (~2.5 %) acts as a memory term in the velocity equation.")
+
+
+def round_to_series(value: float, series: str) -> float:
+    """Nearest value of the E-series ``series`` (``E6``...``E192``)."""
+    if series not in SERIES:
+        raise ValueError(f"series must be one of {sorted(SERIES)}, got {series!r}")
+    value = val.positive(value, "value")
+    return float(eseries.find_nearest(SERIES[series], value))
+
+
+@dataclass(frozen=True)
+class BoardSpec:
+    """The experimentalist's choices (validated).
+
+    rails: supply voltage (V, symmetric); machine_unit: full-scale signal (V); sigma_volts:
+    target stationary standard deviation of the velocity node (V); kappa: volts per unit
+    velocity (None: from sigma_volts and machine_unit); time_scale: seconds per model time unit;
+    capacitance: mass capacitor (F, an E12 value); opamp: macromodel name (``TL072``,
+    ``OPA2140`` or their ``_worst`` sets); diode: bridge diode (``1N4148``, ``BAT54``);
+    v_set: the current sources' sense voltage (V, from a 2.5 V-class reference);
+    v_force: magnitude of the force voltage (V); resistor_series / capacitor_series: E-series
+    for rounding; dac_bits, dac_rms (V rms of the noise DAC, clip at dac_range), dac_range (V),
+    noise_dt (hold time in model units; None: tau_m/100), bessel_fc (Bessel -3 dB frequency in
+    units of the DAC sample rate), ac_corner (AC-coupling corner in units of 1/(2 pi tau_m
+    theta)); temperature: board temperature (C).
+    """
+
+    rails: float = 15.0
+    machine_unit: float = 10.0
+    sigma_volts: float = 1.0
+    kappa: float | None = None
+    time_scale: float = 1e-3
+    capacitance: float = 10e-9
+    opamp: str = "TL072"
+    diode: str = "1N4148"
+    v_set: float = 2.5
+    v_force: float = 2.5
+    resistor_series: str = "E96"
+    capacitor_series: str = "E12"
+    dac_bits: int = 16
+    dac_rms: float = 2.0
+    dac_range: float = 10.0
+    noise_dt: float | None = None
+    bessel_fc: float = 0.25
+    ac_corner: float = 0.001
+    temperature: float = 27.0
+
+    def __post_init__(self):
+        for name in ("rails", "machine_unit", "sigma_volts", "time_scale", "capacitance", "v_set",
+                     "v_force", "dac_rms", "dac_range", "bessel_fc", "ac_corner"):
+            object.__setattr__(self, name, val.positive(getattr(self, name), name))
+        for name in ("kappa", "noise_dt"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, val.positive(getattr(self, name), name))
+        object.__setattr__(self, "temperature", val.finite(self.temperature, "temperature"))
+        if not -40.0 <= self.temperature <= 125.0:
+            raise ValueError(f"temperature must be in [-40, 125] C, got {self.temperature}")
+        if not self.machine_unit < self.rails:
+            raise ValueError(f"machine_unit must be below rails={self.rails} V, got {self.machine_unit}")
+        if not self.dac_range <= self.rails:
+            raise ValueError(f"dac_range must be <= rails={self.rails} V, got {self.dac_range}")
+        if not self.dac_rms * 4.0 <= self.dac_range:
+            raise ValueError(f"dac_rms must be <= dac_range/4 = {self.dac_range / 4} V (clipping), "
+                             f"got {self.dac_rms}")
+        if not self.bessel_fc <= 0.5:
+            raise ValueError(f"bessel_fc must be in (0, 0.5] (fraction of the DAC rate), got {self.bessel_fc}")
+        if not self.ac_corner < 0.2:
+            raise ValueError(f"ac_corner must be in (0, 0.2), got {self.ac_corner}")
+        if isinstance(self.dac_bits, bool) or not isinstance(self.dac_bits, int) \
+                or not 8 <= self.dac_bits <= 24:
+            raise ValueError(f"dac_bits must be an integer in [8, 24], got {self.dac_bits!r}")
+        for name, allowed in (("resistor_series", ("E24", "E96", "E192")),
+                              ("capacitor_series", ("E6", "E12", "E24"))):
+            if getattr(self, name) not in allowed:
+                raise ValueError(f"{name} must be one of {allowed}, got {getattr(self, name)!r}")
+        get_opamp(self.opamp)
+        get_part(self.diode)
+
+    def replace(self, **changes) -> BoardSpec:
+        return replace(self, **changes)
+
+    def as_dict(self) -> dict:
+        return {k: getattr(self, k) for k in self.__dataclass_fields__}
+
+
+@dataclass(frozen=True)
+class BoardDesign:
+    """Component values (SI) of the board, ideal and rounded, and what they implement.
+
+    ``ideal`` are the exact values the mapping asks for; ``values`` the E-series ones used on
+    the board; ``realised`` the model the rounded board implements (with the bridge's tanh
+    width ``epsilon``); ``rounding`` the relative error of every rounded value.
+    """
+
+    model: Model
+    spec: BoardSpec
+    kappa: float
+    theta: float
+    eps_volts: float
+    noise_ts: float
+    ideal: dict
+    values: dict
+    rounding: dict
+    realised: Model
+    v_max: float
+    notes: tuple = field(default_factory=tuple)
+
+    @property
+    def to_model_v(self) -> float:
+        """Model velocity per volt of the integrator output (the output is -kappa v)."""
+        return -1.0 / self.kappa
+
+    @property
+    def noise_dt(self) -> float:
+        return self.noise_ts / self.theta
+
+    @property
+    def i_delta(self) -> float:
+        """Current of each bridge source, v_set / R_S."""
+        return self.spec.v_set / self.values["R_S"]
+
+    @property
+    def force_sign(self) -> float:
+        return 1.0 if self.model.a >= 0 else -1.0
+
+    def table(self) -> list[tuple[str, float, float, float, str]]:
+        """Rows (name, ideal, rounded, relative error, meaning)."""
+        meaning = {"C": "mass capacitor (integrator feedback)",
+                   "R": "viscous resistor (integrator feedback)",
+                   "R_S": "current-source sense resistor, I_0 = v_set/R_S (two, matched)",
+                   "R_F": "force resistor, I_F = V_F/R_F into the virtual ground",
+                   "R_N": "noise resistor, I_n = V_n/R_N into the virtual ground",
+                   "C_AC": "AC-coupling capacitor of the noise chain",
+                   "R_B1": "Bessel low-pass resistor", "R_B2": "Bessel low-pass resistor",
+                   "C_B1": "Bessel low-pass feedback capacitor",
+                   "C_B2": "Bessel low-pass capacitor to ground"}
+        return [(k, self.ideal[k], self.values[k], self.rounding[k], meaning.get(k, ""))
+                for k in self.values]
+
+
+def choose_kappa(model: Model, spec: BoardSpec, v0=()) -> tuple[float, float]:
+    """(kappa, v_max): volts per unit velocity and the largest |v| the board must carry.
+
+    kappa = min(sigma_volts/std, machine_unit/v_max): about 1 V of stationary spread unless
+    the initial velocities or the stationary tails (to e^-32 of the peak) would leave the
+    machine unit."""
+    lo, hi = stationary_range(model)
+    v_max = max([abs(lo), abs(hi)] + [abs(float(x)) for x in v0])
+    if spec.kappa is not None:
+        return spec.kappa, v_max
+    std = stationary_std(model)
+    return min(spec.sigma_volts / std, spec.machine_unit / v_max), v_max
+
+
+def bessel2_sallen_key(fc: float, r: float) -> tuple[float, float]:
+    """(C1, C2) of a unity-gain equal-resistor Sallen-Key 2nd-order Bessel low-pass with -3 dB
+    frequency ``fc``: Q = 1/sqrt(3) needs C1/C2 = 4 Q^2 = 4/3 (C1 the feedback capacitor);
+    the Bessel -3 dB point sits at omega_0/1.2720 (omega_0 = 1/(R sqrt(C1 C2)))."""
+    w0 = 2.0 * math.pi * fc * 1.27201964951
+    prod = 1.0 / (w0 * r) ** 2
+    c2 = math.sqrt(prod * 3.0 / 4.0)
+    return 4.0 / 3.0 * c2, c2
+
+
+def design_board(model: Model, spec: BoardSpec | None = None, v0=()) -> BoardDesign:
+    """Component values for ``model`` on the board ``spec`` (see module docstring).
+
+    ``v0``: initial velocities the experiment starts from (they must fit the machine unit).
+    Raises ValueError naming the parameter when the model cannot be scaled inside the rails.
+    """
+    if not isinstance(model, Model):
+        raise TypeError(f"model must be an analogue.Model, got {type(model).__name__}")
+    spec = BoardSpec() if spec is None else spec
+    if not isinstance(spec, BoardSpec):
+        raise TypeError(f"spec must be a BoardSpec, got {type(spec).__name__}")
+    if model.delta <= 0:
+        raise ValueError("model.delta must be > 0 for the board (its friction element is the bridge)")
+    kappa, v_max = choose_kappa(model, spec, v0)
+    if kappa * v_max > spec.machine_unit * (1 + 1e-9):
+        raise ValueError(f"kappa={kappa:.4g} V puts |v| = {v_max:.4g} at {kappa * v_max:.3g} V, beyond "
+                         f"the machine unit {spec.machine_unit} V; lower kappa")
+    theta, rs, cs = spec.time_scale, spec.resistor_series, spec.capacitor_series
+    cap = round_to_series(spec.capacitance, cs)
+    ck = cap * kappa
+    part = get_part(spec.diode)
+    temp_k = spec.temperature + 273.15
+    eps_volts = part.smoothing_volts(model.delta * ck / theta, temp_k)
+    noise_dt = spec.noise_dt if spec.noise_dt is not None else model.tau_m / 100.0
+    noise_ts = noise_dt * theta
+
+    i_total = model.delta * ck / theta
+    i0 = i_total - 2.0 * part.IS            # the bridge amplitude is I_0 + 2 IS
+    r_visc = 1.0 / (cap / (model.tau_m * theta) - 2.0 / part.rp)  # diode leakage rp/2 in parallel
+    i_force = abs(model.a) * ck / theta
+    d_i = ck ** 2 / (theta * model.gamma)
+    r_noise = spec.dac_rms * math.sqrt(noise_ts / (2.0 * d_i))
+    f_dac = 1.0 / noise_ts
+    r_b = 10e3
+    c_b1, c_b2 = bessel2_sallen_key(spec.bessel_fc * f_dac, r_b)
+    # AC coupling: C_AC in series with R_N; corner = ac_corner/(2 pi tau_m theta)
+    c_ac = 1.0 / (2.0 * math.pi * spec.ac_corner / (model.tau_m * theta) * r_noise)
+    ideal = {"C": spec.capacitance, "R": r_visc, "R_S": spec.v_set / i0,
+             "R_F": spec.v_force / i_force if i_force > 0 else math.inf,
+             "R_N": r_noise, "C_AC": c_ac, "R_B1": r_b, "R_B2": r_b, "C_B1": c_b1, "C_B2": c_b2}
+    values = {}
+    for k, x in ideal.items():
+        if not math.isfinite(x):
+            values[k] = x
+        elif k.startswith("C"):
+            values[k] = round_to_series(x, cs if k == "C" else "E12")
+        else:
+            values[k] = round_to_series(x, rs)
+    rounding = {k: (values[k] / ideal[k] - 1.0) if math.isfinite(ideal[k]) else 0.0 for k in ideal}
+
+    # what the rounded board implements (ideal op-amps; offsets are tolerances, not design)
+    r_tot = 1.0 / (1.0 / values["R"] + 2.0 / part.rp)
+    i_amp = spec.v_set / values["R_S"] + 2.0 * part.IS
+    a_real = (spec.v_force / values["R_F"]) * theta / ck if i_force > 0 else 0.0
+    if model.a < 0:
+        a_real = -a_real
+    d_real = (spec.dac_rms / values["R_N"]) ** 2 * noise_ts / 2.0
+    realised = model.replace(tau_m=r_tot * cap / theta, delta=theta * i_amp / ck, a=a_real,
+                             gamma=ck ** 2 / (theta * d_real), epsilon=eps_volts / kappa)
+    notes = ((f"kappa = {kappa:.4g} V per unit velocity: stationary std {stationary_std(model):.4g} "
+             f"-> {kappa * stationary_std(model):.3g} V; largest |v| {v_max:.3g} -> "
+             f"{kappa * v_max:.3g} V (machine unit {spec.machine_unit} V, rails +-{spec.rails} V)"),
+             (f"bridge tanh width w = 2 N V_T + RS I = {eps_volts * 1e3:.4g} mV "
+             f"({spec.diode}, N = {part.N}, V_T = {thermal_voltage(temp_k) * 1e3:.4g} mV) -> epsilon = "
+             f"{eps_volts / kappa:.4g} = {eps_volts / kappa / stationary_std(model):.3g} std"),
+             DIELECTRIC_ADVICE)
+    return BoardDesign(model=model, spec=spec, kappa=kappa, theta=theta, eps_volts=eps_volts,
+                       noise_ts=noise_ts, ideal=ideal, values=values, rounding=rounding,
+                       realised=realised, v_max=v_max, notes=notes)
+

@@ -1,0 +1,119 @@
+"""The Coulomb-friction element of the board, and an alternative.
+
+**Diode bridge with rail-referenced current sources** (the default).  The bridge sits between
+the virtual ground ``sj`` and the integrator output ``out``.  Its top node is fed by a sourcing
+current source (P-MOSFET, sense resistor ``R_S`` to +15 V, op-amp holding ``v_set`` across
+``R_S``) and its bottom node drained by a sinking one (N-MOSFET to -15 V).  Neither source
+floats: each has volts of compliance (its node sits a diode drop from the lower/upper terminal,
+within +-0.7 V of ground when ``sj`` is the virtual ground), which is what the passive bridge
+around a floating regulator lacks (:func:`floating_bridge_deck`).
+
+With ``u = V(sj) - V(out)`` the bridge carries ``I_bot`` out of ``sj`` for ``u >> w`` and
+``I_top`` into it for ``u << -w``: a mismatch is the friction ``Delta = (I_top + I_bot)/2`` plus a
+constant force ``(I_top - I_bot)/2`` (sliding limits), i.e. a friction asymmetry that the drift
+calibration absorbs.  Each source delivers ``(v_set - vos)/R_S``: op-amp offset and sense
+resistor tolerance set the mismatch.
+
+**OTA** (LM13700-class, :func:`ota_lines`): output current ``I_abc tanh(k V(out)/(2 V_T))``
+into ``sj`` through an input divider ``k``; the width ``2 V_T/k`` is tunable (k < 1 widens),
+the input offset is divided by ``k`` on the way to ``u`` and needs trimming, and the output
+mirrors' mismatch (a few %) is a friction asymmetry.
+
+A comparator driving an analogue switch (sharp sgn, then ``I_0`` switched between the two
+sources) is the third option: it removes the tanh width, but each switching event injects
+the switch's charge (pC) into ``sj`` - at ``C kappa = 48 nC`` per unit velocity a 5 pC
+injection is a velocity kick of 1e-4 per crossing, and in the stick regime the comparator
+chatters around v = 0 (hundreds of crossings per tau_m), so the kicks add an uncontrolled
+noise term exactly where the stick statistics are measured.  It is described, not built.
+"""
+from __future__ import annotations
+
+from ..circuit import validation as val
+from ..circuit.parts import DiodePart
+
+__all__ = ["MOSFET_MODELS", "bridge_lines", "floating_bridge_deck", "ota_lines"]
+
+# Our own level-1 small-signal MOSFETs (BSS84/2N7002 class); their gates draw no current,
+# so the source current is exactly the sense-resistor current.
+MOSFET_MODELS = (".model pmosx PMOS(LEVEL=1 VTO=-1.8 KP=0.05 LAMBDA=0.01)",
+                 ".model nmosx NMOS(LEVEL=1 VTO=1.8 KP=0.05 LAMBDA=0.01)")
+
+
+def _n(x, what="value") -> str:
+    return val.spice_number(x, what)
+
+
+def diode_model_line(name: str, part: DiodePart, is_scale: float = 1.0, temp_shift: float = 0.0) -> str:
+    params = dict(part.model)
+    params["IS"] = params.get("IS", 1e-14) * is_scale
+    text = " ".join(f"{k}={_n(v, k)}" for k, v in params.items())
+    return f".model {val.check_name(name, 'diode model name')} D({text})"
+
+
+def bridge_lines(prefix: str, a: str, b: str, *, part: DiodePart, diode_models, r_s_top: float,
+                 r_s_bot: float, v_set_top: float, v_set_bot: float, opamp_top: str,
+                 opamp_bot: str) -> list[str]:
+    """Element lines of one bridge between nodes ``a`` (virtual ground) and ``b`` (output),
+    with its two current sources (op-amp subcircuits ``opamp_top``/``opamp_bot``, supplies
+    ``vcc``/``vee``).  ``diode_models``: four model names (D1 top->a, D2 top->b, D3 a->bot,
+    D4 b->bot), so that each diode can carry its own mismatch."""
+    p = val.check_name(prefix, "prefix")
+    top, bot = f"{p}top", f"{p}bot"
+    d1, d2, d3, d4 = diode_models
+    lines = [f"D{p}1 {top} {a} {d1}", f"D{p}2 {top} {b} {d2}",
+             f"D{p}3 {a} {bot} {d3}", f"D{p}4 {b} {bot} {d4}"]
+    if part.rp:
+        for i, (x, y) in enumerate(((top, a), (top, b), (a, bot), (b, bot)), 1):
+            lines.append(f"R{p}p{i} {x} {y} {_n(part.rp)}")
+    lines += [
+        # sourcing: V(ref) = Vcc - v_set, op-amp forces V(s) = V(ref): I = v_set/R_S
+        f"V{p}rt vcc {p}rt dc {_n(v_set_top, 'v_set')}",
+        f"R{p}st vcc {p}st {_n(r_s_top, 'R_S')}",
+        f"X{p}ut {p}rt {p}st vcc vee {p}gt {opamp_top}",
+        f"M{p}t {top} {p}gt {p}st {p}st pmosx",
+        # sinking: V(ref) = Vee + v_set
+        f"V{p}rb {p}rb vee dc {_n(v_set_bot, 'v_set')}",
+        f"R{p}sb {p}sb vee {_n(r_s_bot, 'R_S')}",
+        f"X{p}ub {p}rb {p}sb vcc vee {p}gb {opamp_bot}",
+        f"M{p}b {bot} {p}gb {p}sb {p}sb nmosx",
+    ]
+    return lines
+
+
+def ota_lines(prefix: str, sj: str, out: str, *, i_abc: float, k: float, vos: float,
+              asymmetry: float, temperature_k: float) -> list[str]:
+    """An LM13700-class OTA as the friction element: current ``I_abc (1 + asym sgn) tanh((k
+    V(out) + vos)/(2 V_T))`` into ``sj`` (behavioural; ``asymmetry`` is the relative mismatch
+    of the output mirrors).  Bipolar input pair: width 2 V_T at the OTA input."""
+    from ..circuit.parts import thermal_voltage
+    p = val.check_name(prefix, "prefix")
+    vt2 = 2.0 * thermal_voltage(temperature_k)
+    arg = f"({_n(k, 'k')}*v({out})+{_n(vos, 'vos')})/{_n(vt2)}"
+    return [(f"B{p}ota 0 {sj} i={_n(i_abc, 'i_abc')}*(1+{_n(asymmetry, 'asymmetry')}*"
+            f"tanh(1e3*{arg}))*tanh({arg})")]
+
+
+def floating_bridge_deck(*, i_delta: float, i_force: float, r: float, c: float, headroom: float,
+                         v0: float, t_end: float, regulator: bool) -> str:
+    """The passive circuit of :mod:`analogue.circuit` (bridge around a *floating* DC source,
+    1N4148 diodes), relaxing from ``V(v) = v0`` under the force current ``i_force`` without noise.  ``regulator=False``: ideal
+    current source; ``True``: a two-terminal regulator with finite compliance - it delivers
+    ``i_delta`` only while the voltage across it exceeds ``headroom`` and can never deliver
+    power (a current-regulator diode / LM334-class part), modelled as
+    ``I = i_delta * clip(V_across/headroom, 0, 1)`` from ``p`` to ``n``."""
+    from ..circuit.parts import get_part
+    part = get_part("1N4148")
+    model = " ".join(f"{k}={_n(v, k)}" for k, v in part.model)
+    # orientation of analogue.circuit.netlist: D1 v->p, D2 0->p, D3 n->v, D4 n->0 and the
+    # source driving current from p to n; it absorbs power only while V(p) > V(n).
+    if regulator:
+        src = f"Breg p n i={_n(i_delta)}*min(max((v(p)-v(n))/{_n(headroom)},0),1)"
+    else:
+        src = f"Ireg p n dc {_n(i_delta)}"
+    return "\n".join([
+        "floating bridge", f".model d4148 D({model})",
+        f"C1 v 0 {_n(c)}", f"R1 v 0 {_n(r)}", f"IF 0 v dc {_n(i_force)}",
+        "D1 v p d4148", "D2 0 p d4148", "D3 n v d4148", "D4 n 0 d4148", src,
+        f".ic v(v)={_n(v0)}",
+        ".options reltol=1e-4",
+        f".tran {_n(t_end / 2000)} {_n(t_end)} 0 {_n(t_end / 2000)}", ".save v(v) v(p) v(n)", ".end", ""])

@@ -1,0 +1,186 @@
+"""The board's ngspice deck: replicas of one board (same parts, independent noise sequences).
+
+Per replica ``i`` (see :mod:`analogue.board.design` for the equation):
+
+- ``XU{i}``: the integrator op-amp, non-inverting input grounded, inverting input the virtual
+  ground ``sj{i}``, output ``o{i}`` = ``-kappa v``;
+- feedback ``sj{i}``-``o{i}``: the mass capacitor ``C``, the viscous resistor ``R`` and the
+  diode bridge with its two active current sources (:func:`analogue.board.friction.bridge_lines`);
+- the force: the reference voltage ``V_F`` (node ``f``, shared) through ``R_F`` into ``sj{i}``;
+- the noise: DAC ``d{i}`` (filesource of the replica's seeded sequence) -> Bessel -> ``C_AC``
+  -> ``R_N`` into ``sj{i}``;
+- position: digitally, from the sampled output (trapezoid in :func:`analogue.circuit.simulate.
+  run_batch`), as an ADC-fed microcontroller would do it.
+
+The initial velocity is set with ``.ic`` on the output and the integrator's gain node (no
+``uic``: ngspice then solves the operating point of the current sources, the Bessel filter and
+the bridge with the integrator held, which is what a reset switch across ``C`` followed by an
+initial-condition drive does on the bench).  No ``.control`` block; every number is formatted
+by :func:`analogue.circuit.validation.spice_number`.
+"""
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..circuit import validation as val
+from ..circuit.parts import get_part
+from . import friction, noise_chain, opamp
+from .design import BoardDesign
+
+__all__ = ["BoardDeck", "BoardInstance", "build_board_deck", "nominal_instance"]
+
+ROLES = ("int", "st", "sb", "bf")  # integrator, source top, source bottom, Bessel buffer
+
+
+@dataclass(frozen=True)
+class BoardInstance:
+    """One physical board: actual component values and part parameters.
+
+    ``values``: component values (keys of :attr:`BoardDesign.values`, with ``R_S_top`` and
+    ``R_S_bot`` separate); ``v_set_top``/``v_set_bot``: the two reference voltages;
+    ``v_force``: force voltage (signed); ``opamps``: role -> :class:`~analogue.board.opamp.OpAmp`;
+    ``diode_is``: four IS scale factors (bridge diode mismatch); ``temperature`` (C);
+    ``label``: for reports.
+    """
+
+    values: dict
+    v_set_top: float
+    v_set_bot: float
+    v_force: float
+    opamps: dict
+    diode_is: tuple = (1.0, 1.0, 1.0, 1.0)
+    temperature: float = 27.0
+    rails: float = 15.0
+    label: str = "nominal"
+    draws: dict = field(default_factory=dict)
+
+    def replace(self, **changes) -> BoardInstance:
+        return replace(self, **changes)
+
+
+def nominal_instance(design: BoardDesign, offsets: bool = False) -> BoardInstance:
+    """The board with the rounded nominal values; op-amp offsets and bias currents zero
+    unless ``offsets`` (then the typical values of the part, as drawn on a datasheet)."""
+    v = dict(design.values)
+    v["R_S_top"] = v["R_S_bot"] = v.pop("R_S")
+    amp = opamp.get_opamp(design.spec.opamp).at_temperature(design.spec.temperature)
+    if not offsets:
+        amp = amp.replace(vos=0.0, ib=0.0, ios=0.0)
+    return BoardInstance(values=v, v_set_top=design.spec.v_set, v_set_bot=design.spec.v_set,
+                         v_force=design.force_sign * design.spec.v_force,
+                         opamps={r: amp for r in ROLES}, temperature=design.spec.temperature,
+                         rails=design.spec.rails)
+
+
+@dataclass(frozen=True)
+class BoardDeck:
+    """A deck with the interface :func:`analogue.circuit.simulate.run_decks` expects."""
+
+    text: str
+    vectors: dict
+    to_model_v: float
+    to_model_x: float
+    time_scale: float
+    seed: int
+    replicas: int
+    sha256: str
+    noise_files: tuple
+    noise_dt: float = 0.0
+    to_model_noise: float = 1.0
+
+
+def _n(x, what="value") -> str:
+    return val.spice_number(x, what)
+
+
+def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: float,
+                     sample_dt: float, seed: int, noise_dir, first_replica: int = 0,
+                     reltol: float = 1e-4, save_all: bool = False,
+                     friction_kind: str = "bridge", ota: dict | None = None) -> BoardDeck:
+    """Deck for ``len(v0)`` replicas of ``board`` started at ``v0`` (model units).
+
+    Replica ``j`` is driven by the DAC sequence ``(seed, first_replica + j)``
+    (:func:`analogue.board.noise_chain.dac_sequence`), written to ``noise_dir`` (created).
+    ``save_all``: save every node (for the rails check).  ``friction_kind``: ``"bridge"`` or
+    ``"ota"`` (then ``ota`` = dict(i_abc, k, vos, asymmetry)).
+    """
+    from pathlib import Path
+    if not isinstance(design, BoardDesign):
+        raise TypeError(f"design must be a BoardDesign, got {type(design).__name__}")
+    if not isinstance(board, BoardInstance):
+        raise TypeError(f"board must be a BoardInstance, got {type(board).__name__}")
+    if friction_kind not in ("bridge", "ota"):
+        raise ValueError(f"friction_kind must be 'bridge' or 'ota', got {friction_kind!r}")
+    v0 = np.atleast_1d(np.asarray(v0, dtype=float))
+    if v0.ndim != 1 or v0.size < 1 or not np.all(np.isfinite(v0)):
+        raise ValueError("v0 must be a non-empty 1-D array of finite velocities")
+    if np.max(np.abs(v0)) * design.kappa > design.spec.machine_unit * (1 + 1e-9):
+        raise ValueError(f"v0: |v0| up to {np.max(np.abs(v0)):.3g} exceeds the machine unit "
+                         f"({design.spec.machine_unit / design.kappa:.3g} at kappa={design.kappa:.3g} V)")
+    t_end = val.positive(t_end, "t_end")
+    sample_dt = val.positive(sample_dt, "sample_dt")
+    theta, ts = design.theta, design.noise_ts
+    n_samples = int(np.ceil(t_end * theta / ts)) + 2
+    noise_dir = Path(noise_dir)
+    noise_dir.mkdir(parents=True, exist_ok=True)
+    part = get_part(design.spec.diode)
+    b = board
+    temp_k = b.temperature + 273.15
+
+    lines = [f"board {val.check_name(design.spec.opamp, 'opamp')} {part.name}",
+             (f"* analogue board deck: kappa={_n(design.kappa)} V/unit theta={_n(theta)} s "
+             f"TS={_n(ts)} s seed={int(seed)}")]
+    for role in ROLES:
+        lines.append(opamp.subcircuit(b.opamps[role], f"opa_{role}"))
+    dmodels = [f"dbr{k}" for k in range(4)]
+    for name, scale in zip(dmodels, b.diode_is):
+        lines.append(friction.diode_model_line(name, part, is_scale=scale))
+    lines += list(friction.MOSFET_MODELS)
+    lines += [f"Vcc vcc 0 dc {_n(b.rails)}", f"Vee vee 0 dc {_n(-b.rails)}",
+              f"Vf f 0 dc {_n(b.v_force, 'v_force')}"]
+    files, ic = [], []
+    val_ = b.values
+    for j in range(v0.size):
+        r = first_replica + j
+        sj, o = f"sj{j}", f"o{j}"
+        lines += [f"XU{j} 0 {sj} vcc vee {o} opa_int",
+                  f"C{j}m {sj} {o} {_n(val_['C'], 'C')}",
+                  f"R{j}v {sj} {o} {_n(val_['R'], 'R')}"]
+        if friction_kind == "bridge":
+            lines += friction.bridge_lines(
+                f"b{j}", sj, o, part=part, diode_models=dmodels, r_s_top=val_["R_S_top"],
+                r_s_bot=val_["R_S_bot"], v_set_top=b.v_set_top, v_set_bot=b.v_set_bot,
+                opamp_top="opa_st", opamp_bot="opa_sb")
+        else:
+            lines += friction.ota_lines(f"b{j}", sj, o, temperature_k=temp_k, **(ota or {}))
+        if np.isfinite(val_["R_F"]):
+            lines.append(f"R{j}f f {sj} {_n(val_['R_F'], 'R_F')}")
+        volts = noise_chain.dac_sequence(design, seed, r, n_samples)
+        path = noise_dir / f"dac_{design.spec.dac_bits}b_{int(seed)}_{r}_{n_samples}.txt"
+        sha = noise_chain.write_dac_file(path, volts, ts)
+        files.append(str(path))
+        lines += noise_chain.dac_lines(f"n{j}", f"d{j}", path, sha)
+        lines += noise_chain.bessel_lines(f"n{j}", f"d{j}", f"bo{j}", design, "opa_bf", val_)
+        lines += [f"C{j}ac bo{j} ac{j} {_n(val_['C_AC'], 'C_AC')}",
+                  f"R{j}n ac{j} {sj} {_n(val_['R_N'], 'R_N')}"]
+        vo = -design.kappa * v0[j]
+        ic.append(f"v({o})={_n(vo)} v(xu{j}.g)={_n(vo)} v({sj})=0")
+    lines.append(".ic " + " ".join(ic))
+    lines.append(f".options reltol={_n(reltol)} abstol=1e-12 vntol=1e-7 method=gear "
+                 f"temp={_n(b.temperature)} tnom=27")
+    vectors = {"v": [f"v(o{j})" for j in range(v0.size)], "x": None}
+    if not save_all:
+        lines.append(".save " + " ".join(vectors["v"]))
+    max_step = ts / 2.0
+    lines.append(f".tran {_n(sample_dt * theta)} {_n(t_end * theta)} 0 {_n(max_step)}")
+    lines.append(".end")
+    text = "\n".join(lines) + "\n"
+    if opamp.forbidden_deck_lines(text):
+        raise ValueError("internal error: the board deck contains a forbidden line")
+    return BoardDeck(text=text, vectors=vectors, to_model_v=design.to_model_v, to_model_x=1.0,
+                     time_scale=theta, seed=int(seed), replicas=int(v0.size),
+                     sha256=hashlib.sha256(text.encode()).hexdigest(), noise_files=tuple(files),
+                     noise_dt=0.0)

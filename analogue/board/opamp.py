@@ -1,0 +1,199 @@
+"""Our own parameterised op-amp macromodel (no vendor model is shipped).
+
+The subcircuit (pins ``inp inn vcc vee out``) is a one-pole voltage-feedback amplifier:
+
+- input offset voltage ``vos`` in series with the non-inverting input; input bias currents
+  ``ib +- ios/2`` drawn out of each input pin; differential input resistance ``rin``;
+- a transconductance stage ``I = i_max tanh(gm v_d / i_max)`` into a gain node ``g`` loaded by
+  ``r1 || c1``: DC gain ``a0 = gm r1``, unity-gain bandwidth ``gbw = gm / (2 pi c1)``, slew rate
+  ``i_max / c1`` (the tanh is the input pair running out of tail current);
+- rail clamps: diodes from ``g`` to ``vcc - headroom`` and ``vee + headroom``, referenced to the
+  *supply pins*, so the output follows the rails it is given;
+- a unity buffer and the open-loop output resistance ``rout``.
+
+The parameter sets are "class" values read off typical and guaranteed (min/max) datasheet
+columns for a JFET-input TL072 and a JFET-input precision OPA2140 at +-15 V, 25 C.  They are
+not the manufacturers' models; a user who wants a vendor model downloads it and points
+:func:`vendor_model_path` at it (the file is checked, never copied into this repository).
+"""
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, fields, replace
+from pathlib import Path
+
+from ..circuit import validation as val
+
+__all__ = [
+    "OPAMPS",
+    "OpAmp",
+    "forbidden_deck_lines",
+    "get_opamp",
+    "subcircuit",
+    "vendor_model_path",
+]
+
+R1 = 1e6  # gain-node resistance (ohm); gm and c1 follow from a0, gbw
+CLAMP_MODEL = "dclampx"
+
+
+@dataclass(frozen=True)
+class OpAmp:
+    """Op-amp macromodel parameters (SI units).
+
+    a0: open-loop DC gain (V/V); gbw: gain-bandwidth product (Hz); slew: slew rate (V/s);
+    vos: input offset voltage (V); vos_drift: its temperature coefficient (V/K);
+    ib: input bias current (A) at 25 C; ios: input offset current (A); ib_doubling: the
+    temperature rise (K) that doubles ib (JFET inputs: about 10 K); rin: differential input
+    resistance (ohm); rout: open-loop output resistance (ohm); headroom: how close the output
+    gets to either rail (V).
+    """
+
+    name: str
+    a0: float
+    gbw: float
+    slew: float
+    vos: float
+    vos_drift: float
+    ib: float
+    ios: float
+    ib_doubling: float
+    rin: float
+    rout: float
+    headroom: float
+    source: str = ""
+
+    def __post_init__(self):
+        val.check_name(self.name, "op-amp name")
+        for f in fields(self):
+            if f.name in ("name", "source"):
+                continue
+            value = getattr(self, f.name)
+            if f.name in ("vos", "vos_drift", "ib", "ios"):
+                object.__setattr__(self, f.name, val.finite(value, f.name))
+            else:
+                object.__setattr__(self, f.name, val.positive(value, f.name))
+
+    @property
+    def gm(self) -> float:
+        return self.a0 / R1
+
+    @property
+    def c1(self) -> float:
+        return self.gm / (2.0 * math.pi * self.gbw)
+
+    @property
+    def i_max(self) -> float:
+        return self.slew * self.c1
+
+    def at_temperature(self, celsius: float) -> OpAmp:
+        """The same part at ``celsius``: offset drifts linearly, bias currents double every
+        ``ib_doubling`` kelvin (JFET gate leakage)."""
+        dt = val.finite(celsius, "celsius") - 25.0
+        k = 2.0 ** (dt / self.ib_doubling)
+        return replace(self, vos=self.vos + self.vos_drift * dt, ib=self.ib * k, ios=self.ios * k)
+
+    def replace(self, **changes) -> OpAmp:
+        return replace(self, **changes)
+
+
+# Datasheet "class" values (typical column / worst-case column), +-15 V, 25 C.
+OPAMPS: dict[str, OpAmp] = {
+    "TL072": OpAmp("TL072", a0=2e5, gbw=3e6, slew=13e6, vos=3e-3, vos_drift=18e-6, ib=65e-12,
+                   ios=5e-12, ib_doubling=10.0, rin=1e12, rout=100.0, headroom=1.5,
+                   source="TL072-class typical values (JFET input, +-15 V)"),
+    "TL072_worst": OpAmp("TL072_worst", a0=2.5e4, gbw=2e6, slew=8e6, vos=10e-3, vos_drift=30e-6,
+                         ib=200e-12, ios=100e-12, ib_doubling=10.0, rin=1e11, rout=200.0,
+                         headroom=3.0, source="TL072-class guaranteed limits (min gain, max offset)"),
+    "OPA2140": OpAmp("OPA2140", a0=2e6, gbw=11e6, slew=20e6, vos=30e-6, vos_drift=0.35e-6,
+                     ib=0.5e-12, ios=0.5e-12, ib_doubling=10.0, rin=1e13, rout=20.0, headroom=0.2,
+                     source="OPA2140-class typical values (precision JFET, rail-to-rail output)"),
+    "OPA2140_worst": OpAmp("OPA2140_worst", a0=1e6, gbw=8e6, slew=15e6, vos=120e-6,
+                           vos_drift=1e-6, ib=10e-12, ios=10e-12, ib_doubling=10.0, rin=1e12,
+                           rout=40.0, headroom=0.35,
+                           source="OPA2140-class guaranteed limits"),
+}
+
+
+def get_opamp(name: str) -> OpAmp:
+    try:
+        return OPAMPS[name]
+    except (KeyError, TypeError):
+        raise ValueError(f"op-amp must be one of {sorted(OPAMPS)}, got {name!r}") from None
+
+
+def _n(x, what="value") -> str:
+    return val.spice_number(x, what)
+
+
+def subcircuit(p: OpAmp, name: str | None = None) -> str:
+    """SPICE text of the macromodel ``.subckt NAME inp inn vcc vee out`` (see module doc).
+
+    The clamp diodes use the model ``dclampx`` (emitted here, once per subcircuit: a model
+    inside a ``.subckt`` is local to it)."""
+    if not isinstance(p, OpAmp):
+        raise TypeError(f"p must be an OpAmp, got {type(p).__name__}")
+    name = val.check_name(name or p.name, "subcircuit name")
+    return "\n".join([
+        f".subckt {name} inp inn vcc vee out",
+        f"Vos inp ip1 dc {_n(p.vos, 'vos')}",
+        f"Ibp ip1 0 dc {_n(p.ib + 0.5 * p.ios, 'ib')}",
+        f"Ibn inn 0 dc {_n(p.ib - 0.5 * p.ios, 'ib')}",
+        f"Rin ip1 inn {_n(p.rin, 'rin')}",
+        # transconductance with slew limiting (tail current i_max)
+        f"Bgm 0 g i={_n(p.i_max)}*tanh({_n(p.gm / p.i_max)}*(v(ip1)-v(inn)))",
+        f"R1 g 0 {_n(R1)}",
+        f"C1 g 0 {_n(p.c1, 'c1')}",
+        # rail clamps referenced to the supply pins
+        f"Vhp vcc chp dc {_n(p.headroom, 'headroom')}",
+        f"Vhn chn vee dc {_n(p.headroom, 'headroom')}",
+        f"Dhp g chp {CLAMP_MODEL}",
+        f"Dhn chn g {CLAMP_MODEL}",
+        f".model {CLAMP_MODEL} D(IS=1e-14 N=0.2)",
+        "Ebuf o1 0 g 0 1",
+        f"Rout o1 out {_n(p.rout, 'rout')}",
+        f".ends {name}",
+    ])
+
+
+# ---------------------------------------------------------------------- vendor models
+_FORBIDDEN = re.compile(r"^\s*(\.control|\.endc|\.exec|\.include|\.lib|shell|!)", re.IGNORECASE | re.MULTILINE)
+_SAFE_PATH = re.compile(r"[A-Za-z0-9_./+-]+")
+
+
+def forbidden_deck_lines(text: str) -> list[str]:
+    """Lines that would make ngspice run commands or read other files (``.control``, ``.exec``,
+    ``shell``, ``.include``/``.lib``): a vendor file containing any of them is refused."""
+    return [m.group(0).strip() for m in _FORBIDDEN.finditer(text)]
+
+
+def vendor_model_path(path, subckt: str) -> Path:
+    """Validate a vendor op-amp model the user downloaded: an existing regular file under 1 MB,
+    with a safe path (letters, digits, ``_ . / + -``), containing ``.subckt SUBCKT`` with
+    five pins, and no ``.control``/``.exec``/``shell``/``.include``/``.lib`` lines.  Returns
+    the resolved path (to be ``.include``-d by the deck writer; the text is not copied)."""
+    if not isinstance(path, (str, Path)):
+        raise TypeError(f"vendor model path must be a str or Path, got {type(path).__name__}")
+    subckt = val.check_name(subckt, "vendor subcircuit name")
+    p = Path(path).expanduser().resolve()
+    if _SAFE_PATH.fullmatch(str(p)) is None:
+        raise ValueError(f"vendor model path must contain only letters, digits and _ . / + -, "
+                         f"got {str(p)!r}")
+    if not p.is_file():
+        raise ValueError(f"vendor model path {str(p)!r} is not an existing file")
+    if p.stat().st_size > 1_000_000:
+        raise ValueError(f"vendor model file {str(p)!r} is larger than 1 MB")
+    text = p.read_text(errors="replace")
+    bad = forbidden_deck_lines(text)
+    if bad:
+        raise ValueError(f"vendor model file {str(p)!r} contains forbidden lines "
+                         f"(.control/.exec/shell/.include/.lib): {bad[:3]}")
+    m = re.search(rf"^\s*\.subckt\s+{re.escape(subckt)}\s+(.*)$", text, re.IGNORECASE | re.MULTILINE)
+    if m is None:
+        raise ValueError(f"vendor model file {str(p)!r} defines no .subckt {subckt}")
+    pins = [t for t in m.group(1).split() if "=" not in t]
+    if len(pins) != 5:
+        raise ValueError(f".subckt {subckt} in {str(p)!r} has {len(pins)} pins; the board needs "
+                         f"five (in+ in- V+ V- out, in that order)")
+    return p
