@@ -55,7 +55,7 @@ store_log = logging.getLogger("analogue.circuit.store")
 DEFAULT_REPLICAS_PER_DECK = 16
 DEFAULT_TIMEOUT = 3600.0
 _EXTRA = ("replicas_per_deck", "store", "progress", "timeout", "scheduler", "return_noise",
-          "return_records")
+          "return_records", "label")
 # ngspice parses `.options seed=` as a C int; seeds above 2**31 - 1 are ignored with a warning.
 _SEED_MAX = 2**31 - 1
 
@@ -297,12 +297,16 @@ def _batch_meta(task: BatchTask, version: str, info: dict) -> dict:
             "time_scale": task.time_scale, "info": info}
 
 
-def _progress_enabled(progress, n_run: int) -> bool:
+def _progress_mode(progress, n_run: int) -> str | None:
+    """"bar" (tqdm, only on a terminal), "line" (one plain line per run when progress was asked
+    for but stderr is a file or pipe: logs stay readable) or None."""
     if progress is None:
-        return n_run > 1 and sys.stderr.isatty()
+        return "bar" if n_run > 1 and sys.stderr.isatty() else None
     if not isinstance(progress, bool):
         raise ValueError(f"progress must be True, False or None (auto), got {progress!r}")
-    return progress
+    if not progress:
+        return None
+    return "bar" if sys.stderr.isatty() else "line"
 
 
 def _check_scheduler(scheduler) -> None:
@@ -327,7 +331,7 @@ def _executor(workers, scheduler, n_tasks):
 
 
 def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, progress=None,
-              timeout=DEFAULT_TIMEOUT, records=None):
+              timeout=DEFAULT_TIMEOUT, records=None, label="ngspice decks"):
     """Run (or load from the store) a list of decks and stack their replicas.
 
     ``decks``: objects with the netlist.Deck interface (``text``, ``vectors``, ``to_model_v``,
@@ -337,7 +341,8 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
     the held velocity noise of each hold interval in model units (None if the decks do not
     record it) and info a JSON-safe dict (store keys, per-deck wall times, how many decks came
     from the store).  ``records``: an optional dict, filled with ``"x_spring"`` (replicas, n_t)
-    when the decks read the spring's position back from its inductor.
+    when the decks read the spring's position back from its inductor.  ``label`` names the
+    run on its progress bar (or plain line).
     """
     times = np.asarray(times, dtype=float)
     if workers is None:
@@ -396,9 +401,9 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
         with _ng.interrupt_guard():
             ex, closer = _executor(workers, scheduler, len(todo))
             bar = None
-            if _progress_enabled(progress, len(todo)):
+            if _progress_mode(progress, len(todo)) == "bar":
                 from tqdm.auto import tqdm
-                bar = tqdm(total=len(todo), desc="ngspice decks", unit="deck")
+                bar = tqdm(total=len(todo), desc=label, unit="deck")
             futures = {}
             failed = True
             store_ok = True
@@ -444,6 +449,9 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
     wall = _time.perf_counter() - t0
     if todo:
         log.info("analogue.simulate: %d decks ran in %.2f s", len(todo), wall)
+    if _progress_mode(progress, len(todo)) == "line":
+        print(f"{label}: {len(tasks)} decks ({from_store} from the store, {len(todo)} run) in "
+              f"{wall:.1f} s", file=sys.stderr, flush=True)
     v = np.vstack([r["v"] for r in results]) if results else np.empty((0, times.size))
     x = np.vstack([r["x"] for r in results]) if results else np.empty((0, times.size))
     if results and all("noise" in r for r in results):
@@ -539,8 +547,10 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
         ngspice processes run at once locally; default ``os.cpu_count()``.
     **extra
         ``replicas_per_deck`` (default 16, the measured optimum), ``store`` (directory, False
-        to disable; default $ANALOGUE_STORE or ~/.cache/analogue/runs), ``progress`` (bool;
-        default: a tqdm bar when stderr is a terminal), ``timeout`` (seconds per deck, default
+        to disable; default $ANALOGUE_STORE or ~/.cache/analogue/runs), ``progress`` (None:
+        a tqdm bar when stderr is a terminal; True: the bar on a terminal, else one plain line
+        per call on stderr; False: silent), ``label`` (names the run on its bar or line;
+        default: regime, gamma, v0 and seed), ``timeout`` (seconds per deck, default
         3600: the deck's ngspice process group is killed and NgspiceError raised),
         ``scheduler`` ("tcp://host:port" or a distributed.Client: run on a Dask cluster),
         ``return_noise`` (bool, default False: see Returns), ``return_records`` (bool, default
@@ -592,6 +602,14 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
     progress = extra.get("progress")
     if progress is not None and not isinstance(progress, bool):
         raise ValueError(f"progress must be True, False or None (auto), got {progress!r}")
+    label = extra.get("label")
+    if label is None:
+        where = v0 if isinstance(v0, str) else (f"{float(v0):g}" if np.ndim(v0) == 0
+                                                else "given")
+        label = f"{model.regime}, gamma={model.gamma:g}, v0={where}, seed {seed}"
+    elif not isinstance(label, str) or not label.isprintable() or len(label) > 100:
+        raise ValueError(f"label must be a printable str of at most 100 characters, got "
+                         f"{label!r}")
     return_noise = extra.get("return_noise", False)
     if not isinstance(return_noise, bool):
         raise ValueError(f"return_noise must be True or False, got {return_noise!r}")
@@ -626,7 +644,7 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
     records = {}
     v, x, noise, info = run_decks(decks, times, v0_arr, store=extra.get("store"), workers=workers,
                            scheduler=extra.get("scheduler"), progress=progress, timeout=timeout,
-                           records=records)
+                           records=records, label=label)
     table = mapping.table() if hasattr(mapping, "table") else None
     meta = {
         "source": "circuit",
