@@ -324,7 +324,11 @@ def _executor(workers, scheduler, n_tasks):
     if scheduler is None:
         return cf.ThreadPoolExecutor(max_workers=max(1, min(workers, n_tasks))), None
     if isinstance(scheduler, str):
-        from distributed import Client
+        try:
+            from distributed import Client
+        except ImportError:
+            raise RuntimeError("scheduler= needs Dask, which is not installed: "
+                               "pip install 'analogue[dask]'") from None
         client = Client(scheduler)
         return client.get_executor(), client.close
     return scheduler.get_executor(), None
