@@ -1,13 +1,16 @@
 """Command-line interface: ``analogue netlist | run | report | paper | theory | figures``.
 
-Errors are one line on stderr and a non-zero exit code, never a traceback (set
-``ANALOGUE_DEBUG=1`` to see the traceback).
+Every failure is one line on stderr (``analogue: error: ...``) and an exit code: 2 for bad
+input (usage, wrong values or types, an unreadable experiment file), 1 for a run that failed
+(ngspice, the store, the disk, memory, a report with failed sections), 130 when interrupted.
+Set ``ANALOGUE_DEBUG=1`` to see the traceback instead.
 """
 from __future__ import annotations
 
 import json
 import math
 import os
+import re
 import sys
 from pathlib import Path
 
@@ -17,6 +20,38 @@ from .model import Model
 
 EXIT_USAGE = 2
 EXIT_FAILURE = 1
+EXIT_INTERRUPTED = 130
+# Exceptions that mean the input was wrong (the API raises TypeError for wrong types and
+# ValueError for wrong values; a bad TOML file or encoding is a ValueError too).
+_BAD_INPUT = (ValueError, TypeError)
+# Our own messages are sentences; anything else is prefixed with its type (BadZipFile: ...).
+_OWN_MESSAGES = (ValueError, TypeError, RuntimeError, OSError)
+
+
+def _debug() -> bool:
+    return bool(os.environ.get("ANALOGUE_DEBUG"))
+
+
+def _one_line(text: str) -> str:
+    """Every line of a message, on one line (ngspice's own error lines included)."""
+    return " | ".join(ln.strip() for ln in str(text).splitlines() if ln.strip())
+
+
+def error_line(exc: BaseException) -> str:
+    """The one line shown for a failure."""
+    if isinstance(exc, MemoryError):
+        return f"out of memory (MemoryError{': ' + _one_line(exc) if str(exc) else ''}); " \
+               "lower the replicas, t_end or the number of workers"
+    msg = _one_line(exc)
+    if isinstance(exc, KeyError):
+        msg = f"missing key {exc.args[0]!r}" if exc.args else ""
+    if not isinstance(exc, _OWN_MESSAGES) or isinstance(exc, KeyError):
+        return f"{type(exc).__name__}: {msg}" if msg else type(exc).__name__
+    return msg or type(exc).__name__
+
+
+def exit_code(exc: BaseException) -> int:
+    return EXIT_USAGE if isinstance(exc, _BAD_INPUT) else EXIT_FAILURE
 
 
 def _short_help(cmd: click.Command) -> str:
@@ -58,7 +93,26 @@ class _Command(click.Command):
 
 
 class _Group(click.Group):
-    """Turn expected failures into one clear line and a non-zero exit code."""
+    """Turn every failure into one clear line and an exit code (module docstring)."""
+
+    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
+        if not standalone_mode:
+            return super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        try:
+            rv = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        except click.ClickException as exc:
+            click.echo(f"analogue: error: {_one_line(exc.format_message())}", err=True)
+            sys.exit(exc.exit_code)
+        except click.Abort as exc:
+            cause = exc.__cause__
+            if _debug() and cause is not None and not isinstance(cause, KeyboardInterrupt):
+                raise cause
+            if cause is not None and not isinstance(cause, KeyboardInterrupt):
+                click.echo(f"analogue: error: {error_line(cause)}", err=True)
+                sys.exit(exit_code(cause))
+            click.echo("analogue: interrupted", err=True)
+            sys.exit(EXIT_INTERRUPTED)
+        sys.exit(rv if isinstance(rv, int) else 0)
 
     context_class = _Context
     command_class = _Command
@@ -73,16 +127,18 @@ class _Group(click.Group):
     def invoke(self, ctx):
         try:
             return super().invoke(ctx)
-        except click.exceptions.Exit:
+        except (click.exceptions.Exit, click.ClickException, click.Abort):
             raise
-        except (click.ClickException, click.Abort):
-            raise
-        except (ValueError, KeyError, FileNotFoundError, RuntimeError, OSError) as exc:
-            if os.environ.get("ANALOGUE_DEBUG"):
+        except KeyboardInterrupt:
+            if _debug():
                 raise
-            msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-            click.echo(f"analogue: error: {msg}", err=True)
-            ctx.exit(EXIT_USAGE if isinstance(exc, (ValueError, KeyError)) else EXIT_FAILURE)
+            click.echo("analogue: interrupted", err=True)
+            ctx.exit(EXIT_INTERRUPTED)
+        except Exception as exc:  # every failure reaching the CLI: one line
+            if _debug():
+                raise
+            click.echo(f"analogue: error: {error_line(exc)}", err=True)
+            ctx.exit(exit_code(exc))
 
 
 def _floats(text, name: str):
@@ -104,9 +160,10 @@ def _floats(text, name: str):
 def main():
     """Stick-slip friction with noise: theory, ngspice circuit, and their comparison.
 
-    Typical use: `analogue paper --out report` runs every standard experiment in circuits/
+    Typical use: `analogue paper --out report` runs the paper's experiments (stick, slip, work)
     on the circuit and writes report/index.html with the paper's figures, circuit data
-    overlaid, metrics.json and an error budget.
+    overlaid, metrics.json and an error budget; `analogue report FILE.toml` does the same for
+    your own experiment.
     """
 
 
@@ -134,42 +191,101 @@ def netlist(experiment, check):
 
 
 # ------------------------------------------------------------------ run / report / paper
+_HOST = re.compile(r"(?:[A-Za-z0-9](?:[A-Za-z0-9-]{0,61}[A-Za-z0-9])?)(?:\.[A-Za-z0-9](?:[A-Za-z0-9-]{0,61}[A-Za-z0-9])?)*"
+                   r"|\[[0-9A-Fa-f:.]+\]")
+
+
+def _scheduler_option(ctx, param, value):
+    """A Dask scheduler address: tcp://HOST:PORT or tls://HOST:PORT (ucx:// only with ucx-py).
+    Checked here so that a typo fails at once, naming the option, not after a connect timeout."""
+    if value is None:
+        return None
+    scheme, sep, rest = value.strip().partition("://")
+    if scheme == "ucx":
+        import importlib.util
+        if importlib.util.find_spec("ucp") is None:
+            raise click.BadParameter(f"ucx:// needs UCX support (the ucx-py package), which is "
+                                     f"not installed; use tcp://HOST:PORT, got {value!r}",
+                                     param_hint="--scheduler")
+    elif not sep or scheme not in ("tcp", "tls"):
+        raise click.BadParameter(f"must be a Dask scheduler address tcp://HOST:PORT (or "
+                                 f"tls://HOST:PORT), got {value!r}", param_hint="--scheduler")
+    host, colon, port = rest.rpartition(":")
+    if not colon or not _HOST.fullmatch(host) or not port.isdigit() or not 1 <= int(port) <= 65535:
+        raise click.BadParameter(f"must be {scheme}://HOST:PORT with a host name or address and "
+                                 f"a port in 1..65535, got {value!r}", param_hint="--scheduler")
+    return value.strip()
+
+
+def _store_option(ctx, param, value):
+    if value is None:
+        return None
+    if not value.strip():
+        raise click.BadParameter("must be a directory path, got an empty string (leave the "
+                                 "option out for $ANALOGUE_STORE or ~/.cache/analogue/runs)",
+                                 param_hint="--store")
+    path = Path(value).expanduser()
+    if path.exists() and not path.is_dir():
+        raise click.BadParameter(f"{value!r} exists and is not a directory", param_hint="--store")
+    return path
+
+
+def _timeout_option(ctx, param, value):
+    if value is None:
+        return None
+    if not (math.isfinite(value) and value > 0):
+        raise click.BadParameter(f"must be a finite number of seconds > 0, got {value!r}",
+                                 param_hint="--timeout")
+    return value
+
+
 def _run_options(f):
     f = click.option("--workers", type=click.IntRange(1, 256), default=None,
                      help="Local worker processes (default: all cores).")(f)
-    f = click.option("--scheduler", default=None, metavar="ADDRESS",
+    f = click.option("--scheduler", default=None, metavar="ADDRESS", callback=_scheduler_option,
                      help="Dask scheduler address (tcp://host:port) to run the decks on.")(f)
-    f = click.option("--store", type=click.Path(file_okay=False, path_type=Path), default=None,
+    f = click.option("--store", default=None, metavar="DIRECTORY", callback=_store_option,
                      help="Run-store directory (default $ANALOGUE_STORE or ~/.cache/analogue/runs).")(f)
+    f = click.option("--timeout", type=float, default=None, metavar="SECONDS",
+                     callback=_timeout_option,
+                     help="Give up on a deck (one ngspice run) after this many seconds.")(f)
     f = click.option("--quick", is_flag=True, help="Small ensembles: minutes, larger error bars.")(f)
     f = click.option("--progress/--no-progress", default=True, help="Show progress bars.")(f)
     return f
 
 
+def _options(workers, scheduler, store, timeout, quick, progress):
+    from .report.plan import RunOptions
+    return RunOptions(workers=workers, scheduler=scheduler, store=store, quick=quick,
+                      progress=progress, timeout=timeout)
+
+
 @main.command()
 @click.argument("experiment")
 @_run_options
-def run(experiment, workers, scheduler, store, quick, progress):
-    """Simulate EXPERIMENT (a name in circuits/ or a TOML path) on the circuit; resumable."""
-    from .report.pipeline import RunOptions, run_experiment
-    opts = RunOptions(workers=workers, scheduler=scheduler, store=store, quick=quick,
-                      progress=progress)
-    result = run_experiment(experiment, opts)
+def run(experiment, workers, scheduler, store, timeout, quick, progress):
+    """Simulate EXPERIMENT (a name: ./circuits/<name>.toml, else a standard experiment; or a
+    TOML path) on the circuit; resumable."""
+    from .report import pipeline
+    result = pipeline.run_experiment(experiment, _options(workers, scheduler, store, timeout,
+                                                          quick, progress))
     click.echo(result.summary())
 
 
 @main.command()
 @click.argument("experiment")
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=None,
-              help="Report directory (default report/<experiment>).")
+              help="Report directory (default report/<name>).")
 @_run_options
-def report(experiment, out, workers, scheduler, store, quick, progress):
-    """Build the report of EXPERIMENT from stored runs (runs what is missing)."""
-    from .report.pipeline import RunOptions, build_experiment_report
-    opts = RunOptions(workers=workers, scheduler=scheduler, store=store, quick=quick,
-                      progress=progress)
-    out = out or Path("report") / experiment
-    index = build_experiment_report(experiment, out, opts)
+def report(experiment, out, workers, scheduler, store, timeout, quick, progress):
+    """Build the report of EXPERIMENT (a name or a TOML path: yours) from stored runs (runs
+    what is missing)."""
+    from .circuit.experiments import load_experiment
+    from .report import pipeline
+    exp = load_experiment(experiment)  # validated before anything runs
+    out = out or Path("report") / exp.name
+    index = pipeline.build_experiment_report(exp, out, _options(workers, scheduler, store,
+                                                                timeout, quick, progress))
     click.echo(f"report: {index}")
 
 
@@ -177,13 +293,13 @@ def report(experiment, out, workers, scheduler, store, quick, progress):
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("report"),
               show_default=True, help="Where the report goes.")
 @_run_options
-def paper(out, workers, scheduler, store, quick, progress):
-    """The main job: every standard experiment, the paper's Figs. 1-9 with circuit data,
-    metrics.json and the error budget, in one self-contained report."""
-    from .report.pipeline import RunOptions, build_paper_report
-    opts = RunOptions(workers=workers, scheduler=scheduler, store=store, quick=quick,
-                      progress=progress)
-    index = build_paper_report(out, opts)
+def paper(out, workers, scheduler, store, timeout, quick, progress):
+    """The main job: the paper's experiments (stick, slip, work; never your own files - use
+    `report` for those), the paper's Figs. 1-9 with circuit data, metrics.json and the error
+    budget, in one self-contained report."""
+    from .report import pipeline
+    index = pipeline.build_paper_report(out, _options(workers, scheduler, store, timeout, quick,
+                                                      progress))
     click.echo(f"report: {index}")
 
 

@@ -5,14 +5,14 @@ Schema (every table and key optional unless marked; unknown keys are errors)::
     name = "stick"                 # required, ^[A-Za-z][A-Za-z0-9_]{0,31}$, the file's stem
     description = "..."            # free text (never reaches a deck)
 
-    [model]                        # analogue.Model; tau_m, delta, a, gamma required
-    tau_m = 1.0
+    [model]                        # analogue.Model: every field of the dataclass is a key;
+    tau_m = 1.0                    # those without a default are required
     delta = 0.7
     a = 0.2
     gamma = 10.0
     mass = 1.0
 
-    [circuit]                      # analogue.circuit.CircuitSpec fields
+    [circuit]                      # analogue.circuit.CircuitSpec: every field is a key
     coulomb = "diode-bridge"
     diode = "ideal"
     smoothing = 0.02
@@ -29,41 +29,96 @@ Schema (every table and key optional unless marked; unknown keys are errors)::
 
     [netlist]                      # the representative deck committed in netlists/
     replicas = 4                   # total replicas in that deck (v0 values cycled)
+
+    [report]                       # what the report measures: analogue.report.plan
+
+The whole document is validated when it is loaded, before anything runs: the tables, the
+cross-references between ``[experiment]`` and ``[report]``, the time grids of every run and
+every circuit a command will build (the nominal one, the noise-free one of paper Fig. 1 and the
+tight-tolerance integration check; :meth:`Experiment.planned_circuits`).
+
+The ``[model]`` and ``[circuit]`` keys are the fields of :class:`analogue.Model` and
+:class:`~analogue.circuit.mapping.CircuitSpec` (read from the dataclasses, so new fields are
+accepted as they are added); the values are validated by those classes.  A nested table
+(``[model.shot]``) becomes the dataclass its field is annotated with (e.g. ``ShotNoise``).
+
+Experiment names resolve from ``./circuits/<name>.toml`` first, then from the standard
+circuits shipped with the package (``analogue/circuits/`` in an installed wheel, copied from
+the checkout's top-level ``circuits/`` at build time; the checkout's ``circuits/`` itself when
+running from a source tree).
 """
 from __future__ import annotations
 
+import dataclasses
+import math
+import re
+import sys
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from .. import model as _model_module
 from ..model import Model
+from ..report.plan import ReportSettings, report_settings_from_dict
 from . import validation as val
 from .mapping import CircuitMapping, CircuitSpec, map_model
 from .netlist import Deck, build_deck
 
-__all__ = ["Experiment", "load_experiment", "regenerate_netlists", "experiment_names",
-           "CIRCUITS_DIR", "NETLISTS_DIR"]
+__all__ = ["Experiment", "load_experiment", "experiment_from_dict", "regenerate_netlists",
+           "netlist_path", "experiment_names", "standard_circuit", "resolve_experiment",
+           "model_keys", "circuit_keys", "PAPER_EXPERIMENTS", "CIRCUITS_DIR",
+           "PACKAGE_CIRCUITS_DIR", "NETLISTS_DIR"]
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
-CIRCUITS_DIR = REPO_ROOT / "circuits"
+CIRCUITS_DIR = REPO_ROOT / "circuits"        # the checkout's standard circuits (fixed layout)
 NETLISTS_DIR = REPO_ROOT / "netlists"
+# In an installed wheel the standard circuits are package data (setup.py copies circuits/
+# into analogue/circuits/ when it builds); a source tree has none and uses CIRCUITS_DIR.
+PACKAGE_CIRCUITS_DIR = Path(__file__).resolve().parents[1] / "circuits"
+
+# The experiments of `analogue paper`, in the paper's order: stick (Figs. 2, 5, 6), slip
+# (Figs. 3, 4), work (Figs. 7-9).  The one list: `paper` runs these and nothing else.  The
+# model-family experiments (issue 9: cubic, stribeck, spring, shot) join here once the report
+# supports them ("Beyond the paper").
+PAPER_EXPERIMENTS = ("stick", "slip", "work")
 
 _TOP_KEYS = {"name", "description", "model", "circuit", "experiment", "netlist", "report"}
-# [report] is read by analogue.report.plan (what the report measures; never reaches a deck).
-_MODEL_KEYS = {"tau_m", "delta", "a", "gamma", "mass", "epsilon",
-               "cubic", "stribeck", "spring", "x0", "shot"}  # (the last five: issue 9)
-_MODEL_REQUIRED = {"tau_m", "delta", "a", "gamma"}
 _EXPERIMENT_KEYS = {"v0", "replicas", "t_end", "sample_dt", "seed", "burn_in",
                     "histogram_times", "work_taus"}
 _EXPERIMENT_REQUIRED = {"v0", "t_end", "sample_dt"}
 _NETLIST_KEYS = {"replicas"}
+# Longest run / shortest solver step (noise hold or max_step): beyond this a deck would not
+# finish (ngspice takes at least one step per hold; measured ~20 us per replica-step).
+MAX_STEPS_PER_RUN = 10_000_000
+# Noise-free runs (paper Fig. 1) last six relaxation times: the motion has settled by then.
+NOISE_FREE_TAUS = 6.0
+
+
+def _init_fields(cls) -> dict:
+    return {f.name: f for f in dataclasses.fields(cls) if f.init}
+
+
+def model_keys() -> set:
+    """Keys of the ``[model]`` table: the fields of :class:`analogue.Model`."""
+    return set(_init_fields(Model))
+
+
+def circuit_keys() -> set:
+    """Keys of the ``[circuit]`` table: the fields of :class:`CircuitSpec`."""
+    return set(_init_fields(CircuitSpec))
+
+
+def _required(cls) -> set:
+    return {n for n, f in _init_fields(cls).items()
+            if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING}
 
 
 @dataclass(frozen=True)
 class Experiment:
-    """One standard experiment: the model, the circuit choice and what to measure."""
+    """One experiment: the model, the circuit choice, what to run and what to measure
+    (``report``: the ``[report]`` table, parsed with the rest of the file)."""
 
     name: str
     description: str
@@ -79,9 +134,40 @@ class Experiment:
     work_taus: tuple
     netlist_replicas: int
     source: Path | None = None
+    report: ReportSettings = field(default_factory=ReportSettings)
 
     def mapping(self) -> CircuitMapping:
         return map_model(self.model, self.spec)
+
+    def noise_free_mapping(self) -> CircuitMapping:
+        """The user's own circuit (same components, same parts) with the noise source off."""
+        return self.mapping().without_noise()
+
+    def check_spec(self) -> CircuitSpec:
+        """The integration check's circuit: the same, 100x tighter tolerances, a quarter of the
+        step (the held noise is the same realisation, so the path-by-path difference measures
+        the integration error)."""
+        m = self.mapping()
+        max_step = self.spec.max_step if self.spec.max_step is not None else m.noise_dt
+        return self.spec.replace(reltol=self.spec.reltol / 100, abstol=self.spec.abstol / 100,
+                                 vntol=m.vntol / 100, max_step=max_step / 4)
+
+    def planned_circuits(self) -> dict:
+        """Every circuit a run of this experiment builds: ``{"nominal", "noise_free",
+        "check"}`` -> CircuitMapping (each raises ValueError if it cannot be built)."""
+        nominal = self.mapping()
+        try:
+            check = map_model(self.model, self.check_spec())
+        except ValueError as exc:
+            raise ValueError(f"the integration check's circuit (100x tighter tolerances, a "
+                             f"quarter of the step) cannot be built: {exc}") from None
+        return {"nominal": nominal, "noise_free": nominal.without_noise(), "check": check}
+
+    def noise_free_t_end(self) -> float:
+        """Length of the noise-free run: ``min(t_end, 6 tau_m)`` on the sample grid."""
+        n = max(1, math.floor(min(self.t_end, NOISE_FREE_TAUS * self.model.tau_m)
+                              / self.sample_dt + 1e-9))
+        return n * self.sample_dt
 
     def initial_velocities(self) -> np.ndarray:
         """(len(v0) * replicas,) initial velocities: each v0 value repeated ``replicas`` times."""
@@ -98,6 +184,13 @@ class Experiment:
                           seed=self.seed if seed is None else seed, sample_dt=self.sample_dt,
                           title=self.name)
 
+    def noise_free_deck(self, seed: int | None = None) -> Deck:
+        """The noise-free deck: one replica per v0, the user's circuit with zero noise."""
+        v0 = np.asarray(self.v0, dtype=float)
+        return build_deck(self.noise_free_mapping(), replicas=len(v0), v0=v0,
+                          t_end=self.noise_free_t_end(), sample_dt=self.sample_dt,
+                          seed=self.seed if seed is None else seed, title=self.name)
+
     def representative_deck(self) -> Deck:
         """The small deck committed as ``netlists/<name>.cir``."""
         return self.deck(replicas=self.netlist_replicas)
@@ -106,7 +199,7 @@ class Experiment:
 def _table(data, key: str, allowed: set, where: str) -> dict:
     section = data.get(key, {})
     if not isinstance(section, dict):
-        raise ValueError(f"{where}: [{key}] must be a table")
+        raise ValueError(f"{where}: [{key}] must be a table, got {type(section).__name__}")
     unknown = sorted(set(section) - allowed)
     if unknown:
         raise ValueError(f"{where}: unknown key {key}.{unknown[0]} (allowed: {', '.join(sorted(allowed))})")
@@ -131,6 +224,123 @@ def _floats(value, what: str, allow_empty: bool = True) -> tuple:
     return tuple(val.finite(x, f"{what}[{i}]") for i, x in enumerate(value))
 
 
+def _nested_class(cls, key: str):
+    """The dataclass a field of ``cls`` is annotated with (``shot: ShotNoise | None``)."""
+    annotation = str(_init_fields(cls)[key].type)
+    import analogue
+    for token in re.findall(r"[A-Za-z_][A-Za-z0-9_]*", annotation):
+        for home in (sys.modules.get(cls.__module__), _model_module, analogue):
+            found = getattr(home, token, None) if home is not None else None
+            if isinstance(found, type) and dataclasses.is_dataclass(found):
+                return found
+    return None
+
+
+def _field_value(cls, table: str, key: str, value, where: str):
+    """A TOML value for field ``key`` of ``cls``: nested tables become the field's dataclass;
+    text or booleans where the field is a number are refused (TypeError)."""
+    what = f"{where}: {table}.{key}"
+    annotation = str(_init_fields(cls)[key].type)
+    if isinstance(value, dict):
+        sub = _nested_class(cls, key)
+        if sub is None:
+            raise TypeError(f"{what} must be a value, not a table")
+        try:
+            return sub(**value)
+        except TypeError as exc:
+            allowed = ", ".join(sorted(_init_fields(sub)))
+            raise TypeError(f"{what}: {exc} (keys of [{table}.{key}]: {allowed})") from None
+        except ValueError as exc:
+            raise ValueError(f"{what}: {exc}") from None
+    shape = re.search(r"\btuple\[([^\]]*)\]", annotation)
+    if isinstance(value, list) and shape:
+        # a TOML array for a tuple field (stribeck = [delta_s, v_s]): the count is a value error
+        items = [t.strip() for t in shape.group(1).split(",")]
+        if "..." not in items and len(value) != len(items):
+            raise ValueError(f"{what} must be a list of {len(items)} values, got {value!r}")
+        return tuple(value)
+    numeric = re.search(r"\b(float|int|Real)\b", annotation) is not None
+    if numeric and re.search(r"\bstr\b", annotation) is None and isinstance(value, (str, bool, list)) \
+            and not ("bool" in annotation and isinstance(value, bool)):
+        raise TypeError(f"{what} must be a number, got {value!r}")
+    return value
+
+
+def _build(cls, table: str, data: dict, where: str):
+    kwargs = {k: _field_value(cls, table, k, v, where) for k, v in data.items()}
+    try:
+        return cls(**kwargs)
+    except TypeError as exc:
+        raise TypeError(f"{where}: [{table}]: {exc}") from None
+    except (ValueError, OverflowError) as exc:
+        raise ValueError(f"{where}: [{table}]: {exc}") from None
+
+
+def _grid(t_end: float, sample_dt: float, what: str, where: str) -> None:
+    n = round(t_end / sample_dt)
+    if n < 1 or abs(n * sample_dt - t_end) > 1e-6 * t_end:
+        raise ValueError(f"{where}: {what}={t_end:g} must be a whole number of "
+                         f"experiment.sample_dt={sample_dt:g} intervals (t/sample_dt = "
+                         f"{t_end / sample_dt:.6g})")
+
+
+def _check_plan(exp: Experiment, where: str) -> None:
+    """Cross-references and everything the runs will build, before anything runs."""
+    st_full, st_quick = exp.report.variants()
+    v0s = exp.v0
+    for p in exp.report.prehistory:
+        v0, t = (p[0] if len(p) == 3 else v0s[0]), p[-1]
+        if not any(math.isclose(v0, u, rel_tol=1e-12, abs_tol=1e-12) for u in v0s):
+            raise ValueError(f"{where}: report.prehistory entry {list(p)} starts from v0={v0:g}, "
+                             f"which is not one of experiment.v0={list(v0s)}")
+        if not 0 < t <= exp.t_end:
+            raise ValueError(f"{where}: report.prehistory entry {list(p)} has time t={t:g} "
+                             f"outside (0, experiment.t_end={exp.t_end:g}]")
+    for st, size in ((st_full, "full"), (st_quick, "--quick")):
+        window = st.stationary_t_end - st.stationary_burn_in
+        for w, tau in st.work_paths:
+            if tau > window:
+                raise ValueError(f"{where}: report.work_paths entry [{w:g}, {tau:g}]: tau={tau:g} "
+                                 f"exceeds the stationary window stationary_t_end - "
+                                 f"stationary_burn_in = {window:g} ({size} size; --quick halves "
+                                 f"stationary_t_end)")
+        for tau in exp.work_taus:
+            if tau > window + 1e-9:
+                raise ValueError(f"{where}: experiment.work_taus entry {tau:g} exceeds the "
+                                 f"stationary window report.stationary_t_end - "
+                                 f"report.stationary_burn_in = {window:g} ({size} size; --quick "
+                                 f"halves stationary_t_end)")
+        _grid(st.stationary_t_end, exp.sample_dt, f"report.stationary_t_end ({size} size)", where)
+    _grid(exp.t_end, exp.sample_dt, "experiment.t_end", where)
+
+    # every circuit the runs build, and the decks' numbers
+    try:
+        plan = exp.planned_circuits()
+        exp.representative_deck()
+        exp.noise_free_deck()
+    except OverflowError as exc:
+        raise ValueError(f"{where}: the circuit's values overflow ({exc}); check circuit."
+                         f"time_scale, circuit.capacitance, circuit.volts_per_velocity and the "
+                         f"[model] values") from None
+    except ValueError as exc:
+        raise ValueError(f"{where}: {exc}") from None
+    for kind, m in plan.items():
+        try:
+            val.check_mapping_values(m, kind)
+        except ValueError as exc:
+            raise ValueError(f"{where}: {exc}") from None
+    longest = max(exp.t_end, st_full.stationary_t_end)
+    m = plan["check"]
+    step = min(m.noise_dt, m.spec.max_step)
+    if longest / step > MAX_STEPS_PER_RUN:
+        name = "max_step" if exp.spec.max_step is not None and \
+            exp.spec.max_step <= m.noise_dt else "noise_dt"
+        raise ValueError(f"{where}: circuit.{name}={getattr(exp.spec, name) or m.noise_dt:.3g} "
+                         f"means {longest / step:.3g} solver steps over the longest run "
+                         f"({longest:g} model time units, integration check at a quarter of "
+                         f"the step); the limit is {MAX_STEPS_PER_RUN:.0e}: raise it")
+
+
 def experiment_from_dict(data: dict, where: str = "experiment", source: Path | None = None) -> Experiment:
     """Validate a parsed TOML document (see the module docstring for the schema)."""
     if not isinstance(data, dict):
@@ -145,29 +355,13 @@ def experiment_from_dict(data: dict, where: str = "experiment", source: Path | N
     if not isinstance(description, str):
         raise ValueError(f"{where}: description must be a string")
 
-    mdata = _table(data, "model", _MODEL_KEYS, where)
-    _require(mdata, _MODEL_REQUIRED, "model", where)
-    mdata = dict(mdata)
-    for key, value in mdata.items():
-        if key == "gamma" and value == float("inf"):
-            continue  # gamma = inf: no Gaussian noise (shot noise alone)
-        if key not in ("stribeck", "shot"):
-            val.finite(value, f"{where}: model.{key}")
-    if "stribeck" in mdata:  # [delta_s, v_s]
-        st = mdata["stribeck"]
-        if not isinstance(st, list) or len(st) != 2:
-            raise ValueError(f"{where}: model.stribeck must be a list [delta_s, v_s]")
-        mdata["stribeck"] = tuple(val.finite(x, f"{where}: model.stribeck[{i}]") for i, x in enumerate(st))
-    if "shot" in mdata:  # [model.shot] rate, mean, two_sided
-        from ..model import ShotNoise
-        sh = mdata["shot"]
-        if not isinstance(sh, dict) or not {"rate", "mean"} <= set(sh) <= {"rate", "mean", "two_sided"}:
-            raise ValueError(f"{where}: [model.shot] must be a table with rate, mean and optional two_sided")
-        mdata["shot"] = ShotNoise(**sh)
-    model = Model(**mdata)
+    mdata = _table(data, "model", model_keys(), where)
+    _require(mdata, _required(Model), "model", where)
+    model = _build(Model, "model", mdata, where)
 
-    cdata = _table(data, "circuit", set(CircuitSpec.__dataclass_fields__), where)
-    spec = CircuitSpec(**cdata)
+    cdata = _table(data, "circuit", circuit_keys(), where)
+    spec = _build(CircuitSpec, "circuit", cdata, where)
+    val.check_spec_ranges(spec, f"{where}: circuit")
 
     edata = _table(data, "experiment", _EXPERIMENT_KEYS, where)
     _require(edata, _EXPERIMENT_REQUIRED, "experiment", where)
@@ -194,42 +388,92 @@ def experiment_from_dict(data: dict, where: str = "experiment", source: Path | N
     ndata = _table(data, "netlist", _NETLIST_KEYS, where)
     netlist_replicas = _int(ndata.get("replicas", 4), f"{where}: netlist.replicas", 1, 64)
 
+    report = report_settings_from_dict(data.get("report"), where)
+
     exp = Experiment(name=name, description=description, model=model, spec=spec, v0=v0,
                      replicas=replicas, t_end=t_end, sample_dt=sample_dt, seed=seed,
                      burn_in=burn_in, histogram_times=times, work_taus=taus,
-                     netlist_replicas=netlist_replicas, source=source)
-    exp.mapping()  # refuse experiments the circuit cannot do (ratings, bias) at load time
+                     netlist_replicas=netlist_replicas, source=source, report=report)
+    _check_plan(exp, where)
     return exp
 
 
+def _names_in(directory: Path) -> list[str]:
+    if not directory.is_dir():
+        return []
+    return sorted(p.stem for p in directory.glob("*.toml") if val.NAME_PATTERN.fullmatch(p.stem))
+
+
+def _standard_dir() -> Path:
+    """Where the standard circuits are: package data in an installed wheel, else the checkout."""
+    return PACKAGE_CIRCUITS_DIR if _names_in(PACKAGE_CIRCUITS_DIR) else CIRCUITS_DIR
+
+
 def experiment_names() -> list[str]:
-    """Names of the experiments in ``circuits/``, sorted."""
-    return sorted(p.stem for p in CIRCUITS_DIR.glob("*.toml"))
+    """Names of the standard experiments (shipped with the package), sorted."""
+    return _names_in(_standard_dir())
+
+
+def standard_circuit(name: str) -> Path:
+    """The TOML file of the standard experiment ``name`` (package data or the checkout)."""
+    name = val.check_name(name, "experiment name")
+    path = _standard_dir() / f"{name}.toml"
+    if not path.is_file():
+        raise ValueError(f"experiment name must be one of {experiment_names()}, got {name!r}")
+    return path
+
+
+def resolve_experiment(name: str) -> Path:
+    """``./circuits/<name>.toml`` if it exists, else the standard experiment ``name``."""
+    name = val.check_name(name, "experiment name")
+    local = Path.cwd() / "circuits" / f"{name}.toml"
+    if local.is_file():
+        return local
+    try:
+        return standard_circuit(name)
+    except ValueError:
+        local_names = _names_in(Path.cwd() / "circuits")
+        raise ValueError(f"experiment name must be one of {sorted(set(experiment_names()) | set(local_names))} "
+                         f"(./circuits, then the standard circuits), got {name!r}") from None
+
+
+def _read_document(path: Path) -> dict:
+    try:
+        raw = path.read_bytes()
+    except IsADirectoryError:
+        raise ValueError(f"{path}: is a directory, not an experiment file") from None
+    except OSError as exc:
+        raise ValueError(f"{path}: cannot read the experiment file ({exc.strerror or exc})") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{path}: not a UTF-8 text file (byte {exc.start}: "
+                         f"{raw[exc.start:exc.start + 1]!r}); TOML files are UTF-8") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        msg = " ".join(str(exc).split())
+        raise ValueError(f"{path}: not valid TOML: {msg}") from None
 
 
 def load_experiment(path_or_name) -> Experiment:
-    """Load ``circuits/<name>.toml`` (given a bare name) or a TOML file path."""
+    """Load an experiment: a bare name (``./circuits/<name>.toml``, else the standard
+    experiment) or a TOML file path."""
+    by_name = False
     if isinstance(path_or_name, Path):
         path = path_or_name
     elif isinstance(path_or_name, str):
         if val.NAME_PATTERN.fullmatch(path_or_name):
-            path = CIRCUITS_DIR / f"{path_or_name}.toml"
-            if not path.exists():
-                raise ValueError(f"experiment name must be one of {experiment_names()}, "
-                                 f"got {path_or_name!r}")
+            path, by_name = resolve_experiment(path_or_name), True
         else:
             path = Path(path_or_name)
     else:
         raise ValueError(f"path_or_name must be a path or an experiment name, got {path_or_name!r}")
-    if not path.is_file():
+    if not path.exists():
         raise ValueError(f"no experiment file at {path}")
-    try:
-        with open(path, "rb") as fh:
-            data = tomllib.load(fh)
-    except tomllib.TOMLDecodeError as exc:
-        raise ValueError(f"{path}: not valid TOML: {exc}") from None
+    data = _read_document(path)
     exp = experiment_from_dict(data, where=str(path), source=path)
-    if path.parent.resolve() == CIRCUITS_DIR.resolve() and exp.name != path.stem:
+    if (by_name or path.parent.resolve() == CIRCUITS_DIR.resolve()) and exp.name != path.stem:
         raise ValueError(f"{path}: name must equal the file stem {path.stem!r}, got {exp.name!r}")
     return exp
 
@@ -244,6 +488,12 @@ def netlist_text(exp: Experiment) -> str:
     header = (f"* Generated by analogue.circuit.experiments from {where} "
               f"({exp.netlist_replicas} replicas; regenerate with `analogue netlist`). Do not edit.\n")
     return f"{title}\n{header}{rest}"
+
+
+def _write_atomic(path: Path, text: str) -> None:
+    tmp = path.with_name(f".{path.name}.tmp")
+    tmp.write_text(text)
+    tmp.replace(path)
 
 
 def netlist_path(exp: Experiment) -> Path:
@@ -270,6 +520,6 @@ def regenerate_netlists(check: bool = False, experiments=None) -> list[Path]:
             continue
         path.parent.mkdir(exist_ok=True)
         if current != text:
-            path.write_text(text)
+            _write_atomic(path, text)
         out.append(path)
     return out

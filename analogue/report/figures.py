@@ -35,7 +35,7 @@ def _title(runs: ExperimentRuns) -> str:
 
 # ------------------------------------------------------------------------------ Fig. 1
 def fig_deterministic(all_runs: list, out: Path):
-    """Paper Fig. 1: noise-free motion, circuit (gamma -> 1e8) vs eq. det_eq."""
+    """Paper Fig. 1: noise-free motion, the circuit with its noise off vs eq. det_eq."""
     fig, axes = new_figure(1, len(all_runs), squeeze=False)
     for ax, runs in zip(axes.ravel(), all_runs):
         ens = runs.noise_free
@@ -61,8 +61,8 @@ def fig_deterministic(all_runs: list, out: Path):
         [Model(**r.noise_free.meta["model_effective"]).deterministic(v0, r.noise_free.t)
          for v0 in r.exp.v0])))) for r in all_runs)
     return path, ("Noise-free motion (paper Fig. 1). Lines: eq. det_eq with the exact sgn law "
-                  "(dotted: stick time t_a, eq. tbar1). Circles: the circuit with its noise "
-                  f"reduced to gamma = 1e8. Largest deviation from the circuit's own smoothed "
+                  "(dotted: stick time t_a, eq. tbar1). Circles: the same circuit (its own "
+                  f"components and parts) with the noise source off. Largest deviation from the circuit's own smoothed "
                   f"law: {dev:.1e} (model units).")
 
 

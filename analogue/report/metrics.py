@@ -87,7 +87,15 @@ def validate_metrics(obj: dict) -> None:
     for key in ("comparisons", "provenance"):
         if key not in obj:
             raise ValueError(f"metrics.json lacks {key!r}")
-    if not isinstance(obj["comparisons"], list) or not obj["comparisons"]:
+    failures = obj.get("failures", [])
+    if not isinstance(failures, list):
+        raise ValueError("metrics.json 'failures' must be a list")
+    for i, f in enumerate(failures):
+        if not isinstance(f, dict) or not all(isinstance(f.get(k), str)
+                                              for k in ("section", "stage", "error")):
+            raise ValueError(f"failure {i} must have string 'section', 'stage' and 'error'")
+    # a report whose every experiment failed still records why (failures), with no comparisons
+    if not isinstance(obj["comparisons"], list) or not (obj["comparisons"] or failures):
         raise ValueError("metrics.json 'comparisons' must be a non-empty list")
     for i, c in enumerate(obj["comparisons"]):
         for k, typ in _REQUIRED.items():

@@ -1,31 +1,78 @@
 """From experiments to a report directory: ``index.html`` (self-contained), PNGs, ``metrics.json``.
 
-``build_paper_report`` is the main job (``analogue paper``): every standard experiment in
-``circuits/``, the paper's Figs. 1-9 with circuit data, the paper's open question settled by
-exact numerics, and every circuit-versus-theory comparison with its error budget.
+``build_paper_report`` is the main job (``analogue paper``): the paper's experiments
+(:data:`analogue.circuit.experiments.PAPER_EXPERIMENTS`, the standard circuits shipped with
+the package, never the user's files), the paper's Figs. 1-9 with circuit data, the paper's open
+question settled by exact numerics, and every circuit-versus-theory comparison with its error
+budget.  ``build_experiment_report`` (``analogue report``) does the same for one experiment of
+the user's.
+
+Every experiment is loaded (and so validated) before anything runs.  After that, a section
+whose work fails (a circuit run, an analysis, a figure) never throws away the sections that
+finished: it is written as a failed section with its error, ``metrics.json`` lists it under
+``failures``, and :class:`ReportIncomplete` is raised once the page is written.
 """
 from __future__ import annotations
 
 import json
+import os
 import platform
 import sys
 import time
+import traceback
 from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
 
 import numpy as np
 
-from ..circuit.experiments import experiment_names, load_experiment
+from ..circuit.experiments import PAPER_EXPERIMENTS, Experiment, load_experiment, standard_circuit
 from . import figures as F
 from .comparisons import ExperimentAnalysis, analyse
 from .html import Figure, Section, Table, write_page
 from .metrics import validate_metrics
-from .plan import RunOptions, report_settings
+from .plan import RunOptions
 from .runs import ExperimentRuns, run_experiment_runs
 
 __all__ = ["RunOptions", "run_experiment", "build_experiment_report", "build_paper_report",
-           "build_report", "RunSummary"]
+           "build_report", "RunSummary", "ReportIncomplete", "experiment_section_text"]
+
+
+class ReportIncomplete(RuntimeError):
+    """The report was written, but some of its sections failed (each is in the page with its
+    error, and in metrics.json under ``failures``)."""
+
+    def __init__(self, index: Path, failures: list):
+        self.index, self.failures = index, failures
+        what = "; ".join(f"{f['section']}: {f['error']}" for f in failures)
+        super().__init__(f"report written to {index} with {len(failures)} failed "
+                         f"section(s): {what}")
+
+
+def _error_text(exc: BaseException) -> str:
+    msg = " | ".join(ln.strip() for ln in str(exc).splitlines() if ln.strip())
+    return f"{type(exc).__name__}: {msg}" if msg else type(exc).__name__
+
+
+class _Failures:
+    """Runs one piece of a report; a failure is recorded (section, stage, error), not raised."""
+
+    def __init__(self):
+        self.items: list[dict] = []
+
+    def attempt(self, section: str, stage: str, fn, experiment: str | None = None):
+        try:
+            return fn(), None
+        except (KeyboardInterrupt, SystemExit):
+            raise
+        except Exception as exc:  # any failure of one section is reported
+            if os.environ.get("ANALOGUE_DEBUG"):
+                traceback.print_exc()
+            err = _error_text(exc)
+            self.items.append({"section": section, "experiment": experiment, "stage": stage,
+                               "error": err})
+            _log(f"{section}: FAILED ({stage}): {err}")
+            return None, err
 
 
 _T0 = time.perf_counter()
@@ -46,30 +93,34 @@ class RunSummary:
                 f"{p['wall_time_s']:.1f} s")
 
 
+def _load(name_or_exp) -> Experiment:
+    return name_or_exp if isinstance(name_or_exp, Experiment) else load_experiment(name_or_exp)
+
+
 def run_experiment(name, opts: RunOptions) -> RunSummary:
     """Run (or load from the store) every circuit run of one experiment."""
-    exp = load_experiment(name)
+    exp = _load(name)
     _log(f"{exp.name}: running the circuit (stored runs are reused)")
     return RunSummary(run_experiment_runs(exp, opts))
 
 
 def build_experiment_report(name, out, opts: RunOptions) -> Path:
-    return build_report([name], Path(out), opts, title=f"analogue report: experiment {name}")
-
-
-# the paper's order: stick (Figs. 2, 5, 6), slip (Figs. 3, 4), work (Figs. 7-9), then the rest
-PAPER_ORDER = ("stick", "slip", "work")
+    """The report of one experiment (a name or a TOML path: the user's)."""
+    exp = _load(name)
+    return build_report([exp], Path(out), opts, title=f"analogue report: experiment {exp.name}")
 
 
 def build_paper_report(out, opts: RunOptions) -> Path:
-    names = experiment_names()
-    # The model-family experiments (issue 9: cubic, stribeck, spring, shot) join the paper once
-    # the report supports them ("Beyond the paper" chapter); until then the paper keeps the
-    # paper's own models only.
-    names = [n for n in names if load_experiment(n).model.is_paper]
-    names = [n for n in PAPER_ORDER if n in names] + [n for n in names if n not in PAPER_ORDER]
-    return build_report(names, Path(out), opts,
+    """The paper's experiments only (:data:`PAPER_EXPERIMENTS`, standard circuits)."""
+    return build_report([standard_circuit(n) for n in PAPER_EXPERIMENTS], Path(out), opts,
                         title="Stick-slip friction with noise: the paper on an analogue circuit")
+
+
+def experiment_section_text(exp: Experiment) -> list[str]:
+    """Paragraphs of an experiment's section: its description (the user's text, escaped by
+    the page template like every other text)."""
+    text = " ".join(exp.description.split())
+    return [text] if text else []
 
 
 # ------------------------------------------------------------------------------ sections
@@ -123,8 +174,11 @@ def _software() -> dict:
             "platform": platform.platform()}
 
 
-def _figures_for(runs: ExperimentRuns, analysis: ExperimentAnalysis, out: Path) -> list:
-    items = []
+def _figures_for(runs: ExperimentRuns, analysis: ExperimentAnalysis, out: Path,
+                 fails: _Failures, section: str) -> tuple[list, list]:
+    """The experiment's figures; one that fails is recorded and the others are kept.
+    Returns (figures, errors)."""
+    items, errors = [], []
     tag = {"stick": "2", "slip": "3-4"}.get(runs.exp.name, "paths")
     for what, fn in (
             ("prehistory", lambda: F.fig_prehistory(runs, out, tag)),
@@ -137,10 +191,12 @@ def _figures_for(runs: ExperimentRuns, analysis: ExperimentAnalysis, out: Path) 
             ("rate function", lambda: F.fig_rate_function(runs, out)),
             ("error budget", lambda: F.fig_budget(analysis, out))):
         _log(f"{runs.exp.name}: figure: {what}")
-        r = fn()
-        if r is not None:
+        r, err = fails.attempt(section, f"figure: {what}", fn, runs.exp.name)
+        if err is not None:
+            errors.append(f"figure '{what}': {err}")
+        elif r is not None:
             items.append(Figure(*r))
-    return items
+    return items, errors
 
 
 def _open_question_section(out: Path, opts: RunOptions) -> Section:
@@ -169,18 +225,34 @@ def _open_question_section(out: Path, opts: RunOptions) -> Section:
 
 
 def build_report(names, out: Path, opts: RunOptions, title: str) -> Path:
-    """Run and analyse the experiments ``names`` and write the report into ``out``."""
+    """Run and analyse the experiments ``names`` (names, TOML paths or Experiment objects) and
+    write the report into ``out``.  Raises :class:`ReportIncomplete` after writing the page
+    when some section failed."""
     t0 = time.perf_counter()
     out = Path(out)
+    # every experiment is validated before anything runs (bad input: nothing started yet)
+    experiments = [_load(n) for n in names]
     out.mkdir(parents=True, exist_ok=True)
-    all_runs, analyses = [], []
-    for name in names:
-        exp = load_experiment(name)
+    fails = _Failures()
+    all_runs, analyses, exp_sections = [], [], {}
+    for exp in experiments:
+        section = f"Experiment '{exp.name}'"
         _log(f"{exp.name}: circuit runs ({'quick' if opts.quick else 'full'} size; stored runs are reused)")
-        runs = run_experiment_runs(exp, opts, report_settings(exp))
+        runs, err = fails.attempt(section, "circuit runs", lambda exp=exp: run_experiment_runs(exp, opts),
+                                  exp.name)
+        if runs is None:
+            exp_sections[exp.name] = Section(f"{section}: failed", experiment_section_text(exp),
+                                             error=err)
+            continue
         _log(f"{exp.name}: comparing with theory")
-        analyses.append(analyse(runs, progress=_log))
+        analysis, err = fails.attempt(section, "comparison with theory",
+                                      lambda runs=runs: analyse(runs, progress=_log), exp.name)
+        if analysis is None:
+            exp_sections[exp.name] = Section(f"{section}: failed", experiment_section_text(exp),
+                                             error=err)
+            continue
         all_runs.append(runs)
+        analyses.append(analysis)
 
     _log("drawing figures")
     sections = []
@@ -193,13 +265,16 @@ def build_report(names, out: Path, opts: RunOptions, title: str) -> Path:
         ex = [c for c in a.comparisons if c.theory_kind == "exact"]
         summary_rows.append([a.runs.exp.name, s["comparisons"], s["abs_z_below_3"], s["within_budget"],
                              sum(abs(c.z) < 3 for c in ex), len(ex)])
-    sections.append(Section("Summary", [
-        f"{len(comps)} comparisons of circuit estimates with theory: {n_z} have |z| &lt; 3 and "
+    failed_names = [f["experiment"] for f in fails.items if f["experiment"]]
+    summary_text = [
+        f"{len(comps)} comparisons of circuit estimates with theory: {n_z} have |z| < 3 and "
         f"{n_ok} lie within their error budget (3 standard errors plus the independently "
         "estimated systematic errors). Theory 'exact' is the finite-noise Fokker-Planck solution "
         "of the ideal model (sgn friction, white noise); 'weak-noise' is the paper's saddle-point "
         "result, whose budget includes the finite-noise correction exact(gamma) - weak-noise."]
-        + _explain(comps),
+    if failed_names:
+        summary_text.append("Failed (see their sections): " + ", ".join(failed_names) + ".")
+    sections.append(Section("Summary", summary_text + _explain(comps),
         tables=[Table("Per experiment", ["experiment", "comparisons", "|z| < 3", "within budget",
                                          "exact: |z| < 3", "exact: total"], summary_rows)]))
 
@@ -212,21 +287,37 @@ def build_report(names, out: Path, opts: RunOptions, title: str) -> Path:
         "integrator node x (a VCCS into a capacitor) so that ngspice itself integrates the "
         "position for the work W = F (x(t+tau) - x(t)). Time is scaled by theta seconds per "
         "model time unit. The decks are in netlists/ (regenerate with `analogue netlist`)."]
-    sections.append(Section("The circuit and its component values", circuit_par,
-                            tables=[_mapping_table(r) for r in all_runs]))
+    tables = []
+    for r in all_runs:
+        t, _ = fails.attempt("The circuit and its component values", "component table",
+                             lambda r=r: _mapping_table(r), r.exp.name)
+        if t is not None:
+            tables.append(t)
+    sections.append(Section("The circuit and its component values", circuit_par, tables=tables))
 
-    figs = []
-    fig1_runs = [r for r in all_runs if r.exp.name in ("stick", "slip")] or all_runs
-    figs.append(Figure(*F.fig_deterministic(fig1_runs, out)))
-    sections.append(Section("Paper Fig. 1: deterministic motion", figures=figs))
-    for runs, a in zip(all_runs, analyses):
-        sections.append(Section(f"Experiment '{runs.exp.name}': {runs.exp.model.regime} regime",
-                                [runs.exp.description.replace("\n", " ")],
-                                figures=_figures_for(runs, a, out)))
+    if all_runs:
+        fig1_runs = [r for r in all_runs if r.exp.name in ("stick", "slip")] or all_runs
+        fig, err = fails.attempt("Paper Fig. 1: deterministic motion", "figure",
+                                 lambda: Figure(*F.fig_deterministic(fig1_runs, out)))
+        sections.append(Section("Paper Fig. 1: deterministic motion",
+                                figures=[fig] if fig is not None else [], error=err))
+    by_name = {r.exp.name: (r, a) for r, a in zip(all_runs, analyses)}
+    for exp in experiments:
+        if exp.name in exp_sections:
+            sections.append(exp_sections[exp.name])
+            continue
+        runs, a = by_name[exp.name]
+        title_ = f"Experiment '{exp.name}': {exp.model.regime} regime"
+        figs, errs = _figures_for(runs, a, out, fails, title_)
+        sections.append(Section(title_, experiment_section_text(exp), figures=figs,
+                                error="; ".join(errs) if errs else None))
 
-    if any(r.exp.name == "work" for r in all_runs) or len(names) > 1:
+    if any(r.exp.name == "work" for r in all_runs) or len(experiments) > 1:
         _log("the paper's open question: exact rate functions at several gamma")
-        sections.append(_open_question_section(out, opts))
+        title_ = "The paper's open question: is the jump of I(w) at w = 0 real?"
+        sec, err = fails.attempt(title_, "exact rate functions",
+                                 lambda: _open_question_section(out, opts))
+        sections.append(sec if sec is not None else Section(title_, error=err))
 
     sections.append(Section("All comparisons and their error budgets", [
         "Rows in red are deviations the budget does not explain. Budget terms (absolute, in "
@@ -244,7 +335,7 @@ def build_report(names, out: Path, opts: RunOptions, title: str) -> Path:
         "circuit_spec": {k: p["circuit_spec"] for k, p in provs.items()},
         "seeds": {k: p["seeds"] for k, p in provs.items()},
         "replicas": {k: p["replicas"] for k, p in provs.items()},
-        "ngspice_version": next(iter(provs.values()))["ngspice_version"],
+        "ngspice_version": next(iter(provs.values()))["ngspice_version"] if provs else None,
         "deck_hashes": {k: p["deck_hashes"] for k, p in provs.items()},
         "wall_time_s": wall,
         "quick": opts.quick,
@@ -259,7 +350,9 @@ def build_report(names, out: Path, opts: RunOptions, title: str) -> Path:
         tables=[Table("run provenance", ["item", "value"], prov_rows)]))
 
     metrics = {"comparisons": [c.as_dict() for c in comps], "provenance": provenance,
-               "summary": {"comparisons": len(comps), "abs_z_below_3": n_z, "within_budget": n_ok}}
+               "summary": {"comparisons": len(comps), "abs_z_below_3": n_z, "within_budget": n_ok,
+                           "failed_sections": len(fails.items)},
+               "failures": fails.items}
     validate_metrics(json.loads(json.dumps(metrics, default=str)))
     tmp = out / "metrics.json.tmp"
     tmp.write_text(json.dumps(metrics, indent=2, default=str))
@@ -271,6 +364,11 @@ def build_report(names, out: Path, opts: RunOptions, title: str) -> Path:
              "reduced equation dv/dt = -v/tau_m - Delta sgn(v) + a + xi/m (Baule, Touchette & "
              "Cohen).",
              "Every figure is also a PNG file in this directory; every number is in metrics.json."]
+    if fails.items:
+        intro.append(f"{len(fails.items)} section(s) failed; they are marked below with their "
+                     "errors, and listed in metrics.json under 'failures'.")
     index = write_page(out / "index.html", title, intro, sections)
     _log(f"report written: {index}")
+    if fails.items:
+        raise ReportIncomplete(index, fails.items)
     return index

@@ -11,23 +11,37 @@ The ``[report]`` table of ``circuits/<name>.toml`` (all keys optional)::
                                    # (v, t); a pair (v, t) means v0 = experiment.v0[0]
     prehistory_window = 0.15       # half-width of the target window (velocity units)
     work_paths = [[1.0, 5.0]]      # (w, tau): circuit windows of work rate ~ w vs eq. eqelk1
-    check_replicas = 64            # replicas re-run for the integration / bandwidth checks
+    check_replicas = 64            # replicas re-run with tight tolerances (integration check)
 
-``--quick`` divides replica counts by four (at least 32) and halves the stationary length.
+``--quick`` divides replica counts by four (at least 32; the integration check: at least 16)
+and halves the stationary length.
+
+The table is parsed with the rest of the file, by
+:func:`analogue.circuit.experiments.experiment_from_dict`, and travels with the experiment
+(``Experiment.report``); its cross-references to ``[experiment]`` (prehistory starting
+velocities and times, work windows) are checked there, before anything runs.
 """
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from ..circuit.experiments import Experiment
+if TYPE_CHECKING:  # the experiment module imports this one (Experiment.report)
+    from ..circuit.experiments import Experiment
 
-__all__ = ["RunOptions", "ReportSettings", "report_settings", "QUICK_DIVISOR"]
+__all__ = ["RunOptions", "ReportSettings", "report_settings", "report_settings_from_dict",
+           "QUICK_DIVISOR", "MIN_STATIONARY_REPLICAS", "MIN_CHECK_REPLICAS"]
 
 QUICK_DIVISOR = 4
 MIN_QUICK_REPLICAS = 32
+MIN_QUICK_CHECK_REPLICAS = 16
+# The stationary estimators' errors are delete-a-group jackknives over replicas with
+# g = min(32, n // 2) groups (report.observables): at least 4 groups.
+MIN_STATIONARY_REPLICAS = 8
+# The integration check's paired jackknife needs at least 2 groups of 2.
+MIN_CHECK_REPLICAS = 4
 
 
 @dataclass(frozen=True)
@@ -39,6 +53,7 @@ class RunOptions:
     store: Path | None = None
     quick: bool = False
     progress: bool = True
+    timeout: float | None = None  # seconds per deck; None: simulate's default
 
     def simulate_kwargs(self) -> dict:
         kw = {"workers": self.workers, "progress": self.progress}
@@ -46,6 +61,8 @@ class RunOptions:
             kw["scheduler"] = self.scheduler
         if self.store is not None:
             kw["store"] = self.store
+        if self.timeout is not None:
+            kw["timeout"] = self.timeout
         return kw
 
     def scaled(self, replicas: int) -> int:
@@ -66,17 +83,22 @@ class ReportSettings:
     check_replicas: int = 64
 
     def __post_init__(self):
-        for name in ("stationary_replicas", "check_replicas"):
+        for name, lo in (("stationary_replicas", MIN_STATIONARY_REPLICAS),
+                         ("check_replicas", MIN_CHECK_REPLICAS)):
             v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or not 2 <= v <= 100_000:
-                raise ValueError(f"report.{name} must be an integer in [2, 100000], got {v!r}")
+            if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= 100_000:
+                raise ValueError(f"report.{name} must be an integer in [{lo}, 100000], got {v!r}")
         for name in ("stationary_t_end", "stick_threshold", "prehistory_window"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not (math.isfinite(v) and v > 0):
                 raise ValueError(f"report.{name} must be a finite number > 0, got {v!r}")
         b = self.stationary_burn_in
-        if not (isinstance(b, (int, float)) and 0 <= b < self.stationary_t_end):
-            raise ValueError(f"report.stationary_burn_in must be in [0, stationary_t_end), got {b!r}")
+        # --quick halves the stationary length: the burn-in must leave data in both sizes
+        if not (isinstance(b, (int, float)) and not isinstance(b, bool) and math.isfinite(b)
+                and 0 <= b < self.stationary_t_end / 2):
+            raise ValueError(f"report.stationary_burn_in must be in [0, stationary_t_end/2) = "
+                             f"[0, {self.stationary_t_end / 2:g}) (--quick halves "
+                             f"stationary_t_end), got {b!r}")
         for name, sizes in (("prehistory", (2, 3)), ("work_paths", (2,))):
             items = getattr(self, name)
             ok = isinstance(items, (list, tuple)) and all(
@@ -97,23 +119,36 @@ class ReportSettings:
     def for_options(self, opts: RunOptions) -> "ReportSettings":
         if not opts.quick:
             return self
+        # the check costs 100x tighter tolerances: a quarter of it, like the replicas
         return replace(self, stationary_replicas=opts.scaled(self.stationary_replicas),
                        stationary_t_end=self.stationary_t_end / 2,
-                       check_replicas=max(16, self.check_replicas // 2))
+                       check_replicas=min(self.check_replicas, max(
+                           MIN_QUICK_CHECK_REPLICAS, self.check_replicas // QUICK_DIVISOR)))
+
+    def variants(self) -> tuple["ReportSettings", "ReportSettings"]:
+        """The full and the ``--quick`` settings (both are checked when a file is loaded)."""
+        return self, self.for_options(RunOptions(quick=True))
 
 
 _KEYS = set(ReportSettings.__dataclass_fields__)
 
 
-def report_settings(exp: Experiment) -> ReportSettings:
-    """Read the ``[report]`` table of the experiment's TOML file (defaults if absent)."""
-    data = {}
-    if exp.source is not None and Path(exp.source).exists():
-        with open(exp.source, "rb") as fh:
-            data = tomllib.load(fh).get("report", {})
+def report_settings_from_dict(data, where: str = "experiment") -> ReportSettings:
+    """Validate a ``[report]`` table (defaults for absent keys; unknown keys are errors)."""
+    if data is None:
+        data = {}
     if not isinstance(data, dict):
-        raise ValueError(f"{exp.name}: [report] must be a table")
+        raise ValueError(f"{where}: [report] must be a table, got {type(data).__name__}")
     unknown = sorted(set(data) - _KEYS)
     if unknown:
-        raise ValueError(f"{exp.name}: unknown key report.{unknown[0]} (allowed: {', '.join(sorted(_KEYS))})")
-    return ReportSettings(**data)
+        raise ValueError(f"{where}: unknown key report.{unknown[0]} (allowed: "
+                         f"{', '.join(sorted(_KEYS))})")
+    try:
+        return ReportSettings(**data)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{where}: {exc}") from None
+
+
+def report_settings(exp: "Experiment") -> ReportSettings:
+    """The experiment's ``[report]`` settings (parsed with the file when it was loaded)."""
+    return exp.report

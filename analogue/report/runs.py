@@ -3,11 +3,17 @@ so they are seeded, stored and resumable).
 
 - transition runs: ``replicas`` trajectories from each ``v0`` (f(v, t | v0), prehistory);
 - a stationary run: replicas started from p_s (stationary law, work, stick, transport);
-- noise-free runs (gamma -> 1e8) against ``Model.deterministic`` (paper Fig. 1);
-- integration checks: the first deck of the transition and stationary runs again with
-  100x tighter tolerances and a quarter of the step.  The held noise (``trrandom`` with
-  ``.options seed``) is the same realisation, so the path-by-path difference measures the
-  integration error directly, with no statistical noise.
+- a noise-free run against ``Model.deterministic`` (paper Fig. 1): the user's own circuit
+  (same component values, same parts) with the noise source's amplitude set to zero
+  (:meth:`~analogue.circuit.mapping.CircuitMapping.without_noise`), one replica per v0;
+- integration checks: the first decks of the transition and stationary runs again with
+  100x tighter tolerances and a quarter of the step, covering at least ``check_replicas``
+  replicas ([report]).  The held noise (``trrandom`` with ``.options seed``) is the same
+  realisation, so the path-by-path difference measures the integration error directly, with
+  no statistical noise.
+
+Every circuit built here was validated when the experiment was loaded
+(:meth:`~analogue.circuit.experiments.Experiment.planned_circuits`).
 """
 from __future__ import annotations
 
@@ -20,18 +26,31 @@ from ..circuit.experiments import Experiment
 from ..circuit.simulate import DEFAULT_REPLICAS_PER_DECK
 from ..ensemble import Ensemble
 from ..model import Model
-from .plan import ReportSettings, RunOptions, report_settings
+from .plan import ReportSettings, RunOptions
 
-__all__ = ["ExperimentRuns", "run_experiment_runs", "first_deck_size", "NOISE_FREE_GAMMA"]
-
-NOISE_FREE_GAMMA = 1e8
-NOISE_FREE_SPEC = {"smoothing": 0.5, "allow_bias": True}
+__all__ = ["ExperimentRuns", "run_experiment_runs", "first_deck_size", "check_plan"]
 
 
 def first_deck_size(replicas: int, per_deck: int = DEFAULT_REPLICAS_PER_DECK) -> int:
     """Replicas in deck 0 when :func:`analogue.simulate` splits ``replicas`` evenly."""
     n_decks = -(-replicas // per_deck)
     return replicas // n_decks + (1 if replicas % n_decks else 0)
+
+
+def check_plan(replicas: int, want: int, per_deck: int = DEFAULT_REPLICAS_PER_DECK) -> tuple[int, int]:
+    """``(decks, size)``: the integration check re-runs the first ``decks`` decks of a nominal
+    run of ``replicas`` replicas, each of ``size`` replicas, covering at least ``want`` replicas
+    where the nominal run has that many equal-sized leading decks.
+
+    :func:`analogue.simulate` splits ``replicas`` into ``n`` decks, the first ``replicas % n``
+    one replica larger; deck ``b``'s noise depends on ``(seed, b)`` and on its size, so a
+    re-run reproduces the nominal noise only deck for deck: ``simulate(replicas=decks * size,
+    replicas_per_deck=size)`` builds exactly the first ``decks`` nominal decks."""
+    n = -(-replicas // per_deck)
+    q, r = divmod(replicas, n)
+    size = q + (1 if r else 0)
+    equal = r if r else n           # leading decks of that size
+    return max(1, min(-(-want // size), equal)), size
 
 
 @dataclass
@@ -41,7 +60,7 @@ class ExperimentRuns:
     quick: bool
     transition: dict            # v0 -> Ensemble
     stationary: Ensemble
-    noise_free: Ensemble        # one replica per v0, gamma = NOISE_FREE_GAMMA
+    noise_free: Ensemble        # one replica per v0: the same circuit with the noise off
     check_transition: Ensemble  # tight-tolerance re-run of deck 0 of transition[v0[0]]
     check_stationary: Ensemble  # ... and of the stationary run
     wall_time: float = 0.0
@@ -73,11 +92,21 @@ class ExperimentRuns:
         }
 
 
-def _tight(spec, mapping):
-    """The same circuit, integrated 100x more tightly with a quarter of the step."""
-    max_step = spec.max_step if spec.max_step is not None else mapping.noise_dt
-    return spec.replace(reltol=spec.reltol / 100, abstol=spec.abstol / 100,
-                        vntol=mapping.vntol / 100, max_step=max_step / 4)
+def _noise_free_run(exp: Experiment, seed: int, kw: dict) -> Ensemble:
+    """One replica per v0 on the user's circuit with the noise off (paper Fig. 1)."""
+    from ..circuit.simulate import run_decks, time_grid
+    deck = exp.noise_free_deck(seed=seed)
+    times = time_grid(deck.t_end, exp.sample_dt)
+    v0 = np.asarray(exp.v0, dtype=float)
+    run_kw = {k: kw[k] for k in ("store", "workers", "scheduler", "progress", "timeout") if k in kw}
+    v, x, _, info = run_decks([deck], times, v0, **run_kw)
+    mapping = exp.noise_free_mapping()
+    meta = {"source": "circuit", "noise": "off", "model": exp.model.as_dict(),
+            "model_effective": mapping.model_effective.as_dict(), "seed": seed,
+            "deck_sha256": [deck.sha256], "t_end": deck.t_end, "sample_dt": exp.sample_dt,
+            **{k: info[k] for k in ("ngspice_version", "store_keys", "from_store", "wall_time")
+               if k in info}}
+    return Ensemble(times, v, x, meta)
 
 
 def _check_coupled(nominal: Ensemble, check: Ensemble, what: str) -> None:
@@ -95,14 +124,12 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
                         settings: ReportSettings | None = None) -> ExperimentRuns:
     from ..circuit.simulate import simulate
     from ..theory.exact import sample_stationary
-    from ..circuit.mapping import map_model
 
     t_start = time.perf_counter()
-    settings = (settings or report_settings(exp)).for_options(opts)
+    settings = (settings or exp.report).for_options(opts)
     kw = opts.simulate_kwargs()
     model, spec = exp.model, exp.spec
-    mapping = map_model(model, spec)
-    model_eff = mapping.model_effective
+    model_eff = exp.mapping().model_effective
     replicas = opts.scaled(exp.replicas)
     # Each run gets its own seed, derived from the experiment's: distinct experiments (whose
     # seeds differ) never share a noise realisation, so their comparisons are independent.
@@ -120,22 +147,20 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
     stationary = simulate(model, v0=v0_stat, t_end=settings.stationary_t_end, replicas=n_stat,
                           seed=seeds["stationary"], sample_dt=exp.sample_dt, circuit=spec, **kw)
 
-    v0s = np.asarray(exp.v0, dtype=float)
-    noise_free = simulate(model.replace(gamma=NOISE_FREE_GAMMA), v0=v0s,
-                          t_end=min(exp.t_end, 6.0 * model.tau_m), replicas=len(v0s),
-                          seed=seeds["noise_free"], sample_dt=exp.sample_dt,
-                          circuit=spec.replace(**NOISE_FREE_SPEC), **kw)
+    noise_free = _noise_free_run(exp, seeds["noise_free"], kw)
 
-    tight = _tight(spec, mapping)
+    tight = exp.check_spec()
     v00 = exp.v0[0]
-    n0 = first_deck_size(replicas)
-    check_transition = simulate(model, v0=v00, t_end=exp.t_end, replicas=n0, seed=base,
-                                sample_dt=exp.sample_dt, circuit=tight, **kw)
+    decks, size = check_plan(replicas, settings.check_replicas)
+    check_transition = simulate(model, v0=v00, t_end=exp.t_end, replicas=decks * size, seed=base,
+                                sample_dt=exp.sample_dt, circuit=tight, replicas_per_deck=size,
+                                **kw)
     _check_coupled(transition[v00], check_transition, "transition check")
-    n1 = first_deck_size(n_stat)
+    decks, size = check_plan(n_stat, settings.check_replicas)
+    n1 = decks * size
     check_stationary = simulate(model, v0=v0_stat[:n1], t_end=settings.stationary_t_end,
                                 replicas=n1, seed=seeds["stationary"], sample_dt=exp.sample_dt,
-                                circuit=tight, **kw)
+                                circuit=tight, replicas_per_deck=size, **kw)
     _check_coupled(stationary, check_stationary, "stationary check")
     return _indexed(ExperimentRuns(exp=exp, settings=settings, quick=opts.quick,
                                    transition=transition, stationary=stationary,

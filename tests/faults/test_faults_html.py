@@ -1,0 +1,92 @@
+"""Injection into the HTML report: every user text is escaped (jinja2 autoescape); a failing
+section is written as a failed section, finished sections are kept, metrics.json records it."""
+import json
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from analogue.report.html import Figure, Section, Table, write_page
+
+ROOT = Path(__file__).resolve().parents[2]
+PAYLOADS = ['<script>alert(1)</script>', '"><img src=x onerror=alert(1)>',
+            "</table><script>x()</script>", "<!--", "&lt;script&gt;", "{{ 7*7 }}{% raw %}"]
+
+
+def _png(tmp_path):
+    from analogue.plots.style import new_figure, save
+    fig, ax = new_figure()
+    ax.plot([0, 1], [0, 1])
+    return save(fig, tmp_path / "a.png")
+
+
+def _no_live_markup(html: str):
+    assert "<script" not in html.lower()
+    assert "<img src=x" not in html and "<!--" not in html
+
+
+@pytest.mark.parametrize("payload", PAYLOADS)
+def test_every_text_field_of_the_page_is_escaped(tmp_path, payload):
+    png = _png(tmp_path)
+    page = write_page(tmp_path / "index.html", f"T {payload}", [f"intro {payload}"],
+                      [Section(f"S {payload}", [f"p {payload}"], [Figure(png, f"cap {payload}")],
+                               [Table(f"t {payload}", [f"h {payload}", "n"],
+                                      [[f"c {payload}", 1.5]], collapsed=True)])])
+    html = page.read_text()
+    _no_live_markup(html)
+    from markupsafe import escape
+    for where in ("T", "intro", "S", "p", "cap", "t", "h", "c"):
+        assert f"{where} {escape(payload)}" in html, where
+
+
+def test_trusted_markup_is_explicit(tmp_path):
+    from markupsafe import Markup
+    page = write_page(tmp_path / "index.html", "T", [Markup("<b>kept</b>")],
+                      [Section("S", ["<b>escaped</b>"])])
+    html = page.read_text()
+    assert "<b>kept</b>" in html and "&lt;b&gt;escaped&lt;/b&gt;" in html
+
+
+def test_failed_section_shows_its_error_escaped(tmp_path):
+    page = write_page(tmp_path / "index.html", "T", [],
+                      [Section("Experiment 'x'", error="RuntimeError: <script>boom</script>")])
+    html = page.read_text()
+    assert "failed" in html.lower() and "&lt;script&gt;boom" in html and "<script" not in html
+
+
+def test_description_payload_is_escaped_in_the_experiment_section(tmp_path):
+    from analogue.report.pipeline import experiment_section_text
+    from analogue.circuit.experiments import experiment_from_dict
+    d = tomllib.loads((ROOT / "circuits" / "stick.toml").read_text())
+    d["description"] = "<script>alert('desc')</script>\nsecond line & more"
+    exp = experiment_from_dict(d)
+    page = write_page(tmp_path / "index.html", "T", [],
+                      [Section("E", experiment_section_text(exp))])
+    html = page.read_text()
+    assert "<script" not in html and "&lt;script&gt;alert(" in html
+
+
+def test_failing_experiments_keep_finished_work_and_are_recorded(tmp_path, monkeypatch):
+    """Every experiment fails: the page and metrics.json are still written, each failure is a
+    section with its error, and the exit status reflects it."""
+    import analogue.report.pipeline as P
+    from analogue.report.plan import RunOptions
+
+    def boom(exp, opts, settings=None):
+        raise RuntimeError(f"ngspice failed for {exp.name} <b>")
+    monkeypatch.setattr(P, "run_experiment_runs", boom)
+    monkeypatch.setattr(P, "_open_question_section",
+                        lambda out, opts: Section("The paper's open question", ["kept"]))
+    with pytest.raises(P.ReportIncomplete) as exc:
+        P.build_report(["stick", "slip"], tmp_path, RunOptions(quick=True, progress=False),
+                       title="t")
+    assert "stick" in str(exc.value) and "slip" in str(exc.value)
+    html = (tmp_path / "index.html").read_text()
+    assert html.count("failed") >= 2 and "ngspice failed for stick &lt;b&gt;" in html
+    assert "kept" in html  # the section that finished is there
+    metrics = json.loads((tmp_path / "metrics.json").read_text())
+    failed = {f["section"]: f for f in metrics["failures"]}
+    assert any("stick" in k for k in failed) and any("slip" in k for k in failed)
+    assert all("ngspice failed" in f["error"] for f in failed.values())
+    from analogue.report.metrics import validate_metrics
+    validate_metrics(metrics)
