@@ -129,11 +129,14 @@ class _Group(click.Group):
             return super().invoke(ctx)
         except (click.exceptions.Exit, click.ClickException, click.Abort):
             raise
-        except KeyboardInterrupt:
+        except KeyboardInterrupt as exc:
             if _debug():
                 raise
-            click.echo("analogue: interrupted", err=True)
-            ctx.exit(EXIT_INTERRUPTED)
+            # RunInterrupted (SIGINT/SIGTERM/SIGHUP during a run) says what was cleaned up and
+            # carries the shell's 128 + signal; a bare Ctrl-C is 130
+            msg = _one_line(exc)
+            click.echo(f"analogue: error: {msg}" if msg else "analogue: interrupted", err=True)
+            ctx.exit(getattr(exc, "exit_code", EXIT_INTERRUPTED))
         except Exception as exc:  # every failure reaching the CLI: one line
             if _debug():
                 raise
@@ -217,7 +220,7 @@ def _scheduler_option(ctx, param, value):
     return value.strip()
 
 
-def _store_option(ctx, param, value):
+def _store_dir_option(ctx, param, value):
     if value is None:
         return None
     if not value.strip():
@@ -244,7 +247,7 @@ def _run_options(f):
                      help="Local worker processes (default: all cores).")(f)
     f = click.option("--scheduler", default=None, metavar="ADDRESS", callback=_scheduler_option,
                      help="Dask scheduler address (tcp://host:port) to run the decks on.")(f)
-    f = click.option("--store", default=None, metavar="DIRECTORY", callback=_store_option,
+    f = click.option("--store", default=None, metavar="DIRECTORY", callback=_store_dir_option,
                      help="Run-store directory (default $ANALOGUE_STORE or ~/.cache/analogue/runs).")(f)
     f = click.option("--timeout", type=float, default=None, metavar="SECONDS",
                      callback=_timeout_option,
@@ -322,7 +325,7 @@ def figures(out):
               help="Report directory whose metrics.json goes to metrics.csv (default: "
                    "report/<experiment> or report/, if they hold this experiment).")
 @_run_options
-def export(experiment, out, report_dir, workers, scheduler, store, quick, progress):
+def export(experiment, out, report_dir, workers, scheduler, store, timeout, quick, progress):
     """Write every circuit run of EXPERIMENT as netCDF (<role>.nc) and metrics.csv.
 
     Runs come from the store (running what is missing); read them back with
@@ -333,7 +336,8 @@ def export(experiment, out, report_dir, workers, scheduler, store, quick, progre
     name = load_experiment(experiment).name
     out = out or Path("export") / name
     for p in export_experiment(experiment, out, report=report_dir, quick=quick, store=store,
-                               workers=workers, scheduler=scheduler, progress=progress):
+                               workers=workers, scheduler=scheduler, progress=progress,
+                               timeout=timeout):
         click.echo(f"wrote {p}")
 
 

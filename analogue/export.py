@@ -34,7 +34,8 @@ def _role_transition(v0: float) -> str:
 
 
 def load_runs(experiment, *, quick: bool = False, store=None, workers: int | None = None,
-              scheduler: str | None = None, progress: bool | None = False) -> dict[str, Ensemble]:
+              scheduler: str | None = None, progress: bool | None = False,
+              timeout: float | None = None) -> dict[str, Ensemble]:
     """The circuit runs of ``experiment`` (a name in ``circuits/`` or a TOML path), by role.
 
     Parameters
@@ -43,8 +44,8 @@ def load_runs(experiment, *, quick: bool = False, store=None, workers: int | Non
         E.g. ``"stick"``.
     quick : bool
         The ``--quick`` sizes of the report (fewer replicas).
-    store, workers, scheduler, progress
-        As for :func:`analogue.simulate`.
+    store, workers, scheduler, progress, timeout
+        As for :func:`analogue.simulate` (timeout: seconds per deck; None: its default).
 
     Returns
     -------
@@ -61,7 +62,7 @@ def load_runs(experiment, *, quick: bool = False, store=None, workers: int | Non
     exp = load_experiment(experiment)
     opts = RunOptions(workers=workers, scheduler=scheduler,
                       store=None if store is None else Path(store), quick=quick,
-                      progress=progress)
+                      progress=progress, timeout=timeout)
     runs = run_experiment_runs(exp, opts)
     out = {}
     for role, ens in runs_by_role(runs).items():
@@ -131,7 +132,7 @@ def _write_text(path: Path, text: str) -> None:
 # --------------------------------------------------------------------------------- export
 def export_experiment(experiment, out, *, report=None, quick: bool = False, store=None,
                       workers: int | None = None, scheduler: str | None = None,
-                      progress: bool | None = False) -> list[Path]:
+                      progress: bool | None = False, timeout: float | None = None) -> list[Path]:
     """Write every run of ``experiment`` as ``<out>/<role>.nc`` (read them with
     :func:`analogue.open_ensemble` or ``xarray.open_dataset``), plus ``<out>/metrics.csv``
     (one row per circuit-versus-theory comparison) when a report of the experiment exists
@@ -147,7 +148,7 @@ def export_experiment(experiment, out, *, report=None, quick: bool = False, stor
     if report is not None and not rows:
         raise ValueError(f"report: {metrics} has no comparisons of experiment {name!r}")
     runs = load_runs(experiment, quick=quick, store=store, workers=workers, scheduler=scheduler,
-                     progress=progress)
+                     progress=progress, timeout=timeout)
     out.mkdir(parents=True, exist_ok=True)
     paths = [write_netcdf(ens, out / f"{role}.nc") for role, ens in runs.items()]
     if rows:
