@@ -29,9 +29,11 @@ __all__ = [
     "Reference",
     "cite",
     "eq",
+    "equations_markdown",
     "eqs",
     "fig",
     "number_labels",
+    "references_html",
     "references_text",
 ]
 
@@ -295,3 +297,17 @@ def equations_markdown() -> str:
         lines.append(f"- **[{r.key}]** {r.authors}, \"{r.title}\", *{r.journal}* ({r.year}), "
                      f"[doi:{r.doi}]({r.url}){arxiv}. {r.used_for[:1].upper() + r.used_for[1:]}.")
     return "\n".join(lines) + "\n"
+
+
+def references_html() -> list[str]:
+    """The bibliography as HTML paragraphs for the report (text escaped, DOI and arXiv links)."""
+    import html
+    out = []
+    for r in REFERENCES:
+        arxiv = (f', <a href="https://arxiv.org/abs/{html.escape(r.arxiv)}">arXiv:'
+                 f'{html.escape(r.arxiv)}</a>') if r.arxiv else ""
+        out.append(f"[{html.escape(r.key)}] {html.escape(r.authors)}, "
+                   f"&ldquo;{html.escape(r.title)}&rdquo;, <i>{html.escape(r.journal)}</i> "
+                   f"({r.year}), <a href=\"{html.escape(r.url)}\">doi:{html.escape(r.doi)}</a>"
+                   f"{arxiv}. {html.escape(r.used_for[:1].upper() + r.used_for[1:])}.")
+    return out

@@ -79,3 +79,11 @@ def test_references_have_dois_and_the_required_works():
 def test_docs_table_is_up_to_date():
     doc = Path(__file__).resolve().parents[2] / "docs" / "equations.md"
     assert doc.read_text() == P.equations_markdown(), "regenerate docs/equations.md (see paper.py)"
+
+
+def test_references_html_is_escaped_and_linked():
+    items = P.references_html()
+    assert len(items) == len(P.REFERENCES)
+    for r, h in zip(P.REFERENCES, items):
+        assert f'href="https://doi.org/{r.doi}"' in h
+        assert "<script" not in h and "&" not in r.title or "&amp;" in h
