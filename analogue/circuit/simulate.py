@@ -319,10 +319,10 @@ def _check_scheduler(scheduler) -> None:
 
 
 def _executor(workers, scheduler, n_tasks):
-    """(executor, closer) for the local thread pool or a Dask cluster."""
+    """(executor, closer, client) for the local thread pool (client None) or a Dask cluster."""
     _check_scheduler(scheduler)
     if scheduler is None:
-        return cf.ThreadPoolExecutor(max_workers=max(1, min(workers, n_tasks))), None
+        return cf.ThreadPoolExecutor(max_workers=max(1, min(workers, n_tasks))), None, None
     if isinstance(scheduler, str):
         try:
             from distributed import Client
@@ -330,8 +330,18 @@ def _executor(workers, scheduler, n_tasks):
             raise RuntimeError("scheduler= needs Dask, which is not installed: "
                                "pip install 'analogue[dask]'") from None
         client = Client(scheduler)
-        return client.get_executor(), client.close
-    return scheduler.get_executor(), None
+        return client.get_executor(), client.close, client
+    return scheduler.get_executor(), None, scheduler
+
+
+def _stop_remote(client, group) -> None:
+    """Kill the ngspice processes of run ``group`` on every Dask worker (a cancelled Dask
+    future does not stop a task that already runs); best effort, never raises."""
+    try:
+        client.run(_ng.terminate_group, group, on_error="ignore")
+    except Exception as exc:  # noqa: BLE001 - the run is failing already; report, go on
+        log.warning("analogue: could not stop the ngspice processes on the Dask workers (%s)",
+                    " ".join(str(exc).split())[:200])
 
 
 def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, progress=None,
@@ -403,7 +413,7 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
         # SIGINT/SIGTERM/SIGHUP kill the ngspice groups and unwind through the finally
         # below (temporary directories removed, finished decks kept in the store).
         with _ng.interrupt_guard():
-            ex, closer = _executor(workers, scheduler, len(todo))
+            ex, closer, client = _executor(workers, scheduler, len(todo))
             bar = None
             if _progress_mode(progress, len(todo)) == "bar":
                 from tqdm.auto import tqdm
@@ -443,8 +453,10 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
                 if failed:
                     for f in futures:
                         f.cancel()
-                    if scheduler is None:
+                    if client is None:
                         _ng.terminate_group(group)  # our own ngspice processes still running
+                    else:
+                        _stop_remote(client, group)  # theirs, on the Dask workers
                 if bar is not None:
                     bar.close()
                 ex.shutdown(wait=True)
