@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 
-__all__ = ["finite", "positive", "nonnegative", "finite_array"]
+__all__ = ["ArgumentTypeError", "finite", "finite_array", "nonnegative", "positive"]
 
 
 def finite(name: str, value) -> float:
@@ -40,3 +40,8 @@ def finite_array(name: str, value) -> np.ndarray:
     if not np.all(np.isfinite(x)):
         raise ValueError(f"{name} must be finite")
     return x
+
+
+class ArgumentTypeError(TypeError, ValueError):
+    """An argument of the wrong type (a TypeError).  Also a ValueError, because these were
+    reported as ValueError before and callers may catch that."""

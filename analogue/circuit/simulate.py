@@ -20,6 +20,7 @@ import json
 import logging
 import math
 import os
+import re
 import sys
 import time as _time
 import uuid
@@ -28,6 +29,7 @@ from numbers import Integral, Real
 
 import numpy as np
 
+from ..checks import ArgumentTypeError
 from ..ensemble import Ensemble
 from ..model import Model
 from . import limits
@@ -62,9 +64,10 @@ _SEED_MAX = 2**31 - 1
 
 # ----------------------------------------------------------------------------- validation
 def _int(name, value, lo, hi=None) -> int:
+    """An int in [lo, hi]; bools, floats and strings are refused (TypeError), not coerced."""
     if isinstance(value, bool) or not isinstance(value, Integral):
-        raise ValueError(f"{name} must be an integer >= {lo}" + (f" and <= {hi}" if hi else "")
-                         + f", got {value!r}")
+        raise ArgumentTypeError(f"{name} must be an integer >= {lo}"
+                                + (f" and <= {hi}" if hi else "") + f", got {value!r}")
     value = int(value)
     if value < lo or (hi is not None and value > hi):
         raise ValueError(f"{name} must be an integer >= {lo}" + (f" and <= {hi}" if hi else "")
@@ -73,11 +76,24 @@ def _int(name, value, lo, hi=None) -> int:
 
 
 def _real(name, value, *, positive=True) -> float:
-    if isinstance(value, bool) or not isinstance(value, Real) or not math.isfinite(float(value)):
+    """A finite float (> 0 if ``positive``); bools and strings are refused (TypeError)."""
+    if isinstance(value, bool) or not isinstance(value, Real):
+        raise ArgumentTypeError(f"{name} must be a finite real number > 0, got {value!r}")
+    try:
+        value = float(value)
+    except OverflowError:  # an int beyond the float range
+        value = math.inf
+    if not math.isfinite(value) or (positive and not value > 0):
         raise ValueError(f"{name} must be a finite real number > 0, got {value!r}")
-    value = float(value)
-    if positive and not value > 0:
-        raise ValueError(f"{name} must be a finite real number > 0, got {value!r}")
+    return value
+
+
+def _bool(name, value, *, allow_none=False) -> bool | None:
+    if value is None and allow_none:
+        return None
+    if not isinstance(value, bool):
+        raise ArgumentTypeError(f"{name} must be True or False"
+                                + (" or None (auto)" if allow_none else "") + f", got {value!r}")
     return value
 
 
@@ -302,20 +318,36 @@ def _progress_mode(progress, n_run: int) -> str | None:
     for but stderr is a file or pipe: logs stay readable) or None."""
     if progress is None:
         return "bar" if n_run > 1 and sys.stderr.isatty() else None
-    if not isinstance(progress, bool):
-        raise ValueError(f"progress must be True, False or None (auto), got {progress!r}")
-    if not progress:
+    if not _bool("progress", progress):
         return None
     return "bar" if sys.stderr.isatty() else "line"
 
 
+_ADDRESS = re.compile(r"(tcp|tls|ws|wss|ucx)://(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9._-]+)"
+                      r"(?::(\d{1,5}))?/?")
+
+
 def _check_scheduler(scheduler) -> None:
-    ok = (scheduler is None or hasattr(scheduler, "get_executor")
-          or (isinstance(scheduler, str)
-              and scheduler.startswith(("tcp://", "tls://", "inproc://", "ucx://"))))
-    if not ok:
+    """None, an object with ``get_executor`` (a distributed.Client), or a well-formed Dask
+    address: tcp/tls/ws/wss://host[:port] (port 1-65535), inproc://..., ucx:// only when a
+    UCX backend is installed."""
+    if scheduler is None or hasattr(scheduler, "get_executor"):
+        return
+    if not isinstance(scheduler, str):
+        raise ArgumentTypeError(f"scheduler must be a Dask scheduler address such as "
+                                f"'tcp://host:8786' or a distributed.Client, got {scheduler!r}")
+    if scheduler.startswith("inproc://"):
+        return
+    m = _ADDRESS.fullmatch(scheduler)
+    port_ok = m is not None and (m.group(3) is None or 0 < int(m.group(3)) < 65536)
+    if not port_ok:
         raise ValueError(f"scheduler must be a Dask scheduler address such as 'tcp://host:8786' "
-                         f"or a distributed.Client, got {scheduler!r}")
+                         f"(host, then a port 1-65535), got {scheduler!r}")
+    if m.group(1) == "ucx":
+        import importlib.util
+        if not any(importlib.util.find_spec(n) for n in ("distributed_ucxx", "ucp")):
+            raise ValueError(f"scheduler {scheduler!r}: ucx:// needs a UCX backend "
+                             f"(distributed-ucxx), which is not installed; use tcp://host:port")
 
 
 def _executor(workers, scheduler, n_tasks):
@@ -495,8 +527,8 @@ def _spec(circuit):
             return CircuitSpec(**circuit)
         except TypeError as exc:
             raise ValueError(f"circuit: {exc}") from None
-    raise ValueError(f"circuit must be None, a CircuitSpec or a dict of CircuitSpec fields, "
-                     f"got {type(circuit).__name__}")
+    raise ArgumentTypeError(f"circuit must be None, a CircuitSpec or a dict of CircuitSpec "
+                            f"fields, got {type(circuit).__name__}")
 
 
 def _default_sample_dt(model: Model, t_end: float) -> float:
@@ -600,7 +632,7 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
         raise ValueError(f"unknown keyword argument(s) {', '.join(map(repr, unknown))} for "
                          f"simulate; allowed extras: {', '.join(_EXTRA)}")
     if not isinstance(model, Model):
-        raise ValueError(f"model must be an analogue.Model, got {type(model).__name__}")
+        raise ArgumentTypeError(f"model must be an analogue.Model, got {type(model).__name__}")
     replicas = _int("replicas", replicas, 1)
     seed = _int("seed", seed, 0)
     t_end = _real("t_end", t_end)
@@ -615,23 +647,20 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
     per_deck = _int("replicas_per_deck", extra.get("replicas_per_deck",
                                                    DEFAULT_REPLICAS_PER_DECK), 1)
     timeout = _real("timeout", extra.get("timeout", DEFAULT_TIMEOUT))
-    progress = extra.get("progress")
-    if progress is not None and not isinstance(progress, bool):
-        raise ValueError(f"progress must be True, False or None (auto), got {progress!r}")
+    progress = _bool("progress", extra.get("progress"), allow_none=True)
     label = extra.get("label")
     if label is None:
         where = v0 if isinstance(v0, str) else (f"{float(v0):g}" if np.ndim(v0) == 0
                                                 else "given")
         label = f"{model.regime}, gamma={model.gamma:g}, v0={where}, seed {seed}"
-    elif not isinstance(label, str) or not label.isprintable() or len(label) > 100:
+    elif not isinstance(label, str):
+        raise ArgumentTypeError(f"label must be a printable str of at most 100 characters, "
+                                f"got {label!r}")
+    elif not label.isprintable() or len(label) > 100:
         raise ValueError(f"label must be a printable str of at most 100 characters, got "
                          f"{label!r}")
-    return_noise = extra.get("return_noise", False)
-    if not isinstance(return_noise, bool):
-        raise ValueError(f"return_noise must be True or False, got {return_noise!r}")
-    return_records = extra.get("return_records", False)
-    if not isinstance(return_records, bool):
-        raise ValueError(f"return_records must be True or False, got {return_records!r}")
+    return_noise = _bool("return_noise", extra.get("return_noise", False))
+    return_records = _bool("return_records", extra.get("return_records", False))
     if return_noise and return_records:
         raise ValueError("return_noise and return_records cannot both be True")
     open_store(extra.get("store"))  # validates the store argument early

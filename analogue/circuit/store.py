@@ -50,6 +50,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..checks import ArgumentTypeError
+
 __all__ = ["SCHEMA_VERSION", "TMP_MAX_AGE", "RunStore", "StoreEntry", "batch_key",
            "default_store_path", "open_store"]
 
@@ -434,5 +436,5 @@ def open_store(store=None):
         if not str(store).strip():
             raise ValueError("store must be a directory path, not an empty string")
         return RunStore(store)
-    raise ValueError(f"store must be a directory path, a RunStore, None (default location) or "
-                     f"False (disabled), got {store!r}")
+    raise ArgumentTypeError(f"store must be a directory path, a RunStore, None (default "
+                            f"location) or False (disabled), got {store!r}")

@@ -105,3 +105,38 @@ def test_within_the_limits_it_runs(monkeypatch, tmp_path):
 def test_limits_are_reported():
     mem, why = limits.memory_limit()
     assert mem > 0 and "memory" in why
+
+
+# ------------------------------------------------------------- wrong types, odd values
+@pytest.mark.parametrize("change,name", [
+    ({"replicas": 2.0}, "replicas"), ({"replicas": True}, "replicas"),
+    ({"replicas": "2"}, "replicas"), ({"seed": 1.5}, "seed"), ({"seed": False}, "seed"),
+    ({"t_end": "1"}, "t_end"), ({"t_end": True}, "t_end"), ({"sample_dt": "0.1"}, "sample_dt"),
+    ({"workers": 1.0}, "workers"), ({"replicas_per_deck": "4"}, "replicas_per_deck"),
+    ({"timeout": "10"}, "timeout"), ({"timeout": True}, "timeout"),
+    ({"progress": 1}, "progress"), ({"return_noise": "yes"}, "return_noise"),
+    ({"store": 3.5}, "store"), ({"circuit": 3}, "circuit"), ({"scheduler": 8786}, "scheduler"),
+])
+def test_wrong_types_are_type_errors(no_ngspice, change, name):
+    kw = {**BASE, "t_end": 1.0, "replicas": 2, "store": False, **change}
+    with pytest.raises(TypeError, match=name) as exc:
+        analogue.simulate(STICK, **kw)
+    assert isinstance(exc.value, ValueError)  # what these raised before: callers keep working
+    with pytest.raises(TypeError, match="model"):
+        analogue.simulate({"tau_m": 1.0}, **{**BASE, "t_end": 1.0, "replicas": 2})
+
+
+@pytest.mark.parametrize("change,name", [
+    ({"t_end": 10**400}, "t_end"), ({"t_end": float("inf")}, "t_end"),
+    ({"timeout": float("nan")}, "timeout"), ({"sample_dt": 10**400}, "sample_dt"),
+    ({"scheduler": "tcp://host:notaport"}, "scheduler"),
+    ({"scheduler": "tcp://h:99999"}, "scheduler"), ({"scheduler": "ucx://host:8786"}, "scheduler"),
+    ({"scheduler": "http://host:8786"}, "scheduler"),
+    ({"store": ""}, "store"),
+])
+def test_odd_values_are_value_errors(no_ngspice, change, name):
+    kw = {**BASE, "t_end": 1.0, "replicas": 2, "store": False, **change}
+    with pytest.raises(ValueError, match=name) as exc:
+        analogue.simulate(STICK, **kw)
+    assert not isinstance(exc.value, TypeError)
+    assert "\n" not in str(exc.value)
