@@ -29,9 +29,10 @@ __all__ = [
     "Reference",
     "cite",
     "eq",
-    "equations_markdown",
     "eqs",
+    "equations_markdown",
     "fig",
+    "label_citations",
     "number_labels",
     "references_html",
     "references_text",
@@ -311,3 +312,21 @@ def references_html() -> list[str]:
                    f"({r.year}), <a href=\"{html.escape(r.url)}\">doi:{html.escape(r.doi)}</a>"
                    f"{arxiv}. {html.escape(r.used_for[:1].upper() + r.used_for[1:])}.")
     return out
+
+
+_LABEL_RE = ("(?:" + "|".join(re.escape(x) for x in sorted(LABELS, key=len, reverse=True))
+             + r")(?![\w+])")
+# a citation head followed (possibly after "(", across a line break) by a label
+_CITATION = re.compile(r"\b(?:[Ee]qs?\.|[Ee]quations?|[Ff]igs?\.|[Ff]igures?)\s*\(?\s*"
+                       + _LABEL_RE)
+# labels that cannot be ordinary words (underscores or digits), wherever they stand
+_DISTINCT = re.compile(r"(?<![\w.\"'`])(?:" + "|".join(
+    re.escape(x) for x in sorted(LABELS, key=len, reverse=True)
+    if re.search(r"[_\d]", x) and x not in ("EL1", "EL2")) + r")(?![\w+])")
+
+
+def label_citations(text: str) -> list[str]:
+    """LaTeX labels of the paper cited in ``text`` ("eq. det_eq", "Fig. Fig_dist", a bare
+    "p_stat"): what a reader could not look up.  Empty when ``text`` cites numbers only."""
+    return ([m.group(0) for m in _CITATION.finditer(text)]
+            + [m.group(0) for m in _DISTINCT.finditer(text)])
