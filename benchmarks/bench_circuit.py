@@ -12,6 +12,20 @@ default): ngspice's cost scales with the number of held-noise breakpoints.  Conf
 
 Usage:  .venv/bin/python benchmarks/bench_circuit.py [--replicas 32] [--t-end 40] [--repeat 3]
         [--quick]
+        .venv/bin/python benchmarks/bench_circuit.py --ceiling [--replicas 64] [--t-end 20]
+        [--dask] [--model stick|slip]
+
+``--ceiling`` (issue 10) runs the same job, side by side, as
+* the fixed ceiling: two ``ngspice -b`` processes at once on 16-replica decks at the
+  tolerances every deck had before issue 10 (reltol 1e-4, trtol 7, gear), nothing else;
+* ``simulate`` at those tolerances (16/deck, 2 workers): the runner's own overhead;
+* ``simulate`` with the tolerances and deck size chosen by measurement (the calibration
+  timed separately: it is paid once per model and kept in the run store), and the chosen
+  tolerances' measured integration error in statistical errors;
+* with ``--dask``: the chosen configuration on a ``distributed.LocalCluster`` of 2 single-
+  threaded worker processes against 2 local workers (cluster start-up and a warm-up task
+  excluded: steady state).
+Every line prints its throughput as a ratio to the ceiling, with the load average.
 Set NGSPICE_LIBRARY_PATH if libngspice is not found (default tried:
 /usr/lib/x86_64-linux-gnu/libngspice.so.0).
 """
@@ -86,7 +100,117 @@ def bench_pyspice(mapping, *, trajectories, t_end, sample_dt):
     return time.perf_counter() - t0
 
 
+def _load() -> str:
+    return "load %.1f" % os.getloadavg()[0]
+
+
+def _raw_pair(texts) -> float:
+    """Wall time of running ``texts`` (deck texts) as ``ngspice -b`` processes, two at a
+    time (the fixed ceiling of issue 10)."""
+    exe = find_ngspice()
+    with tempfile.TemporaryDirectory() as tmp:
+        for i, t in enumerate(texts):
+            Path(tmp, f"d{i}.cir").write_text(t)
+        t0 = time.perf_counter()
+        running = []
+        for i in range(len(texts)):
+            running.append(subprocess.Popen([exe, "-b", "-r", f"d{i}.raw", f"d{i}.cir"], cwd=tmp,
+                                            stdout=subprocess.DEVNULL,
+                                            stderr=subprocess.DEVNULL))
+            if len(running) == 2:
+                running.pop(0).wait()
+        for p in running:
+            p.wait()
+        return time.perf_counter() - t0
+
+
+def ceiling(argv=None):
+    from analogue.circuit.deck_size import choose_deck_size
+    from analogue.circuit.mapping import CircuitSpec
+    from analogue.circuit.simulate import deck_seeds
+    from analogue.circuit.tolerances import FIXED, choose_tolerances
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--ceiling", action="store_true")
+    ap.add_argument("--replicas", type=int, default=64)
+    ap.add_argument("--t-end", type=float, default=20.0)
+    ap.add_argument("--repeat", type=int, default=2)
+    ap.add_argument("--dask", action="store_true")
+    ap.add_argument("--model", choices=("stick", "slip"), default="stick")
+    ap.add_argument("--store", default=os.environ.get("ANALOGUE_STORE", "/tmp/bench-circuit-store"))
+    args = ap.parse_args(argv)
+    R, T, rep = args.replicas, args.t_end, max(1, args.repeat)
+    a = 0.2 if args.model == "stick" else 1.2
+    model = Model(tau_m=1.0, delta=0.7, a=a, gamma=10.0)
+    fixed = CircuitSpec(**FIXED.as_dict())
+    mapping = map_model(model, fixed)
+    holds = R * T / mapping.noise_dt
+    print(f"{args.model}: {model.as_dict()}, {R} replicas x t_end {T:g} = {holds:.0f} "
+          f"replica-holds; ngspice {analogue.circuit.ngspice.ngspice_version()}; {_load()}")
+
+    # 1. the ceiling: 16-replica decks of the same job, two ngspice -b at a time
+    n_dec = -(-R // 16)
+    seeds = deck_seeds(1, n_dec)
+    texts = [build_deck(mapping, replicas=16, v0=np.full(16, 0.5), t_end=T, seed=seeds[b],
+                        sample_dt=mapping.noise_dt).text for b in range(n_dec)]
+    rows = []
+
+    def sim(spec, per_deck, **kw):
+        t0 = time.perf_counter()
+        e = analogue.simulate(model, v0=0.5, t_end=T, replicas=R, seed=1, store=False,
+                              progress=False, circuit=spec, replicas_per_deck=per_deck, **kw)
+        return time.perf_counter() - t0, e
+
+    # 2. the calibration (once per model; kept in the store)
+    t0 = time.perf_counter()
+    tol = choose_tolerances(model, CircuitSpec(), replicas=R, t_end=T, store=args.store,
+                            workers=2)
+    chosen = CircuitSpec(**tol.tolerances.as_dict())
+    deck = choose_deck_size(model, chosen, replicas=R, t_end=T, workers=2, store=args.store)
+    t_cal = time.perf_counter() - t0
+    print(f"chosen: {tol.tolerances.label()} (criterion met: {tol.criterion_met}, worst "
+          f"{tol.worst_observable} at {tol.worst_ratio:.3f} statistical errors), "
+          f"{deck.replicas_per_deck} replicas/deck; calibration {t_cal:.1f} s "
+          f"(0 s once stored); {_load()}")
+    for k in range(rep):
+        rows.append(("ceiling: 2 x ngspice -b, 16/deck, reltol 1e-4 gear", _raw_pair(texts),
+                     _load()))
+        rows.append(("simulate, 16/deck, reltol 1e-4 gear, 2 workers",
+                     sim(fixed, 16, workers=2)[0], _load()))
+        rows.append((f"simulate, chosen ({tol.tolerances.label()}, {deck.replicas_per_deck}/deck),"
+                     " 2 workers", sim(chosen, deck.replicas_per_deck, workers=2)[0], _load()))
+    if args.dask:
+        from distributed import Client, LocalCluster
+        with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                          dashboard_address=None) as cluster, Client(cluster) as client:
+            # warm-up: imports and ngspice's first start on each worker, excluded
+            analogue.simulate(model, v0=0.5, t_end=0.1, replicas=2, seed=99, store=False,
+                              progress=False, circuit=chosen, replicas_per_deck=1,
+                              scheduler=client)
+            for k in range(rep):
+                rows.append((f"simulate, chosen, {deck.replicas_per_deck}/deck, 2 local workers",
+                             sim(chosen, deck.replicas_per_deck, workers=2)[0], _load()))
+                rows.append((f"simulate, chosen, {deck.replicas_per_deck}/deck, Dask LocalCluster"
+                             " 2x1", sim(chosen, deck.replicas_per_deck, scheduler=client)[0],
+                             _load()))
+    best = {}
+    for label, wall, load in rows:
+        best.setdefault(label, []).append((wall, load))
+    ceil = min(w for w, _ in best[rows[0][0]])
+    print(f"\n{'configuration':72s} {'wall s (each run, load)':>34s} {'us/rep-hold':>11s} "
+          f"{'x ceiling':>9s}")
+    for label, runs in best.items():
+        w = min(x for x, _ in runs)
+        each = ", ".join(f"{x:.2f} ({ld})" for x, ld in runs)
+        print(f"{label:72s} {each:>34s} {1e6 * w / holds:11.1f} {ceil / w:9.2f}")
+    if args.dask:
+        lw = min(x for x, _ in best[next(k for k in best if "local workers" in k)])
+        dw = min(x for x, _ in best[next(k for k in best if "Dask" in k)])
+        print(f"Dask efficiency (local / Dask wall, fastest of {rep}): {lw / dw:.2f}")
+
+
 def main(argv=None):
+    if "--ceiling" in (argv if argv is not None else sys.argv[1:]):
+        return ceiling(argv)
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--replicas", type=int, default=32)
     ap.add_argument("--t-end", type=float, default=40.0, help="model time units (tau_m = 1)")

@@ -63,7 +63,7 @@ from .. import model as _model_module
 from ..model import Model
 from ..report.plan import ReportSettings, report_settings_from_dict
 from . import validation as val
-from .mapping import CircuitMapping, CircuitSpec, map_model
+from .mapping import FIXED_TRTOL, CircuitMapping, CircuitSpec, map_model
 from .netlist import Deck, build_deck
 
 __all__ = ["Experiment", "load_experiment", "experiment_from_dict", "regenerate_netlists",
@@ -143,14 +143,17 @@ class Experiment:
         """The user's own circuit (same components, same parts) with the noise source off."""
         return self.mapping().without_noise()
 
-    def check_spec(self) -> CircuitSpec:
+    def check_spec(self, spec: CircuitSpec | None = None) -> CircuitSpec:
         """The integration check's circuit: the same, 100x tighter tolerances, a quarter of the
         step (the held noise is the same realisation, so the path-by-path difference measures
-        the integration error)."""
-        m = self.mapping()
-        max_step = self.spec.max_step if self.spec.max_step is not None else m.noise_dt
-        return self.spec.replace(reltol=self.spec.reltol / 100, abstol=self.spec.abstol / 100,
-                                 vntol=m.vntol / 100, max_step=max_step / 4)
+        the integration error).  ``spec``: the nominal run's circuit with its tolerances as
+        chosen (analogue.circuit.tolerances); default this experiment's, unset tolerances at
+        their fixed values.  The check integrates with gear at ngspice's default trtol."""
+        spec = self.spec if spec is None else spec
+        m = map_model(self.model, spec)
+        max_step = spec.max_step if spec.max_step is not None else m.noise_dt
+        return spec.replace(reltol=m.reltol / 100, abstol=spec.abstol / 100, trtol=FIXED_TRTOL,
+                            method="gear", vntol=m.vntol / 100, max_step=max_step / 4)
 
     def planned_circuits(self) -> dict:
         """Every circuit a run of this experiment builds: ``{"nominal", "noise_free",

@@ -93,6 +93,12 @@ COULOMB_KINDS = ("diode-bridge", "behavioural", "behavioural-sgn")
 CUBIC_KINDS = ("behavioural", "diode-network")
 DIODES = ("ideal", *PARTS)
 METHODS = ("gear", "trap")
+# Tolerances a deck gets when the spec leaves them unset and nothing chose them by measurement
+# (analogue.circuit.tolerances): the values every deck had before issue 10.  ngspice's own
+# trtol default is 7.
+FIXED_RELTOL = 1e-4
+FIXED_TRTOL = 7.0
+FIXED_METHOD = "gear"
 # A realistic quality factor of a ferrite pot-core inductor (datasheets give 100-500 in the
 # 1-100 kHz range, less below; kHz power chokes 10-50): R_s = omega_0 L / Q.
 DEFAULT_INDUCTOR_Q = 100.0
@@ -129,15 +135,23 @@ class CircuitSpec:
         so that the part's own width ``2 N V_T + RS I0`` equals the requested smoothing.
     noise_dt : float or None
         Hold time of the noise in model time units; None: ``tau_m/100``.
-    reltol, abstol : float
-        ngspice tolerances (abstol in A).
+    reltol : float or None
+        ngspice relative tolerance; None: chosen by measured accuracy when simulating
+        (:mod:`analogue.circuit.tolerances`), else :data:`FIXED_RELTOL`.  A value given here
+        is used as is (the user's override).
+    trtol : float or None
+        ngspice truncation-error overestimation factor (>= 1; ngspice's default 7); None as
+        for ``reltol``.
+    abstol : float
+        ngspice current tolerance (A).
     vntol : float or None
         ngspice voltage tolerance (V); None: ``min(1e-7 V, 1e-3 eps_V)`` so that it stays far
         below the width of the friction law.
     max_step : float or None
         Largest solver step in model time units; None: ``noise_dt``.
-    method : "gear" | "trap"
-        Integration method (gear does not ring at the steps of the held noise).
+    method : "gear" | "trap" | None
+        Integration method (gear does not ring at the steps of the held noise); None as for
+        ``reltol``.
     bias_tolerance : float
         Largest accepted estimated bias (relative) from smoothing and noise hold time.
     allow_bias : bool
@@ -167,11 +181,11 @@ class CircuitSpec:
     capacitance: float = 100e-9
     volts_per_velocity: float | None = None
     noise_dt: float | None = None
-    reltol: float = 1e-4
+    reltol: float | None = None
     abstol: float = 1e-12
     vntol: float | None = None
     max_step: float | None = None
-    method: str = "gear"
+    method: str | None = None
     bias_tolerance: float = 0.05
     allow_bias: bool = False
     cubic_element: str = "behavioural"
@@ -180,22 +194,33 @@ class CircuitSpec:
     inductor_q: float = DEFAULT_INDUCTOR_Q
     inductor_resistance: float | None = None
     shot_width: float | None = None
+    trtol: float | None = None
 
     def __post_init__(self):
         if self.coulomb not in COULOMB_KINDS:
             raise ValueError(f"coulomb must be one of {COULOMB_KINDS}, got {self.coulomb!r}")
         if self.diode not in DIODES:
             raise ValueError(f"diode must be one of {DIODES}, got {self.diode!r}")
-        if self.method not in METHODS:
-            raise ValueError(f"method must be one of {METHODS}, got {self.method!r}")
+        if self.method is not None and self.method not in METHODS:
+            raise ValueError(f"method must be one of {METHODS} or None (chosen by measurement), "
+                             f"got {self.method!r}")
         s = val.positive(self.smoothing, "smoothing")
         if not s < 1:
             raise ValueError(f"smoothing must be in (0, 1) (fraction of sqrt(tau_m/gamma)), got {s!r}")
         object.__setattr__(self, "smoothing", s)
-        for name in ("time_scale", "capacitance", "reltol", "abstol", "bias_tolerance"):
+        for name in ("time_scale", "capacitance", "abstol", "bias_tolerance"):
             object.__setattr__(self, name, val.positive(getattr(self, name), name))
-        if not self.reltol < 0.1:
-            raise ValueError(f"reltol must be in (0, 0.1), got {self.reltol!r}")
+        if self.reltol is not None:
+            object.__setattr__(self, "reltol", val.positive(self.reltol, "reltol"))
+            if not self.reltol < 0.1:
+                raise ValueError(f"reltol must be in (0, 0.1) or None (chosen by measurement), "
+                                 f"got {self.reltol!r}")
+        if self.trtol is not None:
+            t = val.positive(self.trtol, "trtol")
+            if not 1.0 <= t <= 100.0:
+                raise ValueError(f"trtol must be in [1, 100] or None (chosen by measurement), "
+                                 f"got {self.trtol!r}")
+            object.__setattr__(self, "trtol", t)
         for name in ("volts_per_velocity", "noise_dt", "max_step", "vntol"):
             if getattr(self, name) is not None:
                 object.__setattr__(self, name, val.positive(getattr(self, name), name))
@@ -220,6 +245,11 @@ class CircuitSpec:
 
     def as_dict(self) -> dict:
         return {k: getattr(self, k) for k in self.__dataclass_fields__}
+
+    @property
+    def unset_tolerances(self) -> tuple[str, ...]:
+        """The integration settings left to measurement (None): of reltol, trtol, method."""
+        return tuple(k for k in ("reltol", "trtol", "method") if getattr(self, k) is None)
 
 
 @dataclass(frozen=True)
@@ -318,6 +348,21 @@ class CircuitMapping:
         return min(1e-7, 1e-3 * self.eps_volts) if self.eps_volts > 0 else 1e-7
 
     @property
+    def reltol(self) -> float:
+        """ngspice reltol of the deck: the spec's, or :data:`FIXED_RELTOL`."""
+        return self.spec.reltol if self.spec.reltol is not None else FIXED_RELTOL
+
+    @property
+    def trtol(self) -> float:
+        """ngspice trtol of the deck: the spec's, or :data:`FIXED_TRTOL`."""
+        return self.spec.trtol if self.spec.trtol is not None else FIXED_TRTOL
+
+    @property
+    def method(self) -> str:
+        """ngspice integration method of the deck: the spec's, or :data:`FIXED_METHOD`."""
+        return self.spec.method if self.spec.method is not None else FIXED_METHOD
+
+    @property
     def noise_dt(self) -> float:
         """Hold time of the noise in model time units."""
         return self.noise_ts / self.theta
@@ -407,6 +452,8 @@ class CircuitMapping:
             ("g_x", self.g_x, "S", "position integrator transconductance"),
             ("V_swing", self.voltage_swing, "V", "estimated largest |V(v)|"),
             ("vntol", self.vntol, "V", "ngspice voltage tolerance"),
+            ("reltol", self.reltol, "1", f"ngspice relative tolerance ({self.method} integration)"),
+            ("trtol", self.trtol, "1", "ngspice truncation-error overestimation factor"),
         ]
         if self.emission is not None:
             rows.insert(10, ("N", self.emission, "1", "diode emission coefficient"))

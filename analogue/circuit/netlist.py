@@ -298,8 +298,9 @@ def build_deck(mapping: CircuitMapping, *, replicas: int, v0, t_end: float, seed
                 ic.append(f"v(xr{i}.xcubic.a{j})={_n(volts[i] - r * ip)} "
                           f"v(xr{i}.xcubic.c{j})={_n(volts[i] + r * im)}")
     lines.append(".ic " + " ".join(ic))
-    lines.append(f".options seed={seed} reltol={_n(spec.reltol)} abstol={_n(spec.abstol)} "
-                 f"vntol={_n(mapping.vntol)} method={spec.method} temp=27 tnom=27")
+    lines.append(f".options seed={seed} reltol={_n(mapping.reltol)} abstol={_n(spec.abstol)} "
+                 f"vntol={_n(mapping.vntol)} trtol={_n(mapping.trtol)} method={mapping.method} "
+                 f"temp=27 tnom=27")
     vectors = {"v": [f"v(v{i})" for i in range(replicas)],
                "x": [f"v(x{i})" for i in range(replicas)],
                "noise": [f"v(nz{i})" for i in range(replicas)] if mapping.gaussian_noise else []}

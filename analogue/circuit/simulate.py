@@ -34,6 +34,7 @@ from ..ensemble import Ensemble
 from ..model import Model
 from . import limits
 from . import ngspice as _ng
+from .deck_size import DEFAULT_REPLICAS_PER_DECK
 from .store import SCHEMA_VERSION, batch_key, open_store
 
 __all__ = [
@@ -53,8 +54,8 @@ store_log = logging.getLogger("analogue.circuit.store")
 # small steps on all of them, so the cost per replica-step grows again for large decks while
 # process start-up (~50-90 ms) dominates small ones.  Measured (benchmarks/bench_circuit.py,
 # stick regime): 1/deck 150, 4/deck 69, 8/deck 52, 16/deck 55, 32/deck 79, 64/deck 87
-# microseconds per replica-step.
-DEFAULT_REPLICAS_PER_DECK = 16
+# microseconds per replica-step.  Large runs choose their deck size per model
+# (analogue.circuit.deck_size); DEFAULT_REPLICAS_PER_DECK (16) is the size of small ones.
 DEFAULT_TIMEOUT = 3600.0
 _EXTRA = ("replicas_per_deck", "store", "progress", "timeout", "scheduler", "return_noise",
           "return_records", "label")
@@ -511,6 +512,7 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
     info = {"ngspice_version": version, "store": str(st.root) if st is not None else None,
             "store_keys": keys, "from_store": from_store, "ran": len(todo), "wall_time": wall,
             "deck_wall_times": [r["info"].get("wall_time") for r in results],
+            "deck_raw_points": [r["info"].get("raw_points") for r in results],
             "schema_version": SCHEMA_VERSION, "executor": where}
     return v, x, noise, info
 
@@ -590,12 +592,16 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
     sample_dt : float, optional
         Output grid step (model units); default about tau_m/100.
     circuit : None, CircuitSpec or dict
-        Circuit choices (see :mod:`analogue.circuit.mapping`); None = default spec.
+        Circuit choices (see :mod:`analogue.circuit.mapping`); None = default spec.  Its
+        ``reltol``, ``trtol`` and ``method`` left unset (None) are chosen by measured accuracy
+        (:mod:`analogue.circuit.tolerances`, recorded in ``meta["tolerances"]``); set ones are
+        used as given.
     workers : int, optional
         ngspice processes run at once locally; default ``os.cpu_count()``.
     **extra
-        ``replicas_per_deck`` (default 16, the measured optimum), ``store`` (directory, False
-        to disable; default $ANALOGUE_STORE or ~/.cache/analogue/runs), ``progress`` (None:
+        ``replicas_per_deck`` (default: chosen per model by :mod:`analogue.circuit.deck_size`
+        from measured step counts, recorded in ``meta["deck_size"]``), ``store`` (directory,
+        False to disable; default $ANALOGUE_STORE or ~/.cache/analogue/runs), ``progress`` (None:
         a tqdm bar when stderr is a terminal; True: the bar on a terminal, else one plain line
         per call on stderr; False: silent), ``label`` (names the run on its bar or line;
         default: regime, gamma, v0 and seed), ``timeout`` (seconds per deck, default
@@ -644,8 +650,9 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
     _grid_intervals(t_end, sample_dt, dt_label)  # a count that fits, before anything else
     if workers is not None:
         workers = _int("workers", workers, 1)
-    per_deck = _int("replicas_per_deck", extra.get("replicas_per_deck",
-                                                   DEFAULT_REPLICAS_PER_DECK), 1)
+    per_deck = extra.get("replicas_per_deck")
+    if per_deck is not None:
+        per_deck = _int("replicas_per_deck", per_deck, 1)
     timeout = _real("timeout", extra.get("timeout", DEFAULT_TIMEOUT))
     progress = _bool("progress", extra.get("progress"), allow_none=True)
     label = extra.get("label")
@@ -669,6 +676,28 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
     spec = _spec(circuit)
     from .mapping import map_model
     from .netlist import build_deck
+    # Bad specs and requests that cannot fit fail here, before any calibration runs.
+    _check_sizes(mapping=map_model(model, spec), replicas=replicas,
+                 per_deck=per_deck or DEFAULT_REPLICAS_PER_DECK, workers=workers, t_end=t_end,
+                 sample_dt=sample_dt, dt_label=dt_label, store=extra.get("store"))
+    tol_choice = None
+    if spec.unset_tolerances:
+        # Tolerances by measured accuracy (cached in the run store): see circuit.tolerances.
+        from .tolerances import MIN_CALIBRATED_REPLICA_HOLDS, resolve_spec
+        spec, tol_choice = resolve_spec(model, spec, replicas=replicas, t_end=t_end,
+                                        store=extra.get("store"), workers=workers,
+                                        scheduler=extra.get("scheduler"),
+                                        min_replica_holds=MIN_CALIBRATED_REPLICA_HOLDS)
+    deck_choice = None
+    if per_deck is None:
+        from .deck_size import MIN_CALIBRATED_REPLICA_HOLDS as min_holds
+        from .deck_size import choose_deck_size
+        deck_choice = choose_deck_size(model, spec, replicas=replicas, t_end=t_end,
+                                       workers=workers or os.cpu_count() or 1,
+                                       store=extra.get("store"),
+                                       scheduler=extra.get("scheduler"),
+                                       min_replica_holds=min_holds)
+        per_deck = deck_choice.replicas_per_deck
     mapping = map_model(model, spec)
     # Before allocating anything: replicas x time points x decks, and the bytes to be stored.
     _check_sizes(mapping=mapping, replicas=replicas, per_deck=per_deck, workers=workers,
@@ -701,6 +730,11 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
         "deck_seeds": seeds,
         "deck_replicas": sizes,
         "replicas_per_deck": per_deck,
+        "deck_size": (deck_choice.as_dict() if deck_choice is not None
+                      else {"replicas_per_deck": per_deck, "source": "user"}),
+        "tolerances": (tol_choice.as_dict() if tol_choice is not None
+                       else {"reltol": mapping.reltol, "trtol": mapping.trtol,
+                             "method": mapping.method, "source": "user"}),
         "deck_sha256": [d.sha256 for d in decks],
         "v0": v0 if isinstance(v0, str) else "given",
         "t_end": t_end,

@@ -7,8 +7,9 @@ so they are seeded, stored and resumable).
   (same component values, same parts) with the noise source's amplitude set to zero
   (:meth:`~analogue.circuit.mapping.CircuitMapping.without_noise`), one replica per v0;
 - integration checks: the first decks of the transition and stationary runs again with
-  100x tighter tolerances and a quarter of the step, covering at least ``check_replicas``
-  replicas ([report]).  The held noise (``trrandom`` with ``.options seed``) is the same
+  100x tighter tolerances than the ones chosen for them (:mod:`analogue.circuit.tolerances`,
+  recorded with the deck size in each ensemble's ``meta``) and a quarter of the step,
+  covering at least ``check_replicas`` replicas ([report]).  The held noise (``trrandom`` with ``.options seed``) is the same
   realisation, so the path-by-path difference measures the integration error directly, with
   no statistical noise.
 
@@ -17,6 +18,7 @@ Every circuit built here was validated when the experiment was loaded
 """
 from __future__ import annotations
 
+import os
 import time
 from dataclasses import dataclass, field
 
@@ -88,6 +90,9 @@ class ExperimentRuns:
             "ngspice_version": self.stationary.meta.get("ngspice_version"),
             "deck_hashes": {k: e.meta.get("deck_sha256") for k, e in ens.items()},
             "replicas": {k: e.replicas for k, e in ens.items()},
+            # how each run's ngspice tolerances and deck size were chosen (issue 10)
+            "tolerances": {k: e.meta.get("tolerances") for k, e in ens.items()},
+            "deck_size": {k: e.meta.get("deck_size") for k, e in ens.items()},
             "wall_time_s": self.wall_time,
         }
 
@@ -107,6 +112,20 @@ def _noise_free_run(exp: Experiment, seed: int, kw: dict) -> Ensemble:
             **{k: info[k] for k in ("ngspice_version", "store_keys", "from_store", "wall_time")
                if k in info}}
     return Ensemble(times, v, x, meta)
+
+
+def _choose(model, spec, replicas: int, t_end: float, kw: dict):
+    """(spec with its tolerances set, replicas per deck) for one run of the report."""
+    from ..circuit.deck_size import choose_deck_size
+    from ..circuit.tolerances import resolve_spec
+    common = {k: kw[k] for k in ("store", "scheduler") if k in kw}
+    workers = kw.get("workers") or os.cpu_count() or 1
+    spec, tol = resolve_spec(model, spec, replicas=replicas, t_end=t_end, workers=workers,
+                             **common)
+    deck = choose_deck_size(model, spec, replicas=replicas, t_end=t_end, workers=workers,
+                            **common)
+    return spec, deck.replicas_per_deck, {"tolerances": tol.as_dict(),
+                                          "deck_size": deck.as_dict()}
 
 
 def _check_coupled(nominal: Ensemble, check: Ensemble, what: str) -> None:
@@ -136,31 +155,41 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
     base = 1000 * exp.seed
     seeds = {"stationary": base + 500, "noise_free": base + 900}
 
+    # Tolerances and deck sizes chosen here (not inside simulate) so that the integration
+    # checks below integrate the very decks of the nominal runs 100x more tightly: each run
+    # gets the tolerances its own size calls for (circuit.tolerances) and the deck size that
+    # makes it fastest (circuit.deck_size); both are recorded in the ensembles' meta.
+    n_stat = settings.stationary_replicas
+    trans_spec, trans_deck, trans_why = _choose(model, spec, replicas, exp.t_end, kw)
+    stat_spec, stat_deck, stat_why = _choose(model, spec, n_stat, settings.stationary_t_end, kw)
+
     transition = {}
     for i, v0 in enumerate(exp.v0):
         seeds[f"transition v0={v0:g}"] = base + i
         transition[v0] = simulate(model, v0=v0, t_end=exp.t_end, replicas=replicas,
-                                  seed=base + i, sample_dt=exp.sample_dt, circuit=spec, **kw)
+                                  seed=base + i, sample_dt=exp.sample_dt, circuit=trans_spec,
+                                  replicas_per_deck=trans_deck, **kw)
+        transition[v0].meta.update(trans_why)  # simulate saw them as given: say why
 
-    n_stat = settings.stationary_replicas
     v0_stat = np.asarray(sample_stationary(model_eff, n_stat, seeds["stationary"]), dtype=float)
     stationary = simulate(model, v0=v0_stat, t_end=settings.stationary_t_end, replicas=n_stat,
-                          seed=seeds["stationary"], sample_dt=exp.sample_dt, circuit=spec, **kw)
+                          seed=seeds["stationary"], sample_dt=exp.sample_dt, circuit=stat_spec,
+                          replicas_per_deck=stat_deck, **kw)
+    stationary.meta.update(stat_why)
 
     noise_free = _noise_free_run(exp, seeds["noise_free"], kw)
 
-    tight = exp.check_spec()
     v00 = exp.v0[0]
-    decks, size = check_plan(replicas, settings.check_replicas)
+    decks, size = check_plan(replicas, settings.check_replicas, trans_deck)
     check_transition = simulate(model, v0=v00, t_end=exp.t_end, replicas=decks * size, seed=base,
-                                sample_dt=exp.sample_dt, circuit=tight, replicas_per_deck=size,
-                                **kw)
+                                sample_dt=exp.sample_dt, circuit=exp.check_spec(trans_spec),
+                                replicas_per_deck=size, **kw)
     _check_coupled(transition[v00], check_transition, "transition check")
-    decks, size = check_plan(n_stat, settings.check_replicas)
+    decks, size = check_plan(n_stat, settings.check_replicas, stat_deck)
     n1 = decks * size
     check_stationary = simulate(model, v0=v0_stat[:n1], t_end=settings.stationary_t_end,
                                 replicas=n1, seed=seeds["stationary"], sample_dt=exp.sample_dt,
-                                circuit=tight, replicas_per_deck=size, **kw)
+                                circuit=exp.check_spec(stat_spec), replicas_per_deck=size, **kw)
     _check_coupled(stationary, check_stationary, "stationary check")
     return _indexed(ExperimentRuns(exp=exp, settings=settings, quick=opts.quick,
                                    transition=transition, stationary=stationary,

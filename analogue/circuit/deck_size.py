@@ -1,0 +1,156 @@
+"""Replicas per deck chosen by a cost model with measured step counts (issue 10).
+
+Replicas in one deck share every simulator time step, so each replica's crossing of the diode
+kink shortens the step for all of them: the time points per noise hold grow with the deck size
+``r`` (stick deck, reltol 1e-4: 7.7 at r = 1, 16.6 at 16, 22 at 64), at a rate set by how
+often the paths cross v = 0, which depends on the model.  Against that, every deck costs a
+process start-up and a per-time-point overhead shared by its replicas.  The model of the
+wall time of one deck of ``r`` replicas over ``H`` holds is
+
+    T(r) = START_S + H p(r) (POINT_S + REPLICA_POINT_S r),
+
+``p(r)`` the time points per hold, measured per model by a short calibration run (decks of
+each size in ``CAL_SIZES`` for ``CAL_HOLDS`` holds, same seed; the counts come from the raw
+files and do not depend on the machine's load, so the choice is reproducible), interpolated
+linearly in log r.  A job of N replicas on W workers takes about ``ceil(ceil(N/r)/W) T(r)``;
+the chosen size minimises that over the allowed sizes ``SIZES`` within ``bounds``.
+
+The constants are this 2-core machine's (ngspice 42-45, `benchmarks/bench_circuit.py --fit`):
+0.47 us per replica-iteration at 16 or more replicas and 2.3 us at 1 (theory.md), 2.5
+Newton iterations per point, i.e. 4.9 us per point plus 0.88 us per replica-point; 60 ms to
+start a process and read its deck.
+
+The deck size changes which noise drives which replica (the deck seeds), so it changes the
+numbers like a different seed would; it is recorded in ``meta["deck_size"]``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..model import Model
+
+__all__ = [
+    "DEFAULT_BOUNDS",
+    "DEFAULT_REPLICAS_PER_DECK",
+    "MIN_CALIBRATED_REPLICA_HOLDS",
+    "SIZES",
+    "DeckSizeChoice",
+    "choose_deck_size",
+    "job_time",
+    "points_per_hold",
+]
+
+START_S = 0.06
+POINT_S = 4.9e-6
+REPLICA_POINT_S = 0.88e-6
+SIZES = (4, 8, 16, 32, 64)
+DEFAULT_BOUNDS = (4, 64)
+CAL_SIZES = (4, 16, 64)
+CAL_HOLDS = 300
+CAL_SEED = 20261123
+# The size every deck had before issue 10 (measured optimum of the stick deck at reltol 1e-4);
+# used for runs too small to pay for a calibration (CAL_SIZES x CAL_HOLDS = 2.5e4 replica-holds).
+DEFAULT_REPLICAS_PER_DECK = 16
+MIN_CALIBRATED_REPLICA_HOLDS = 250_000
+
+
+@dataclass(frozen=True)
+class DeckSizeChoice:
+    replicas_per_deck: int
+    source: str                     # "user", "measured"
+    points_per_hold: dict | None = None   # calibration size -> time points per hold
+    predicted_s: dict | None = None       # size -> predicted job time (s)
+
+    def as_dict(self) -> dict:
+        d = {"replicas_per_deck": self.replicas_per_deck, "source": self.source}
+        if self.points_per_hold:
+            d["points_per_hold"] = {str(k): v for k, v in self.points_per_hold.items()}
+            d["predicted_job_s"] = {str(k): v for k, v in self.predicted_s.items()}
+        return d
+
+
+def points_per_hold(measured: dict, r: float) -> float:
+    """p(r): linear interpolation in log r of the measured points per hold (constant beyond
+    the measured sizes)."""
+    sizes = np.array(sorted(measured), dtype=float)
+    vals = np.array([measured[k] for k in sorted(measured)], dtype=float)
+    return float(np.interp(math.log(r), np.log(sizes), vals))
+
+
+def job_time(r: int, replicas: int, holds: float, workers: int, measured: dict) -> float:
+    """Predicted wall time (s) of ``replicas`` replicas in decks of at most ``r`` on
+    ``workers`` processes."""
+    n_decks = -(-replicas // r)
+    r_eff = replicas / n_decks
+    deck = START_S + holds * points_per_hold(measured, r_eff) * (POINT_S + REPLICA_POINT_S * r_eff)
+    return -(-n_decks // workers) * deck
+
+
+def _check_bounds(bounds) -> tuple[int, int]:
+    try:
+        lo, hi = bounds
+    except (TypeError, ValueError):
+        raise ValueError(f"bounds must be a pair (lo, hi) of integers, got {bounds!r}") from None
+    for b in (lo, hi):
+        if isinstance(b, bool) or not isinstance(b, int) or b < 1:
+            raise ValueError(f"bounds must be integers >= 1, got {bounds!r}")
+    if lo > hi:
+        raise ValueError(f"bounds must have lo <= hi, got {bounds!r}")
+    return lo, hi
+
+
+def _calibrate(model: Model, spec, *, store, scheduler, workers) -> dict:
+    from .mapping import map_model
+    from .simulate import simulate
+    mapping = map_model(model, spec)
+    t_cal = CAL_HOLDS * mapping.noise_dt
+    out = {}
+    for r in CAL_SIZES:
+        kw = {"v0": "stationary", "t_end": t_cal, "replicas": r, "seed": CAL_SEED, "replicas_per_deck": r,
+                  "store": store, "progress": False, "workers": workers}
+        if scheduler is not None:
+            kw["scheduler"] = scheduler
+        ens = simulate(model, circuit=spec, **kw)
+        pts = ens.meta.get("deck_raw_points") or [None]
+        if pts[0] is None:
+            raise RuntimeError("deck-size calibration: the run did not record its time points")
+        out[r] = float(pts[0]) / CAL_HOLDS
+    return out
+
+
+_MEMO: dict = {}
+
+
+def choose_deck_size(model: Model, spec, *, replicas: int, t_end: float, workers: int,
+                     bounds=DEFAULT_BOUNDS, store=None, scheduler=None,
+                     measured: dict | None = None,
+                     min_replica_holds: int = 0) -> DeckSizeChoice:
+    """Replicas per deck for a run of ``replicas`` paths of length ``t_end`` on ``workers``
+    processes; ``spec`` must have its tolerances set (:mod:`analogue.circuit.tolerances`).
+    ``measured``: points per hold by deck size, skipping the calibration (tests).  Runs of
+    fewer than ``min_replica_holds`` replica-holds get ``DEFAULT_REPLICAS_PER_DECK`` (within
+    the bounds) without a calibration (source "default")."""
+    lo, hi = _check_bounds(bounds)
+    if isinstance(replicas, bool) or not isinstance(replicas, int) or replicas < 1:
+        raise ValueError(f"replicas must be an integer >= 1, got {replicas!r}")
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
+    allowed = [s for s in SIZES if lo <= s <= hi] or [lo, hi]
+    if replicas <= lo:
+        return DeckSizeChoice(lo, "measured")
+    from .mapping import map_model
+    holds = t_end / map_model(model, spec).noise_dt
+    if measured is None and replicas * holds < min_replica_holds:
+        return DeckSizeChoice(min(max(DEFAULT_REPLICAS_PER_DECK, lo), hi), "default")
+    if measured is None:
+        key = (repr(model.as_dict()), repr(spec))
+        if key not in _MEMO:
+            _MEMO[key] = _calibrate(model, spec, store=store, scheduler=scheduler,
+                                    workers=workers)
+        measured = _MEMO[key]
+    pred = {r: job_time(r, replicas, holds, workers, measured) for r in allowed}
+    best = min(allowed, key=lambda r: (round(pred[r], 6), -r))
+    return DeckSizeChoice(best, "measured", dict(measured), pred)

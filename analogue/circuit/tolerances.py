@@ -1,0 +1,339 @@
+"""ngspice tolerances chosen by measured accuracy (issue 10).
+
+A circuit run is only as good as the statistics it feeds, so the integration tolerances need
+not be tighter than what the statistics can see.  :func:`choose_tolerances` runs a short
+calibration: ``CAL_REPLICAS`` replicas started from the stationary law, ``CAL_HOLDS`` noise
+holds long, once with each candidate ``(reltol, trtol, method)`` and once with a reference
+integrated 100x more tightly than the tightest candidate (reltol, abstol and vntol / 100, a
+quarter of the step: the report's integration check, :func:`analogue.report.runs._tight`).
+All runs share the seed, hence the held noise (``trrandom`` with ``.options seed``), so the
+path-by-path differences ``d_i = O_i(candidate) - O_i(reference)`` measure the integration
+error of each path observable ``O`` with no statistical noise of their own.
+
+Observables (per replica): the time averages of v, v^2, 1[v > 0], 1[|v| < 0.1 sqrt(tau_m/
+gamma)] (the report's stick fraction) and the displacement x(T) (transport, work), and v, v^2,
+1[v < 0] at the last time (the transition observables).  For a run of ``replicas`` paths of
+length ``t_end`` the statistical error of O is ``sigma_O / sqrt(n_eff)``, ``sigma_O`` the
+spread of O over the calibration paths, ``n_eff = replicas`` for the instantaneous
+observables and ``replicas * max(1, t_end / T_cal)`` for the time averages (longer paths
+average more).  The integration error of that estimate has a random part ``sd(d) /
+sqrt(n_eff)`` and a systematic part ``mean(d)``, so its ratio to the statistical error is
+
+    ratio_O = sd(d) / sigma_O + |mean(d)| sqrt(n_eff) / sigma_O,
+
+and a candidate is accepted when ``max_O ratio_O <= fraction`` (default 0.1).  Among the
+accepted candidates the cheapest one (fewest simulator time points per replica-hold: a count,
+so the choice does not depend on the machine's load) is chosen; when none is accepted, the
+one with the smallest worst ratio, flagged ``criterion_met = False``.
+
+Measured on the stick deck (tau_m = 1, Delta = 0.7, a = 0.2, gamma = 10, 16 replicas x 2000
+holds): the velocity's path-wise error is 6e-4 rms at reltol 1e-3 (0.4 % of its spread), but
+the stick fraction shifts systematically, -1.5e-3 at reltol 1e-3 and -2e-4 at 1e-4 for a
+per-path spread of 0.02: the stick fraction is what decides in the stick regime.
+
+The calibration runs go through :func:`analogue.simulate` and so into the content-addressed
+run store: a repeated choice costs file reads only, and the decision is a pure function of
+those stored runs (it is also memoised in-process for ``store=False``).  A value the user sets
+in :class:`~analogue.circuit.mapping.CircuitSpec` (reltol, trtol or method) is never
+overridden: only the unset ones are chosen, among candidates that agree with the set ones.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..model import Model
+from .mapping import (
+    FIXED_METHOD,
+    FIXED_RELTOL,
+    FIXED_TRTOL,
+    METHODS,
+    CircuitSpec,
+    map_model,
+)
+
+__all__ = [
+    "CAL_HOLDS",
+    "CAL_REPLICAS",
+    "CANDIDATES",
+    "DEFAULT_FRACTION",
+    "FIXED",
+    "MIN_CALIBRATED_REPLICA_HOLDS",
+    "CandidateResult",
+    "ToleranceChoice",
+    "Tolerances",
+    "candidate_result",
+    "choose_tolerances",
+    "path_observables",
+    "reference_spec",
+    "resolve_spec",
+    "select",
+]
+
+DEFAULT_FRACTION = 0.1
+CAL_REPLICAS = 16
+CAL_HOLDS = 1000
+CAL_SEED = 20261122
+# Decks of 4 in the calibration: replicas in one deck share every time step, so the error of a
+# path is largest in small decks; the deck-size chooser does not go below 4 by default.
+CAL_DECK = 4
+# Reference: 100x tighter than the tightest candidate, a quarter of the step.
+REFERENCE_FACTOR = 100.0
+# The calibration costs about (candidates + 3) x CAL_REPLICAS x CAL_HOLDS = 1.4e5
+# replica-holds at today's tolerances (the reference is ~3x slower than a candidate); it pays
+# for itself (saving ~40 % of the run) on runs of at least this many replica-holds.
+# simulate() calibrates automatically only for those; smaller runs get FIXED (the report
+# calls choose_tolerances directly, since its store keeps the calibration for every rerun).
+MIN_CALIBRATED_REPLICA_HOLDS = 400_000
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    reltol: float
+    trtol: float
+    method: str
+
+    def __post_init__(self):
+        if self.method not in METHODS:
+            raise ValueError(f"method must be one of {METHODS}, got {self.method!r}")
+        if not (isinstance(self.reltol, (int, float)) and 0 < self.reltol < 0.1):
+            raise ValueError(f"reltol must be in (0, 0.1), got {self.reltol!r}")
+        if not (isinstance(self.trtol, (int, float)) and 1 <= self.trtol <= 100):
+            raise ValueError(f"trtol must be in [1, 100], got {self.trtol!r}")
+
+    def label(self) -> str:
+        return f"reltol={self.reltol:g} trtol={self.trtol:g} {self.method}"
+
+    def as_dict(self) -> dict:
+        return {"reltol": self.reltol, "trtol": self.trtol, "method": self.method}
+
+
+FIXED = Tolerances(FIXED_RELTOL, FIXED_TRTOL, FIXED_METHOD)
+
+# Candidates, roughly loosest first (the choice is by measured cost, not by this order).
+# trtol 20 saves about 10 % of the steps at reltol 1e-3 (theory.md, "Measured later"); trap
+# is measured like gear: if it rang at the noise steps, the calibration would see it.
+CANDIDATES = (
+    Tolerances(1e-3, 20.0, "trap"),
+    Tolerances(1e-3, 20.0, "gear"),
+    Tolerances(3e-4, 7.0, "trap"),
+    Tolerances(3e-4, 7.0, "gear"),
+    Tolerances(1e-4, 7.0, "trap"),
+    FIXED,
+)
+
+
+@dataclass(frozen=True)
+class CandidateResult:
+    """The measured accuracy and cost of one candidate in one calibration."""
+
+    tolerances: Tolerances
+    points_per_replica_hold: float     # simulator time points / (replicas x holds)
+    wall_time: float                   # seconds (informative only: depends on the load)
+    mean: dict = field(default_factory=dict)    # observable -> mean(d)
+    sd: dict = field(default_factory=dict)      # observable -> sd(d)
+    sigma: dict = field(default_factory=dict)   # observable -> spread of O (reference)
+    time_average: dict = field(default_factory=dict)  # observable -> bool
+
+    def ratios(self, replicas: int, t_end: float, t_cal: float) -> dict:
+        """ratio_O (module docstring) for a run of ``replicas`` paths of length ``t_end``."""
+        out = {}
+        for k, s in self.sigma.items():
+            n_eff = replicas * (max(1.0, t_end / t_cal) if self.time_average[k] else 1.0)
+            err = self.sd[k] + abs(self.mean[k]) * math.sqrt(n_eff)
+            if s > 0:
+                out[k] = err / s
+            else:
+                out[k] = 0.0 if err == 0 else math.inf
+        return out
+
+    def worst(self, replicas: int, t_end: float, t_cal: float) -> tuple[str, float]:
+        r = self.ratios(replicas, t_end, t_cal)
+        k = max(r, key=r.get)
+        return k, r[k]
+
+
+def _finite(x):
+    return x if x is None or math.isfinite(x) else None
+
+
+@dataclass(frozen=True)
+class ToleranceChoice:
+    """The tolerances a run uses and why (recorded in ``Ensemble.meta["tolerances"]``)."""
+
+    tolerances: Tolerances
+    source: str                      # "user", "measured", "fixed" (nothing to measure)
+    fraction: float = DEFAULT_FRACTION
+    criterion_met: bool | None = None
+    worst_observable: str | None = None
+    worst_ratio: float | None = None
+    replicas: int | None = None
+    t_end: float | None = None
+    calibration: tuple = ()          # CandidateResult, in candidate order
+    t_cal: float | None = None
+
+    def as_dict(self) -> dict:
+        """JSON-safe (an infinite ratio, from an observable without spread, becomes None)."""
+        d = {**self.tolerances.as_dict(), "source": self.source, "fraction": self.fraction,
+             "criterion_met": self.criterion_met, "worst_observable": self.worst_observable,
+             "worst_ratio": _finite(self.worst_ratio), "for_replicas": self.replicas,
+             "for_t_end": self.t_end, "calibration_t_end": self.t_cal,
+             "calibration_replicas": CAL_REPLICAS if self.calibration else None}
+        if self.calibration:
+            d["candidates"] = []
+            for c in self.calibration:
+                name, ratio = c.worst(self.replicas, self.t_end, self.t_cal)
+                d["candidates"].append({**c.tolerances.as_dict(),
+                                        "points_per_replica_hold": c.points_per_replica_hold,
+                                        "worst_observable": name,
+                                        "worst_ratio": _finite(ratio),
+                                        "accepted": bool(ratio <= self.fraction)})
+        return d
+
+
+# ----------------------------------------------------------------------------- measurement
+def path_observables(v: np.ndarray, x: np.ndarray, threshold: float) -> tuple[dict, dict]:
+    """Per-replica observables of paths ``v``, ``x`` (replicas, n_t): ``({name: (replicas,)},
+    {name: is_time_average})``."""
+    v = np.asarray(v, dtype=float)
+    x = np.asarray(x, dtype=float)
+    obs = {
+        "time mean v": v.mean(axis=1),
+        "time mean v^2": (v**2).mean(axis=1),
+        "P(v>0)": (v > 0).mean(axis=1),
+        "stick fraction": (np.abs(v) < threshold).mean(axis=1),
+        "displacement x(T)": x[:, -1] - x[:, 0],
+        "v(T)": v[:, -1],
+        "v(T)^2": v[:, -1] ** 2,
+        "1[v(T)<0]": (v[:, -1] < 0).astype(float),
+    }
+    avg = {k: k in ("time mean v", "time mean v^2", "P(v>0)", "stick fraction",
+                    "displacement x(T)") for k in obs}
+    return obs, avg
+
+
+def candidate_result(tol: Tolerances, cand, ref, threshold: float, *, points: float = math.nan,
+                     wall_time: float = math.nan) -> CandidateResult:
+    """Compare a candidate's ensemble with the reference's (same noise, same replicas)."""
+    if cand.v.shape != ref.v.shape:
+        raise ValueError("candidate and reference ensembles must have the same shape")
+    oc, avg = path_observables(cand.v, cand.x, threshold)
+    orf, _ = path_observables(ref.v, ref.x, threshold)
+    mean, sd, sigma = {}, {}, {}
+    for k in oc:
+        d = oc[k] - orf[k]
+        mean[k] = float(d.mean())
+        sd[k] = float(d.std(ddof=1)) if d.size > 1 else 0.0
+        sigma[k] = float(orf[k].std(ddof=1)) if d.size > 1 else 0.0
+    return CandidateResult(tol, float(points), float(wall_time), mean, sd, sigma, avg)
+
+
+def select(results, *, replicas: int, t_end: float, t_cal: float,
+           fraction: float = DEFAULT_FRACTION) -> tuple[CandidateResult, bool, str, float]:
+    """The cheapest candidate whose worst ratio is <= fraction, else the most accurate one:
+    ``(result, criterion_met, worst observable, worst ratio)``."""
+    results = list(results)
+    if not results:
+        raise ValueError("select needs at least one candidate result")
+    worst = [c.worst(replicas, t_end, t_cal) for c in results]
+    ok = [i for i, (_, r) in enumerate(worst) if r <= fraction]
+    if ok:
+        i = min(ok, key=lambda j: (results[j].points_per_replica_hold, j))
+        return results[i], True, worst[i][0], worst[i][1]
+    i = min(range(len(results)), key=lambda j: (worst[j][1], j))
+    return results[i], False, worst[i][0], worst[i][1]
+
+
+def reference_spec(spec: CircuitSpec, mapping, tightest: Tolerances) -> CircuitSpec:
+    """The calibration reference: 100x tighter than ``tightest``, a quarter of the step."""
+    max_step = spec.max_step if spec.max_step is not None else mapping.noise_dt
+    return spec.replace(reltol=tightest.reltol / REFERENCE_FACTOR, trtol=FIXED_TRTOL,
+                        method="gear", abstol=spec.abstol / REFERENCE_FACTOR,
+                        vntol=mapping.vntol / REFERENCE_FACTOR, max_step=max_step / 4)
+
+
+_MEMO: dict = {}
+
+
+def _calibrate(model: Model, spec: CircuitSpec, candidates, *, store, workers, scheduler):
+    """Run (or load) the calibration; returns (results, t_cal)."""
+    from .simulate import simulate
+    mapping = map_model(model, spec.replace(**FIXED.as_dict()))
+    t_cal = CAL_HOLDS * mapping.noise_dt
+    tightest = min(candidates, key=lambda c: c.reltol)
+    memo_key = (repr(model.as_dict()), repr(spec), tuple(candidates), CAL_HOLDS, CAL_REPLICAS)
+    if store is False and memo_key in _MEMO:
+        return _MEMO[memo_key]
+    kw = {"v0": "stationary", "t_end": t_cal, "replicas": CAL_REPLICAS, "seed": CAL_SEED,
+              "replicas_per_deck": CAL_DECK, "store": store, "workers": workers, "scheduler": scheduler,
+              "progress": False}
+    if scheduler is None:
+        kw.pop("scheduler")
+    ref = simulate(model, circuit=reference_spec(spec, mapping, tightest), **kw)
+    threshold = 0.1 * model.velocity_scale if math.isfinite(model.gamma) else 0.0
+    results = []
+    for tol in candidates:
+        ens = simulate(model, circuit=spec.replace(**tol.as_dict()), **kw)
+        pts = ens.meta.get("deck_raw_points")
+        per = (float(np.sum(pts)) / (CAL_REPLICAS * CAL_HOLDS)
+               if pts and all(p is not None for p in pts) else math.nan)
+        # Points per deck, shared by its replicas: per replica-hold is points x decks / (R H).
+        results.append(candidate_result(tol, ens, ref, threshold, points=per,
+                                        wall_time=float(ens.meta.get("wall_time", math.nan))))
+    _MEMO[memo_key] = (results, t_cal)
+    return results, t_cal
+
+
+def _has_noise(model: Model) -> bool:
+    return math.isfinite(model.gamma) or model.shot is not None
+
+
+def choose_tolerances(model: Model, spec: CircuitSpec | None = None, *, replicas: int,
+                      t_end: float, fraction: float = DEFAULT_FRACTION, candidates=CANDIDATES,
+                      store=None, workers=None, scheduler=None,
+                      min_replica_holds: int = 0) -> ToleranceChoice:
+    """The tolerances for a run of ``replicas`` paths of length ``t_end`` (model units) of
+    ``model`` in the circuit ``spec`` (module docstring).  Values set in ``spec`` win.
+    Runs of fewer than ``min_replica_holds`` replica-holds get the fixed values instead of a
+    calibration (source "fixed")."""
+    spec = spec if spec is not None else CircuitSpec()
+    if not isinstance(spec, CircuitSpec):
+        raise TypeError(f"spec must be a CircuitSpec, got {type(spec).__name__}")
+    if isinstance(replicas, bool) or not isinstance(replicas, int) or replicas < 1:
+        raise ValueError(f"replicas must be an integer >= 1, got {replicas!r}")
+    if not (isinstance(t_end, (int, float)) and math.isfinite(t_end) and t_end > 0):
+        raise ValueError(f"t_end must be a finite number > 0, got {t_end!r}")
+    if not (isinstance(fraction, (int, float)) and 0 < fraction <= 1):
+        raise ValueError(f"fraction must be in (0, 1], got {fraction!r}")
+    unset = spec.unset_tolerances
+    if not unset:
+        return ToleranceChoice(Tolerances(spec.reltol, spec.trtol, spec.method), "user",
+                               fraction)
+    given = {k: getattr(spec, k) for k in ("reltol", "trtol", "method") if k not in unset}
+    if not _has_noise(model) or not candidates:
+        # Nothing random to compare with: today's fixed values.
+        return ToleranceChoice(Tolerances(**{**FIXED.as_dict(), **given}), "fixed", fraction)
+    noise_dt = map_model(model, spec.replace(**FIXED.as_dict())).noise_dt
+    if replicas * t_end / noise_dt < min_replica_holds:
+        return ToleranceChoice(Tolerances(**{**FIXED.as_dict(), **given}), "fixed", fraction,
+                               replicas=replicas, t_end=float(t_end))
+    pool = [c for c in candidates if all(getattr(c, k) == v for k, v in given.items())]
+    if not pool:
+        # The user's values are outside every candidate: measure the user's value itself
+        # with the unset ones from each candidate.
+        pool = list(dict.fromkeys(Tolerances(**{**c.as_dict(), **given}) for c in candidates))
+    results, t_cal = _calibrate(model, spec.replace(**{k: None for k in unset}), tuple(pool),
+                                store=store, workers=workers, scheduler=scheduler)
+    best, met, name, ratio = select(results, replicas=replicas, t_end=float(t_end), t_cal=t_cal,
+                                    fraction=fraction)
+    return ToleranceChoice(best.tolerances, "measured", fraction, met, name, ratio, replicas,
+                           float(t_end), tuple(results), t_cal)
+
+
+def resolve_spec(model: Model, spec: CircuitSpec, *, replicas: int, t_end: float,
+                 **kwargs) -> tuple[CircuitSpec, ToleranceChoice]:
+    """``spec`` with reltol, trtol and method filled in (:func:`choose_tolerances`)."""
+    choice = choose_tolerances(model, spec, replicas=replicas, t_end=t_end, **kwargs)
+    return spec.replace(**choice.tolerances.as_dict()), choice

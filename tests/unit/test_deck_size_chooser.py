@@ -1,0 +1,48 @@
+"""The deck-size chooser (analogue.circuit.deck_size) with given step counts (no ngspice)."""
+import pytest
+
+from analogue import Model
+from analogue.circuit import deck_size as ds
+from analogue.circuit.mapping import CircuitSpec
+
+STICK = Model(1.0, 0.7, 0.2, 10.0)
+SPEC = CircuitSpec(reltol=1e-4, trtol=7.0, method="gear")
+FLAT = {4: 10.0, 16: 10.0, 64: 10.0}
+STEEP = {4: 5.0, 16: 40.0, 64: 160.0}   # points per hold growing like r: small decks win
+
+
+@pytest.mark.parametrize("bounds", [(1, 64), (4, 16), (8, 8), (16, 64), (5, 7)])
+@pytest.mark.parametrize("measured", [FLAT, STEEP])
+def test_choice_within_bounds(bounds, measured):
+    c = ds.choose_deck_size(STICK, SPEC, replicas=500, t_end=10.0, workers=2, bounds=bounds,
+                            measured=measured)
+    assert bounds[0] <= c.replicas_per_deck <= bounds[1]
+
+
+def test_flat_step_counts_fill_both_workers():
+    # p(r) constant: per-replica cost falls with r (start-up and per-point overhead shared),
+    # but 64 replicas in one deck leave the second worker idle: two decks of 32 are faster.
+    c = ds.choose_deck_size(STICK, SPEC, replicas=64, t_end=10.0, workers=2, measured=FLAT)
+    assert c.replicas_per_deck == 32
+
+
+def test_steep_step_counts_prefer_small_decks():
+    c = ds.choose_deck_size(STICK, SPEC, replicas=512, t_end=10.0, workers=2, measured=STEEP)
+    assert c.replicas_per_deck == 4
+
+
+def test_small_runs_default_without_calibration(monkeypatch):
+    monkeypatch.setattr(ds, "_calibrate", lambda *a, **k: (_ for _ in ()).throw(AssertionError))
+    c = ds.choose_deck_size(STICK, SPEC, replicas=40, t_end=1.0, workers=2,
+                            min_replica_holds=10**6)
+    assert c.source == "default" and c.replicas_per_deck == ds.DEFAULT_REPLICAS_PER_DECK
+    c = ds.choose_deck_size(STICK, SPEC, replicas=40, t_end=1.0, workers=2, bounds=(1, 8),
+                            min_replica_holds=10**6)
+    assert c.replicas_per_deck == 8
+
+
+@pytest.mark.parametrize("bounds", [(0, 4), (8, 4), (1.5, 4), "x"])
+def test_bad_bounds(bounds):
+    with pytest.raises(ValueError, match="bounds"):
+        ds.choose_deck_size(STICK, SPEC, replicas=40, t_end=1.0, workers=2, bounds=bounds,
+                            measured=FLAT)
