@@ -109,6 +109,10 @@ def _noise_free_run(exp: Experiment, seed: int, kw: dict) -> Ensemble:
     meta = {"source": "circuit", "noise": "off", "model": exp.model.as_dict(),
             "model_effective": mapping.model_effective.as_dict(), "seed": seed,
             "deck_sha256": [deck.sha256], "t_end": deck.t_end, "sample_dt": exp.sample_dt,
+            # nothing random to calibrate against: the spec's tolerances or the fixed ones
+            "tolerances": {"reltol": mapping.reltol, "trtol": mapping.trtol,
+                           "method": mapping.method,
+                           "source": "user" if not exp.spec.unset_tolerances else "fixed"},
             **{k: info[k] for k in ("ngspice_version", "store_keys", "from_store", "wall_time")
                if k in info}}
     return Ensemble(times, v, x, meta)
