@@ -1,0 +1,130 @@
+"""Before/after timings of the report's exact theory (issue 10, "theory computed once").
+
+Run: ``.venv/bin/python benchmarks/bench_theory.py [--quick]``.  Each row prints the time of
+the old algorithm (still callable: ``mesh="uniform"``, per-w Legendre roots bracketed from
+k = 0, ``work_pdf(..., share=False)``), the new one, their ratio and the largest difference.
+
+1. Rate function on the report's grids (Fig. 8 model; the open question's a = 0.5 and 1.5 at
+   gamma = 10, 100, 1000): uniform grid + per-w roots -> graded mesh ("auto") + sorted sweep.
+2. Cost of one Legendre point against gamma (the open question's need): nodes per mesh and
+   seconds per point; uniform grows like gamma, graded stays flat.
+3. work_pdf on 30 w per window tau (Fig. 8 and OU, gamma = 10): per-w contours -> shared
+   contours; for OU also the error against the closed form.
+4. The theory cache: cold call, warm call (read from disk).
+
+Differences at gamma >= 100 on the negative-w side are errors of the *old* uniform grid (its
+ground-state transform zone |v| <= tau_m (Delta + |a|) holds sliding states with
+gamma h |U'| ~ 0.2); the graded values are converged in h (h vs h/2 within 1e-6, and the
+uniform grid converges towards them as h -> h/4): see tests/unit/test_theory_fast_paths.py.
+"""
+from __future__ import annotations
+
+import sys
+import tempfile
+import time
+import warnings
+
+import numpy as np
+
+from analogue import Model
+from analogue.theory import ornstein_uhlenbeck as ou
+from analogue.theory import work_statistics as ws
+from analogue.theory.cache import cached_call
+
+
+def _timed(f, *args, **kw):
+    t = time.perf_counter()
+    out = f(*args, **kw)
+    return out, time.perf_counter() - t
+
+
+def rate_old(model, w):
+    """The pre-issue-10 algorithm: uniform grid, every root bracketed from k = 0."""
+    h = ws.tilted_grid_spacing(model)
+    mean = float(ws._scgf_pair(model, 0.0, h, mesh="uniform")[1])
+    out = []
+    for wi in np.ravel(w):
+        k, lam = ws._legendre_root(model, float(wi), h, mean, "uniform")
+        out.append(max(k * wi - lam, 0.0) / model.gamma)
+    return np.array(out)
+
+
+def bench_rate(quick):
+    print("\n1. rate function (old: uniform grid, per-w roots; new: auto mesh, sorted sweep)")
+    print(f"{'case':<28} {'points':>6} {'old [s]':>8} {'new [s]':>8} {'old/new':>8} {'max |dI|':>9}")
+    cases = [("Fig. 8, gamma 10", Model(1.0, 1.0, 0.5, 10.0), np.linspace(-2, 2, 61))]
+    for a, half in ((0.5, 1.2), (1.5, 2.0)):
+        for g, n in ((10.0, 41), (100.0, 21), (1000.0, 9)):
+            if quick and g == 1000.0:
+                continue
+            cases.append((f"open q. a={a:g}, gamma {g:g}", Model(1.0, 1.0, a, g),
+                          np.linspace(-half, half, n)))
+    for name, m, w in cases:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            old, t_old = _timed(rate_old, m, w)
+        new, t_new = _timed(ws.rate_function, m, w)
+        print(f"{name:<28} {w.size:6d} {t_old:8.2f} {t_new:8.2f} {t_old / t_new:8.1f} "
+              f"{np.max(np.abs(old - new)):9.1e}")
+
+
+def bench_gamma(quick):
+    print("\n2. one Legendre point (w = -0.3, a = 0.5) against gamma")
+    print(f"{'gamma':>7} {'uniform n':>10} {'graded n':>9} {'uniform [s]':>12} {'graded [s]':>11}")
+    for g in (10.0, 100.0, 1000.0) if quick else (10.0, 30.0, 100.0, 300.0, 1000.0, 3000.0):
+        m = Model(1.0, 1.0, 0.5, g)
+        h = ws.tilted_grid_spacing(m)
+        n_u = ws._grid_for(m, 0.0, h).n
+        n_g = ws._graded_nodes(m, 0.0, h).size
+        t_u = float("nan")
+        if n_u < 100_000:
+            _, t_u = _timed(ws.rate_function, m, [-0.3], mesh="uniform")
+        _, t_g = _timed(ws.rate_function, m, [-0.3], mesh="graded")
+        print(f"{g:7g} {n_u:10d} {n_g:9d} {t_u:12.2f} {t_g:11.2f}")
+
+
+def bench_pdf(quick):
+    print("\n3. work_pdf, 30 w per tau (old: one contour per w; new: shared contours)")
+    print(f"{'case':<18} {'old [s]':>8} {'new [s]':>8} {'old/new':>8} {'max rel diff':>12} "
+          f"{'err vs OU old/new':>18}")
+    taus = (2.0,) if quick else (1.0, 2.0, 5.0, 10.0)
+    for name, m, centre in (("Fig. 8", Model(1.0, 1.0, 0.5, 10.0), 0.06),
+                            ("OU", Model(1.0, 0.0, 0.5, 10.0), 0.25)):
+        for tau in taus:
+            sd = 0.3 / np.sqrt(tau)
+            w = np.linspace(centre - 5 * sd, centre + 5 * sd, 30)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                ws._FALLBACKS.clear()
+                old, t_old = _timed(ws.work_pdf, m, w, tau, share=False)
+                fb = {x[0] for x in ws._FALLBACKS}
+                new, t_new = _timed(ws.work_pdf, m, w, tau)
+            ok = ~np.isin(w, list(fb))      # compare contour points (fallbacks are O(1) in ln p)
+            diff = np.max(np.abs(new[ok] / old[ok] - 1))
+            err = ""
+            if m.delta == 0:
+                ex = ou.work_pdf(m, w[ok], tau)
+                err = f"{np.max(np.abs(old[ok] / ex - 1)):.1e}/{np.max(np.abs(new[ok] / ex - 1)):.1e}"
+            print(f"{name + f' tau={tau:g}':<18} {t_old:8.1f} {t_new:8.1f} {t_old / t_new:8.1f} "
+                  f"{diff:12.1e} {err:>18}")
+
+
+def bench_cache():
+    print("\n4. theory cache (open question curve a = 0.5, gamma = 100, 21 points)")
+    m = Model(1.0, 1.0, 0.5, 100.0)
+    w = np.linspace(-1.2, 1.2, 21)
+    with tempfile.TemporaryDirectory() as d:
+        _, cold = _timed(cached_call, ws.rate_function_curve, m, w, cache=d)
+        _, warm = _timed(cached_call, ws.rate_function_curve, m, w, cache=d)
+    print(f"cold {cold:.2f} s, warm {warm * 1e3:.1f} ms")
+
+
+def main(quick=False):
+    bench_rate(quick)
+    bench_gamma(quick)
+    bench_pdf(quick)
+    bench_cache()
+
+
+if __name__ == "__main__":
+    main(quick="--quick" in sys.argv)

@@ -1,0 +1,124 @@
+"""The fast paths of the exact work statistics (issue 10) against the reference algorithms
+and independent routes: graded mesh vs uniform grid, sorted Legendre sweep vs per-w roots,
+the fluctuation relation at Delta = 0 (exact) and its failure at Delta > 0, shared work_pdf
+contours vs per-w contours and the OU closed form, and the theory cache in the open-question
+figure.  No timings are asserted (benchmarks/bench_theory.py measures them)."""
+import numpy as np
+import pytest
+
+from analogue import Model
+from analogue.plots import open_question as oq
+from analogue.theory import ornstein_uhlenbeck as ou
+from analogue.theory import work_statistics as ws
+from analogue.theory.cache import TheoryCache
+
+
+def _m(a, gamma, delta=1.0, **kw):
+    return Model(tau_m=1.0, delta=delta, a=a, gamma=gamma, **kw)
+
+
+@pytest.mark.parametrize("a, ks", [(0.5, (-100.0, -30.0, 0.0, 20.0, 100.0)),
+                                   (1.5, (-150.0, -30.0, 0.0, 50.0, 100.0))])
+def test_graded_mesh_scgf_equals_uniform_grid(a, ks):
+    """gamma = 100: the uniform grid (the validated reference) and the graded mesh give the
+    same Richardson-extrapolated eigenvalue and derivative (measured <= 3e-10 relative)."""
+    m = _m(a, 100.0)
+    k = np.array(ks)
+    lu, du = ws._scgf_and_derivative(m, k, None, "uniform")
+    lg, dg = ws._scgf_and_derivative(m, k, None, "graded")
+    np.testing.assert_allclose(lg, lu, rtol=1e-8, atol=1e-8)
+    np.testing.assert_allclose(dg, du, rtol=1e-7, atol=1e-9)
+
+
+def test_graded_mesh_size_does_not_grow_with_gamma():
+    """Structural, not a timing: the graded mesh has about as many nodes at gamma = 1000 as at
+    100 (uniform: 6.1x more), and far fewer than the uniform grid."""
+    n = {}
+    for g in (100.0, 1000.0):
+        m = _m(0.5, g)
+        h = ws.tilted_grid_spacing(m)
+        n[g] = (ws._grid_for(m, -300.0 * g / 1000, h).n, ws._graded_nodes(m, -300.0 * g / 1000, h).size)
+    assert n[1000.0][1] < 1.6 * n[100.0][1]
+    assert n[1000.0][0] > 5 * n[100.0][0]
+    assert n[1000.0][1] < 0.1 * n[1000.0][0]
+    nodes = ws._graded_nodes(_m(0.5, 1000.0), 0.0, ws.tilted_grid_spacing(_m(0.5, 1000.0)))
+    assert np.all(np.diff(nodes) > 0) and 0.0 in nodes
+    ratio = np.diff(nodes)[1:] / np.diff(nodes)[:-1]
+    assert ratio.max() < 1.2 and ratio.min() > 1 / 1.2       # smoothly graded
+
+
+@pytest.mark.slow
+def test_graded_rate_function_converged_in_h_at_gamma_1000():
+    """No uniform reference is affordable here: the graded result must not move when every
+    spacing is halved (measured: 1e-6)."""
+    m = _m(0.5, 1000.0)
+    w = np.array([-0.9, -0.3, 0.0, 0.3])
+    h = ws.tilted_grid_spacing(m)
+    np.testing.assert_allclose(ws.rate_function(m, w), ws.rate_function(m, w, h=h / 2),
+                               atol=2e-5)
+
+
+@pytest.mark.slow
+def test_sweep_equals_independent_roots_at_gamma_10():
+    """The sorted, continued Legendre sweep finds the same roots as bracketing every w from
+    k = 0 (the old algorithm) on the same (uniform) grid."""
+    m = _m(0.5, 10.0)
+    w = np.linspace(-2.0, 2.0, 21)
+    h = ws.tilted_grid_spacing(m)
+    mean = float(ws._scgf_pair(m, 0.0, h)[1])
+    old = np.array([max(k * wi - lam, 0.0) / m.gamma
+                    for wi in w for k, lam in [ws._legendre_root(m, float(wi), h, mean)]])
+    np.testing.assert_allclose(ws.rate_function(m, w[::-1])[::-1], old, atol=1e-10)
+
+
+def test_fluctuation_relation_exact_at_delta_zero_only():
+    """Gallavotti-Cohen symmetry lambda(k) = lambda(-k - gamma/(m tau_m)) of the OU work
+    (paper eq. ftexp at Delta = 0: I(-w) - I(w) = w/(m tau_m)); broken for Delta > 0."""
+    ou_model = Model(tau_m=0.8, delta=0.0, a=0.5, gamma=10.0, mass=1.3)
+    k = np.linspace(-4.0, 4.0, 9)
+    c = ou_model.gamma / (ou_model.mass * ou_model.tau_m)
+    np.testing.assert_allclose(ws.scgf(ou_model, k), ws.scgf(ou_model, -k - c), atol=1e-9)
+    w, rate, fr = ws.rate_function_curve(ou_model, np.linspace(-1.5, 1.5, 13))
+    np.testing.assert_allclose(rate, ou.rate_function(ou_model, w), atol=1e-9)
+    np.testing.assert_allclose(fr, w / (ou_model.mass * ou_model.tau_m), atol=1e-9)
+    dry = _m(0.5, 10.0)
+    c = dry.gamma / (dry.mass * dry.tau_m)
+    assert np.max(np.abs(ws.scgf(dry, k) - ws.scgf(dry, -k - c))) > 0.1
+
+
+def test_rate_function_curve_matches_pointwise_and_rejects_asymmetric_grids():
+    m = _m(0.5, 10.0)
+    w = np.linspace(-1.0, 1.0, 9)
+    _, rate, fr = ws.rate_function_curve(m, w)
+    np.testing.assert_allclose(rate, ws.rate_function(m, w), atol=1e-12)
+    np.testing.assert_allclose(fr, rate[::-1] - rate, atol=0)
+    with pytest.raises(ValueError, match="symmetric"):
+        ws.rate_function_curve(m, np.linspace(-1.0, 1.2, 9))
+    with pytest.raises(ValueError, match="mesh"):
+        ws.rate_function(m, [0.1], mesh="fine")
+
+
+@pytest.mark.slow
+def test_shared_work_pdf_equals_per_w_contours_and_ou_closed_form():
+    """Shared contours against the per-w contours (Fig. 8 model, the stick regime with its
+    non-Gaussian tilted laws; measured <= 6e-5 relative for densities above 1e-20) and
+    against the OU closed form (measured 1.1e-6, as the per-w route)."""
+    tau = 2.0
+    m = _m(0.5, 10.0)
+    w = np.linspace(-0.45, 0.55, 11)
+    shared = ws.work_pdf(m, w, tau)
+    alone = ws.work_pdf(m, w, tau, share=False)
+    np.testing.assert_allclose(shared, alone, rtol=3e-4)
+    o = Model(tau_m=1.0, delta=0.0, a=0.5, gamma=10.0)
+    w = np.linspace(-0.6, 1.1, 12)
+    np.testing.assert_allclose(ws.work_pdf(o, w, tau), ou.work_pdf(o, w, tau), rtol=1e-5)
+
+
+def test_open_question_data_goes_through_the_cache(tmp_path):
+    store = TheoryCache(tmp_path)
+    first = oq.open_question_data(0.5, 1.0, gammas=(10.0,), points={10.0: 5}, cache=store)
+    second = oq.open_question_data(0.5, 1.0, gammas=(10.0,), points={10.0: 5}, cache=store)
+    assert store.misses == 1 and store.hits == 1
+    np.testing.assert_array_equal(first[10.0][1], second[10.0][1])
+    np.testing.assert_allclose(first[10.0][1], ws.rate_function(_m(0.5, 10.0), first[10.0][0]),
+                               atol=1e-12)
