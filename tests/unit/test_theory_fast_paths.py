@@ -122,3 +122,26 @@ def test_open_question_data_goes_through_the_cache(tmp_path):
     np.testing.assert_array_equal(first[10.0][1], second[10.0][1])
     np.testing.assert_allclose(first[10.0][1], ws.rate_function(_m(0.5, 10.0), first[10.0][0]),
                                atol=1e-12)
+
+
+def test_work_variance_all_windows_from_one_autocorrelation():
+    """OU closed form (Var(W_tau) of analogue.theory.ornstein_uhlenbeck, divided by tau^2)
+    and, at Delta > 0, the one-window-at-a-time Green-Kubo integral it replaces."""
+    from scipy import integrate
+
+    from analogue.theory.stationary import autocorrelation
+    taus = np.array([1.0, 2.0, 5.0])
+    o = Model(tau_m=1.0, delta=0.0, a=0.5, gamma=10.0)
+    np.testing.assert_allclose(ws.work_variance(o, taus),
+                               np.asarray(ou.work_variance(o, taus)) / taus**2, rtol=1e-8)
+    m = _m(0.5, 10.0)
+    one = []
+    for tau in taus:
+        s = np.linspace(0.0, tau, 81)
+        c = autocorrelation(m, s)
+        one.append(m.force**2 * 2.0 * integrate.simpson((tau - s) * c, x=s) / tau**2)
+    np.testing.assert_allclose(ws.work_variance(m, taus, n=81), one, rtol=1e-12)
+    with pytest.raises(ValueError, match="n must be"):
+        ws.work_variance(m, taus, n=80)
+    with pytest.raises(ValueError, match="taus"):
+        ws.work_variance(m, [0.0])
