@@ -272,7 +272,7 @@ class RunStore:
             where = f"moved to {dest}"
         except OSError as exc:
             where = f"could not be moved to {self.quarantine_dir} ({_one_line(exc, 120)})"
-        log.warning("analogue: run store: entry %s... is damaged (%s); %s (quarantine); "
+        log.warning("analogue: run store: entry %s... is damaged (%s); %s; "
                     "it will be recomputed", key[:12], reason, where)
 
     def keys(self) -> list[str]:
