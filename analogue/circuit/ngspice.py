@@ -464,6 +464,15 @@ def run_deck(text: str, *, timeout: float = 3600.0, t_stop: float | None = None,
             raise NgspiceError(_with_said(f"ngspice exited with status {returncode}", said))
         if not raw.exists():
             raise NgspiceError(_with_said("ngspice wrote no raw file", said))
+        # The reader holds the file and a copy of its data: refuse what cannot fit, unread.
+        from .limits import format_bytes, memory_limit
+        size = raw.stat().st_size
+        mem, why = memory_limit()
+        if 2 * size > mem:
+            raise NgspiceError(f"the raw file ngspice wrote is {format_bytes(size)}; reading it "
+                               f"needs about twice that, more than the memory limit of "
+                               f"{format_bytes(mem)} ({why}); reduce the replicas per deck or "
+                               f"t_end, or raise the deck's max step")
         try:
             plots = read_raw(raw)
         except (ValueError, OSError) as exc:

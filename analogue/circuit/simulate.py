@@ -258,6 +258,10 @@ def run_batch(task: BatchTask) -> dict:
         out["noise"] = held_values(res.plot["time"], res.plot.columns(task.noise_names),
                                    float(t_s[-1]), task.noise_dt * task.time_scale) \
             * task.to_model_noise
+    for name in ("v", "x", "x_spring", "noise"):
+        if name in out and not np.all(np.isfinite(out[name])):
+            raise _ng.NgspiceError(f"ngspice exited normally but its {name} vectors hold NaN or "
+                                   f"infinite values (deck {task.index}); the circuit diverged")
     return out
 
 

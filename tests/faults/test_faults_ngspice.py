@@ -148,7 +148,7 @@ def test_hang_is_killed_at_the_timeout_with_its_children(fake):
     elapsed = time.monotonic() - t0
     msg = _one_line(exc)
     assert "timeout=1.0" in msg and "simulating..." in msg
-    assert elapsed < 8.0, elapsed
+    assert elapsed < 15.0, elapsed  # ~1 s; the child would hold the pipes for 300 s
     pids = _pids(fake.state)
     assert len(pids) == 2
     deadline = time.monotonic() + 5
@@ -174,7 +174,7 @@ def test_wrapper_whose_child_keeps_the_pipes_open_returns_promptly(fake):
     t0 = time.monotonic()
     res = ng.run_deck(GOOD_DECK, timeout=20.0)
     elapsed = time.monotonic() - t0
-    assert elapsed < 10.0, elapsed
+    assert elapsed < 15.0, elapsed  # the child sleeps 300 s
     t = res.plot["time"]
     v = res.plot["v(v1)"]
     # RC = 1 ms: v(t) = exp(-t / 1 ms) from the real simulator
@@ -194,7 +194,7 @@ def test_version_probe_that_hangs_is_bounded(fake, monkeypatch):
     t0 = time.monotonic()
     with pytest.raises(ng.NgspiceError) as exc:
         ng.ngspice_version()
-    assert time.monotonic() - t0 < 8.0
+    assert time.monotonic() - t0 < 15.0
     msg = _one_line(exc)
     assert "-v" in msg
 
@@ -219,7 +219,7 @@ def test_simulate_timeout_keyword_holds(fake, tmp_path):
     with pytest.raises(ng.NgspiceError) as exc:
         analogue.simulate(STICK, v0=0.4, t_end=1.0, replicas=2, seed=1, replicas_per_deck=1,
                           workers=2, store=tmp_path / "store", progress=False, timeout=1.5)
-    assert time.monotonic() - t0 < 10.0
+    assert time.monotonic() - t0 < 30.0  # imports + 1.5 s, on a loaded machine; not 300 s
     assert "timeout=1.5" in _one_line(exc)
     assert _leftover_dirs(fake.tmp) == []
     assert not ng._ACTIVE
@@ -335,3 +335,41 @@ def test_title_line_may_say_anything(fake):
 def test_signal_names_in_messages():
     assert ng._signal_name(signal.SIGSEGV) == "SIGSEGV"
     assert ng._signal_name(200) == "signal 200"
+
+
+def test_raw_file_beyond_the_memory_limit_is_refused_unread(fake, monkeypatch):
+    """A runaway deck can write a raw file larger than memory: refused by its size, before
+    it is read (here a 3 MB file against a 1 MB limit)."""
+    (fake.state / "raw.bin").write_bytes(HEADER.format(nvar=2, npts=196608).encode()
+                                         + np.zeros(2 * 196608).tobytes())
+    fake("""
+        cp "$STATE/raw.bin" "$3"
+        exit 0
+    """)
+    monkeypatch.setenv("ANALOGUE_MEMORY_LIMIT", "1M")
+    with pytest.raises(ng.NgspiceError) as exc:
+        ng.run_deck(GOOD_DECK)
+    msg = _one_line(exc)
+    assert "raw file" in msg and "ANALOGUE_MEMORY_LIMIT" in msg
+
+
+def test_non_finite_simulator_values_are_an_error_not_data(fake):
+    """ngspice exiting 0 with NaN in a vector: the batch fails in one line instead of being
+    stored (a NaN entry would be quarantined and re-run for ever)."""
+    from analogue.circuit.simulate import BatchTask, run_batch
+    t = np.linspace(0.0, 1e-3, 11)
+    v = np.exp(-t / 1e-3)
+    v[4] = np.nan
+    (fake.state / "raw.bin").write_bytes(HEADER.format(nvar=2, npts=11).encode()
+                                         + np.column_stack([t, v]).tobytes())
+    fake("""
+        cp "$STATE/raw.bin" "$3"
+        exit 0
+    """)
+    task = BatchTask(index=0, text=GOOD_DECK, v_names=("v(a)",), x_names=None, to_model_v=1.0,
+                     to_model_x=1.0, time_scale=1e-3, times=np.linspace(0.0, 1.0, 6),
+                     v0=np.array([1.0]))
+    with pytest.raises(ng.NgspiceError) as exc:
+        run_batch(task)
+    msg = _one_line(exc)
+    assert "NaN" in msg or "non-finite" in msg
