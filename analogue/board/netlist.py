@@ -99,13 +99,15 @@ def _n(x, what="value") -> str:
 def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: float,
                      sample_dt: float, seed: int, noise_dir, first_replica: int = 0,
                      reltol: float = 1e-4, save_all: bool = False,
-                     friction_kind: str = "bridge", ota: dict | None = None) -> BoardDeck:
+                     friction_kind: str = "bridge", ota: dict | None = None,
+                     noise_off: bool = False) -> BoardDeck:
     """Deck for ``len(v0)`` replicas of ``board`` started at ``v0`` (model units).
 
     Replica ``j`` is driven by the DAC sequence ``(seed, first_replica + j)``
     (:func:`analogue.board.noise_chain.dac_sequence`), written to ``noise_dir`` (created).
     ``save_all``: save every node (for the rails check).  ``friction_kind``: ``"bridge"`` or
-    ``"ota"`` (then ``ota`` = dict(i_abc, k, vos, asymmetry)).
+    ``"ota"`` (then ``ota`` = dict(i_abc, k, vos, asymmetry)).  ``noise_off``: the DAC stays
+    at mid-scale (0 V; calibration runs).
     """
     from pathlib import Path
     if not isinstance(design, BoardDesign):
@@ -158,8 +160,12 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
             lines += friction.ota_lines(f"b{j}", sj, o, temperature_k=temp_k, **(ota or {}))
         if np.isfinite(val_["R_F"]):
             lines.append(f"R{j}f f {sj} {_n(val_['R_F'], 'R_F')}")
-        volts = noise_chain.dac_sequence(design, seed, r, n_samples)
-        path = noise_dir / f"dac_{design.spec.dac_bits}b_{int(seed)}_{r}_{n_samples}.txt"
+        if noise_off:
+            volts = np.zeros(n_samples)
+            path = noise_dir / f"dac_zero_{n_samples}.txt"
+        else:
+            volts = noise_chain.dac_sequence(design, seed, r, n_samples)
+            path = noise_dir / f"dac_{design.spec.dac_bits}b_{int(seed)}_{r}_{n_samples}.txt"
         sha = noise_chain.write_dac_file(path, volts, ts)
         files.append(str(path))
         lines += noise_chain.dac_lines(f"n{j}", f"d{j}", path, sha)
@@ -167,7 +173,13 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
         lines += [f"C{j}ac bo{j} ac{j} {_n(val_['C_AC'], 'C_AC')}",
                   f"R{j}n ac{j} {sj} {_n(val_['R_N'], 'R_N')}"]
         vo = -design.kappa * v0[j]
-        ic.append(f"v({o})={_n(vo)} v(xu{j}.g)={_n(vo)} v({sj})=0")
+        # the virtual ground's own equilibrium, -vos - V(out)/a0: holding it at 0 through the
+        # operating point would charge the AC-coupling capacitor to the offset, which then
+        # bleeds a current vos/R_N into sj for ~R_N C_AC = 170 tau_m (measured: 0.5 uA, a
+        # force error of 0.01 for vos = 4 mV)
+        amp = b.opamps["int"]
+        v_sj = -amp.vos - vo / amp.a0
+        ic.append(f"v({o})={_n(vo)} v(xu{j}.g)={_n(vo)} v({sj})={_n(v_sj)}")
     lines.append(".ic " + " ".join(ic))
     lines.append(f".options reltol={_n(reltol)} abstol=1e-12 vntol=1e-7 method=gear "
                  f"temp={_n(b.temperature)} tnom=27")

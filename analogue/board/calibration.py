@@ -1,0 +1,144 @@
+"""Acquisition and calibration: recover tau_m, Delta, a and gamma of a built board.
+
+ADC (:data:`ADC_SPEC`): DC-coupled, simultaneous sampling of the integrator output (and the
+DAC monitor), +-10 V range, 16 bits, at the DAC rate (100 kS/s at theta = 1 ms, TS = 10 us).
+
+Procedure (each step a short ngspice run of the drawn board, exactly what the bench does):
+
+1. **Step responses, friction off** (both current sources' references at 0 V, noise DAC at
+   mid-scale), force input at ``+V_t`` and ``-V_t`` (V_t = 10 V, the force DAC's full scale),
+   from v = 0: ``v(t) = v_inf (1 - e^{-t/tau})`` fitted for ``tau`` and ``v_inf``.  With
+   ``v_inf(+-) = tau (+-g V_t + o)``: the force gain ``g`` (per volt) and the offset force
+   ``o`` (op-amp offset through R_F, bias current) follow; the experiment's force is
+   ``a_off = g V_F + o``.
+2. **Terminal velocities, friction on, noise off**, force at +-V_t: ``v_+ = tau (g V_t + o -
+   Delta_bot)``, ``v_- = tau (-g V_t + o + Delta_top)`` (both sliding as long as g V_t > Delta).
+   ``Delta = (Delta_top + Delta_bot)/2``; the friction asymmetry adds ``(Delta_top -
+   Delta_bot)/2`` to the force: **a from the drift** ``a = a_off + (Delta_top - Delta_bot)/2``.
+3. **OU run, friction off, noise on, force 0**: the velocity is an Ornstein-Uhlenbeck process
+   driven by the *known* DAC sequence.  Regressing the measured v(t) on the response of
+   ``dv = -v/tau dt + eta`` to that sequence through the nominal chain gives the noise gain
+   ``k`` (``D = k^2 D_nominal``, gamma = gamma_nominal / k^2) with a precision no variance
+   estimate of the same length reaches; the plain OU variance route (``gamma = tau F/Var``
+   with the chain's coloured-noise factor F) is reported next to it with its standard error.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import optimize
+
+from ..circuit import ngspice as ng
+from ..model import Model
+from . import noise_chain
+from .design import BoardDesign
+from .netlist import BoardInstance, build_board_deck
+
+__all__ = ["ADC_SPEC", "Calibration", "calibrate_board", "V_TEST"]
+
+ADC_SPEC = {"coupling": "DC", "sampling": "simultaneous (velocity, DAC monitor)",
+            "range_V": 10.0, "bits": 16, "rate": "the DAC rate 1/TS (100 kS/s at TS = 10 us)",
+            "anti_alias": "none needed beyond the integrator (the velocity is band-limited by "
+                          "tau_m) - sample synchronously with the DAC clock"}
+V_TEST = 10.0
+STEP_T = 8.0
+OU_T = 20.0
+
+
+@dataclass(frozen=True)
+class Calibration:
+    tau_m: float
+    delta: float
+    delta_top: float
+    delta_bot: float
+    a: float
+    gamma: float
+    gamma_variance: float
+    gamma_variance_se: float
+    force_gain: float
+    force_offset: float
+    noise_gain: float
+
+    def model(self, template: Model, epsilon: float) -> Model:
+        return template.replace(tau_m=self.tau_m, delta=self.delta, a=self.a, gamma=self.gamma,
+                                epsilon=epsilon)
+
+    def as_dict(self) -> dict:
+        return {k: getattr(self, k) for k in self.__dataclass_fields__}
+
+
+def _run(design, board, *, t_end, noise, seed, noise_dir, v0=0.0):
+    deck = build_board_deck(design, board, v0=[v0], t_end=t_end, sample_dt=0.01, seed=seed,
+                            noise_dir=noise_dir, reltol=1e-4, noise_off=not noise)
+    res = ng.run_deck(deck.text, t_stop=t_end * design.theta)
+    t = np.arange(round(t_end / 0.01) + 1) * 0.01
+    v = ng.resample(res.plot, deck.vectors["v"], t * design.theta)[0] * design.to_model_v
+    return t, v
+
+
+def _fit_step(t, v):
+    def f(t, v_inf, tau):
+        return v_inf * (1.0 - np.exp(-t / tau))
+    (v_inf, tau), _ = optimize.curve_fit(f, t, v, p0=(v[-1], 1.0))
+    return v_inf, tau
+
+
+def calibrate_board(design: BoardDesign, board: BoardInstance, *, seed: int, noise_dir) -> Calibration:
+    """Run the calibration procedure (module docstring) on ``board``."""
+    off = board.replace(v_set_top=0.0, v_set_bot=0.0)
+    v_f = board.v_force  # the experiment's force voltage (as set on the board)
+    v_nom_f = design.force_sign * design.spec.v_force  # what the experimenter dialled
+    res = {}
+    for name, b, vt in (("off+", off, V_TEST), ("off-", off, -V_TEST),
+                        ("on+", board, V_TEST), ("on-", board, -V_TEST)):
+        # the force reference is scaled by its own tolerance: v_f / v_nom_f
+        res[name] = _run(design, b.replace(v_force=vt * v_f / v_nom_f),
+                         t_end=STEP_T, noise=False, seed=seed, noise_dir=noise_dir)
+    vp, tau_p = _fit_step(*res["off+"])
+    vm, tau_m_ = _fit_step(*res["off-"])
+    tau = 0.5 * (tau_p + tau_m_)
+    g = (vp - vm) / (2.0 * tau * V_TEST)
+    o = (vp + vm) / (2.0 * tau)
+    a_off = g * v_nom_f + o
+    v_plus = float(np.mean(res["on+"][1][-50:]))
+    v_minus = float(np.mean(res["on-"][1][-50:]))
+    d_bot = g * V_TEST + o - v_plus / tau
+    d_top = v_minus / tau + g * V_TEST - o
+    delta = 0.5 * (d_top + d_bot)
+    a = a_off + 0.5 * (d_top - d_bot)
+
+    # OU run: friction off, force off, noise on, from v = 0
+    ou = off.replace(v_force=0.0)
+    t, v = _run(design, ou, t_end=OU_T, noise=True, seed=seed, noise_dir=noise_dir)
+    n = int(math.ceil(OU_T * design.theta / design.noise_ts)) + 2
+    volts = noise_chain.dac_sequence(design, seed, 0, n)
+    per = 8
+    tf, cur = noise_chain.chain_current(design.values, np.concatenate([[0.0], volts]),
+                                        design.noise_ts, per_hold=per)
+    eta = cur * design.theta / (design.values["C"] * design.kappa)   # model units, nominal C
+    dt = design.noise_ts / per / design.theta
+    lam = math.exp(-dt / tau)
+    pred = np.empty_like(eta)
+    acc = 0.0
+    for i, e in enumerate(eta):            # exact OU response to piecewise-constant input
+        acc = acc * lam + e * tau * (1.0 - lam)
+        pred[i] = acc
+    pred_t = np.interp(t, np.concatenate([[0.0], tf / design.theta]), np.concatenate([[0.0], pred]))
+    keep = t > 3.0 * tau
+    A = np.column_stack([pred_t[keep], np.ones(keep.sum())])
+    (k, c0), *_ = np.linalg.lstsq(A, v[keep], rcond=None)
+    gamma_nom = design.realised.gamma
+    gamma = gamma_nom / k ** 2
+    # variance route, with the chain's coloured-noise factor at lambda = 1/tau
+    factor = noise_chain.ou_variance_factor(design.values, design.noise_ts,
+                                            1.0 / (tau * design.theta))
+    x = v[keep] - v[keep].mean()
+    var = float(np.mean(x * x))
+    n_eff = keep.sum() * 0.01 / (tau)          # OU: integrated autocorrelation time tau
+    var_se = var * math.sqrt(2.0 / max(n_eff, 1.0))
+    g_var = tau * factor / var
+    return Calibration(tau_m=tau, delta=delta, delta_top=d_top, delta_bot=d_bot, a=a,
+                       gamma=gamma, gamma_variance=g_var, gamma_variance_se=g_var * var_se / var,
+                       force_gain=g, force_offset=o, noise_gain=float(k))
