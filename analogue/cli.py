@@ -517,5 +517,26 @@ def theory(quantity, experiment_arg, experiment, tau_m, delta, a, gamma, mass, e
         click.echo(tab.as_text())
 
 
+# -------------------------------------------------------------------------------- board
+@main.command()
+@click.argument("experiment")
+@click.option("--out", type=click.Path(file_okay=False, path_type=Path), required=True,
+              help="Directory for schematic.svg, bom.csv, board.cir, metrics.json, index.html.")
+@click.option("--quick", is_flag=True, help="Few boards, short runs (about two minutes).")
+@click.option("--workers", type=click.IntRange(1, 256), default=None,
+              help="ngspice processes at once (default: all cores).")
+@click.option("--store", "board_store", type=click.Path(file_okay=False, path_type=Path),
+              default=None, help="Run-store directory (default $ANALOGUE_STORE or ~/.cache/analogue/runs).")
+@click.option("--seed", type=click.IntRange(0, 2**31 - 1), default=None,
+              help="Master seed (default: the experiment's).")
+def board(experiment, out, quick, workers, board_store, seed):
+    """A board you can build for EXPERIMENT: op-amp realisation with E-series parts, noise
+    chain, tolerance Monte Carlo, calibration, schematic.svg and bom.csv."""
+    from .board.job import run_board_job
+    index = run_board_job(experiment, out, quick=quick, store=board_store, workers=workers,
+                          seed=seed, log=lambda msg: click.echo(msg, err=True))
+    click.echo(f"board report: {index}")
+
+
 if __name__ == "__main__":  # pragma: no cover
     main()

@@ -8,7 +8,7 @@ from pathlib import Path
 from .design import BoardDesign
 from .schematic import eng
 
-__all__ = ["bom_rows", "write_bom", "HEADER"]
+__all__ = ["HEADER", "bom_rows", "write_bom"]
 
 HEADER = ("reference", "part", "value", "tolerance", "dielectric_or_rating", "quantity")
 

@@ -36,7 +36,7 @@ from . import noise_chain
 from .design import BoardDesign
 from .netlist import BoardInstance, build_board_deck
 
-__all__ = ["ADC_SPEC", "Calibration", "calibrate_board", "V_TEST"]
+__all__ = ["ADC_SPEC", "V_TEST", "Calibration", "calibrate_board"]
 
 ADC_SPEC = {"coupling": "DC", "sampling": "simultaneous (velocity, DAC monitor)",
             "range_V": 10.0, "bits": 16, "rate": "the DAC rate 1/TS (100 kS/s at TS = 10 us)",
@@ -112,7 +112,7 @@ def calibrate_board(design: BoardDesign, board: BoardInstance, *, seed: int, noi
     # OU run: friction off, force off, noise on, from v = 0
     ou = off.replace(v_force=0.0)
     t, v = _run(design, ou, t_end=OU_T, noise=True, seed=seed, noise_dir=noise_dir)
-    n = int(math.ceil(OU_T * design.theta / design.noise_ts)) + 2
+    n = math.ceil(OU_T * design.theta / design.noise_ts) + 2
     volts = noise_chain.dac_sequence(design, seed, 0, n)
     per = 8
     tf, cur = noise_chain.chain_current(design.values, np.concatenate([[0.0], volts]),
@@ -128,7 +128,7 @@ def calibrate_board(design: BoardDesign, board: BoardInstance, *, seed: int, noi
     pred_t = np.interp(t, np.concatenate([[0.0], tf / design.theta]), np.concatenate([[0.0], pred]))
     keep = t > 3.0 * tau
     A = np.column_stack([pred_t[keep], np.ones(keep.sum())])
-    (k, c0), *_ = np.linalg.lstsq(A, v[keep], rcond=None)
+    (k, _c0), *_ = np.linalg.lstsq(A, v[keep], rcond=None)
     gamma_nom = design.realised.gamma
     gamma = gamma_nom / k ** 2
     # variance route, with the chain's coloured-noise factor at lambda = 1/tau

@@ -22,10 +22,18 @@ def eng(x: float, unit: str) -> str:
     return f"{x:.3g} {unit}"
 
 
-def draw_schematic(design: BoardDesign, path) -> Path:
+def draw_schematic(design: BoardDesign, path, fmt: str = "svg") -> Path:
+    """Write the schematic as SVG (schemdraw's own backend) or PNG (matplotlib backend)."""
     import schemdraw
     import schemdraw.elements as elm
-    schemdraw.use("svg")
+    if fmt not in ("svg", "png"):
+        raise ValueError(f"fmt must be 'svg' or 'png', got {fmt!r}")
+    if fmt == "png":
+        import matplotlib
+        matplotlib.use("Agg")
+        schemdraw.use("matplotlib")
+    else:
+        schemdraw.use("svg")
     v = design.values
     spec = design.spec
     path = Path(path)
@@ -89,6 +97,10 @@ def draw_schematic(design: BoardDesign, path) -> Path:
             f"DAC {spec.dac_bits} bit\n{eng(1.0 / design.noise_ts, 'S/s')}\n{spec.dac_rms:g} V rms\n"
             "seeded Gaussian", loc="top", ofst=(-1.6, 0)))
         d.add(elm.Ground())
-    data = d.get_imagedata("svg")
+    data = d.get_imagedata(fmt)
     path.write_bytes(data if isinstance(data, bytes) else data.encode())
+    if fmt == "png":
+        import matplotlib.pyplot as plt
+        plt.close("all")
+        schemdraw.use("svg")
     return path

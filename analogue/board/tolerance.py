@@ -33,8 +33,16 @@ from . import opamp
 from .design import BoardDesign
 from .netlist import ROLES, BoardInstance, nominal_instance
 
-__all__ = ["Tolerances", "CLASSES", "draw_board", "effective_model", "readout_offset",
-           "gradients", "sensitivities", "PARAMS"]
+__all__ = [
+    "CLASSES",
+    "PARAMS",
+    "Tolerances",
+    "draw_board",
+    "effective_model",
+    "gradients",
+    "readout_offset",
+    "sensitivities",
+]
 
 CLASSES = ("resistors", "capacitors", "references", "opamp_offsets", "opamp_bias", "diodes",
            "temperature")
@@ -63,7 +71,7 @@ class Tolerances:
         if bad:
             raise ValueError(f"enabled must be a subset of {CLASSES}, got {bad}")
 
-    def only(self, *classes) -> "Tolerances":
+    def only(self, *classes) -> Tolerances:
         return replace(self, enabled=tuple(classes))
 
 
@@ -206,4 +214,8 @@ def sensitivities(design: BoardDesign, tol: Tolerances, *, boards: int, seed: in
         out[cls] = {k: {"std": float(np.std(dx @ g, ddof=1)), "mean_shift": float(np.mean(dx @ g))}
                     for k, g in grads.items()}
         out[cls]["_params_std"] = {p: float(np.std(dx[:, j], ddof=1)) for j, p in enumerate(PARAMS)}
+        # each parameter's share: the spread its deviation alone causes in each observable
+        out[cls]["_param_contrib"] = {k: {p: float(np.std(dx[:, j] * g[j], ddof=1))
+                                          for j, p in enumerate(PARAMS)}
+                                      for k, g in grads.items()}
     return out

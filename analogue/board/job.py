@@ -1,0 +1,299 @@
+"""``analogue board EXPERIMENT --out DIR [--quick]``: the whole board job.
+
+Steps (each result carries its seeds and sizes):
+
+1. design (:mod:`.design`) for the experiment's model and initial velocities;
+2. nominal board in ngspice (stationary start from p_s of the realised model) against exact
+   theory of the requested model, with the budget of :mod:`.budget` (rounding, smoothing,
+   bandwidth from an SDE pair, integration from a reltol 1e-4 re-run of a few replicas);
+3. tolerance Monte Carlo: ``boards`` boards drawn with :func:`.tolerance.draw_board`, each
+   simulated with the same DAC sequences as a nominal reference run (common random numbers)
+   and calibrated with :func:`.calibration.calibrate_board`; spread and bias of every
+   observable before calibration (against the requested model) and after (against exact
+   theory at the board's calibrated parameters);
+4. linearised sensitivities (exact theory, :func:`.tolerance.gradients`) per tolerance class,
+   including work rate-function points I(w): which tolerance dominates;
+5. the OTA friction element at nominal values, compared with the bridge;
+6. schematic.svg, bom.csv, board.cir, metrics.json, index.html.
+"""
+from __future__ import annotations
+
+import json
+import math
+import platform
+import time as _time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..circuit import ngspice as ng
+from ..circuit.experiments import load_experiment
+from ..report.metrics import validate_metrics
+from ..theory.exact import rate_function, sample_stationary, stationary_moments
+from . import budget, calibration, tolerance
+from .bom import write_bom
+from .design import BoardSpec, design_board
+from .netlist import build_board_deck, nominal_instance
+from .runner import noise_directory, run_board
+from .schematic import draw_schematic
+
+__all__ = ["FULL", "QUICK", "JobSettings", "run_board_job", "theory_observables"]
+
+
+@dataclass(frozen=True)
+class JobSettings:
+    replicas: int
+    t_end: float
+    burn_in: float
+    pair_replicas: int
+    integ_replicas: int
+    boards: int
+    mc_replicas: int
+    mc_t_end: float
+    sens_boards: int
+    ota_replicas: int
+    rate_points: bool = True   # work rate-function points in the sensitivities (~15 s)
+
+
+FULL = JobSettings(replicas=32, t_end=40.0, burn_in=2.0, pair_replicas=256, integ_replicas=4,
+                   boards=20, mc_replicas=8, mc_t_end=20.0, sens_boards=400, ota_replicas=16)
+QUICK = JobSettings(replicas=8, t_end=12.0, burn_in=2.0, pair_replicas=64, integ_replicas=4,
+                    boards=4, mc_replicas=4, mc_t_end=8.0, sens_boards=100, ota_replicas=4)
+SAMPLE_DT = 0.01
+W_FACTORS = (-1.0, 0.0, 2.0, 3.0)   # rate-function points at these multiples of <w>
+
+
+def theory_observables(model, offset: float, threshold: float, w_points=()) -> dict:
+    """Exact stationary observables of ``model`` read through an ADC offset ``offset`` (model
+    velocity units), and the work rate function at ``w_points``."""
+    m = stationary_moments(model)
+    lo = min(-threshold - abs(offset), model.potential_minimum()) - 14 * model.velocity_scale
+    hi = max(threshold + abs(offset), model.potential_minimum()) + 14 * model.velocity_scale
+    v = np.linspace(lo, hi, 40001)
+    p = model.stationary_pdf(v)
+    cdf = np.concatenate([[0.0], np.cumsum(0.5 * (p[1:] + p[:-1]) * np.diff(v))])
+    cdf /= cdf[-1]
+
+    def prob(a, b):
+        return float(np.interp(b, v, cdf) - np.interp(a, v, cdf))
+
+    out = {"mean v": m.mean + offset, "var v": m.variance,
+           "P(v>0)": prob(-offset, hi), "stick fraction": prob(-threshold - offset, threshold - offset)}
+    if len(w_points):
+        for w, i in zip(w_points, rate_function(model, list(w_points))):
+            out[f"I(w={w:.4g})"] = float(i)
+    return out
+
+
+def _stats(x) -> dict:
+    x = np.asarray(x, dtype=float)
+    return {"mean": float(x.mean()), "std": float(x.std(ddof=1)) if x.size > 1 else float("nan"),
+            "n": int(x.size)}
+
+
+def run_board_job(experiment: str, out, *, quick: bool = False, store=None, workers=None,
+                  seed: int | None = None, log=print, settings: JobSettings | None = None) -> Path:
+    """Run the job; returns the path of index.html.  ``settings`` overrides the sizes of
+    ``QUICK``/``FULL`` (tests use tiny ones)."""
+    t_start = _time.perf_counter()
+    if settings is not None and not isinstance(settings, JobSettings):
+        raise TypeError(f"settings must be a JobSettings, got {type(settings).__name__}")
+    st = settings or (QUICK if quick else FULL)
+    exp = load_experiment(experiment)
+    model = exp.model
+    if model.delta <= 0:
+        raise ValueError(f"experiment {exp.name!r}: the board needs Delta > 0 (its friction element)")
+    seed = exp.seed if seed is None else seed
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    design = design_board(model, BoardSpec(), v0=list(exp.v0))
+    thr = 0.1 * model.velocity_scale   # the paper report's stick threshold
+    taus = (1.0,)
+    fn = budget.observables_fn(model, burn_in=st.burn_in, threshold=thr, taus=taus)
+    nominal = nominal_instance(design)
+    timings = {}
+
+    # ------------------------------------------------------------------ 2. nominal board
+    log(f"board: nominal board, {st.replicas} replicas x {st.t_end} tau_m")
+    t0 = _time.perf_counter()
+    v0 = sample_stationary(design.realised, st.replicas, seed + 1)
+    ens = run_board(design, nominal, v0=v0, t_end=st.t_end, sample_dt=SAMPLE_DT, seed=seed,
+                    store=store, workers=workers)
+    tight = run_board(design, nominal, v0=v0[:st.integ_replicas], t_end=st.t_end,
+                      sample_dt=SAMPLE_DT, seed=seed, store=store, workers=workers, reltol=1e-4)
+    from ..report.observables import subset
+    integ = budget.integration_pair(fn, subset(ens, np.arange(st.integ_replicas)), tight)
+    timings["nominal_s"] = _time.perf_counter() - t0
+    log("board: noise-chain SDE pair (bandwidth budget)")
+    col, white = budget.bandwidth_pair(design, v0=sample_stationary(design.realised, st.pair_replicas, seed + 2),
+                                       t_end=st.t_end, replicas=st.pair_replicas, seed=seed + 3,
+                                       sample_dt=SAMPLE_DT)
+    band = budget.jackknife_difference(fn, col, white)
+    rows, _circ = budget.board_comparisons(exp.name, design, ens, fn=fn, threshold=thr, taus=taus,
+                                          band=band, integ=integ)
+
+    # ------------------------------------------------------------------ 4. sensitivities
+    log("board: sensitivities (exact theory, linearised)")
+    t0 = _time.perf_counter()
+    w_mean = model.force * stationary_moments(model).mean
+    w_points = [f * w_mean for f in W_FACTORS] if st.rate_points else []
+    observe = lambda m, off: theory_observables(m, off, thr, w_points)
+    _base, grads = tolerance.gradients(design, observe)
+    tol = tolerance.Tolerances()
+    sens = tolerance.sensitivities(design, tol, boards=st.sens_boards, seed=seed + 4, grads=grads)
+    timings["sensitivities_s"] = _time.perf_counter() - t0
+
+    # ------------------------------------------------------------------ 3. Monte Carlo
+    log(f"board: Monte Carlo of {st.boards} boards x {st.mc_replicas} replicas x {st.mc_t_end} tau_m")
+    t0 = _time.perf_counter()
+    v0_mc = v0[:st.mc_replicas]
+    fn_mc = budget.observables_fn(model, burn_in=st.burn_in, threshold=thr, taus=())
+    ref = fn_mc(run_board(design, nominal, v0=v0_mc, t_end=st.mc_t_end, sample_dt=SAMPLE_DT,
+                          seed=seed, store=store, workers=workers))
+    ndir = noise_directory(store)
+    exact_req = theory_observables(model, 0.0, thr)
+    boards = []
+    for i in range(st.boards):
+        b = tolerance.draw_board(design, tol, seed + 5, i)
+        obs = fn_mc(run_board(design, b, v0=v0_mc, t_end=st.mc_t_end, sample_dt=SAMPLE_DT,
+                              seed=seed, store=store, workers=workers))
+        cal = calibration.calibrate_board(design, b, seed=seed, noise_dir=ndir)
+        eff = tolerance.effective_model(design, b)
+        cal_model = cal.model(model, design.realised.epsilon)
+        exact_cal = theory_observables(cal_model, 0.0, thr)
+        exact_eff = theory_observables(eff, tolerance.readout_offset(design, b), thr)
+        boards.append({"label": b.label, "draws": {k: (list(v) if isinstance(v, tuple) else v)
+                                                   for k, v in b.draws.items()},
+                       "observed": obs, "effective": asdict_model(eff), "calibrated": cal.as_dict(),
+                       "exact_requested": exact_req, "exact_calibrated": exact_cal,
+                       "exact_effective": exact_eff})
+        log(f"board: MC board {i + 1}/{st.boards} done")
+    timings["monte_carlo_s"] = _time.perf_counter() - t0
+    mc = summarise_mc(boards, ref, exact_req, theory_observables(design.realised, 0.0, thr))
+    cal_err = calibration_errors(boards)
+
+    # ------------------------------------------------------------------ 5. OTA alternative
+    log("board: OTA friction element (nominal)")
+    t0 = _time.perf_counter()
+    i_abc = design.spec.v_set / design.values["R_S"]
+    ota = {"i_abc": i_abc, "k": 1.0, "vos": 0.0, "asymmetry": 0.0}
+    ens_ota = run_board(design, nominal, v0=v0[:st.ota_replicas], t_end=st.t_end,
+                        sample_dt=SAMPLE_DT, seed=seed, store=store, workers=workers,
+                        friction_kind="ota", ota=ota)
+    ota_obs = budget.jackknife(fn, ens_ota)
+    bridge_same = budget.jackknife(fn, subset(ens, np.arange(st.ota_replicas)))
+    timings["ota_s"] = _time.perf_counter() - t0
+
+    # ------------------------------------------------------------------ 6. outputs
+    draw_schematic(design, out / "schematic.svg")
+    matched = recommend_matching(sens)
+    write_bom(design, out / "bom.csv", matched=tuple(matched["bom_refs"]))
+    deck = build_board_deck(design, nominal, v0=[float(exp.v0[0])], t_end=exp.t_end,
+                            sample_dt=SAMPLE_DT, seed=seed, noise_dir=out / "noise")
+    (out / "board.cir").write_text(deck.text)
+    wall = _time.perf_counter() - t_start
+    metrics = {
+        "comparisons": rows,
+        "provenance": {"parameters": model.as_dict(), "realised": design.realised.as_dict(),
+                       "seeds": {"noise": seed, "stationary_v0": seed + 1, "sde_pair": seed + 3,
+                                 "sensitivities": seed + 4, "monte_carlo": seed + 5},
+                       "ngspice_version": ng.ngspice_version(), "deck_hashes": ens.meta["deck_sha256"],
+                       "wall_time_s": wall, "quick": quick, "settings": asdict(st),
+                       "python": platform.python_version(), "timings_s": timings},
+        "board": {"spec": design.spec.as_dict(), "kappa": design.kappa,
+                  "components": [list(r) for r in design.table()], "notes": list(design.notes)},
+        "monte_carlo": mc, "calibration_errors": cal_err, "sensitivities": sens,
+        "matching": matched, "ota": {"ota": ota_obs, "bridge": bridge_same, "settings": ota},
+        "boards": boards,
+    }
+    metrics = _clean(metrics)
+    validate_metrics(metrics)
+    (out / "metrics.json").write_text(json.dumps(metrics, indent=1))
+    from .report import write_report
+    return write_report(out, exp, design, metrics)
+
+
+def asdict_model(m) -> dict:
+    return {k: getattr(m, k) for k in ("tau_m", "delta", "a", "gamma", "epsilon")}
+
+
+def summarise_mc(boards: list, ref: dict, exact_req: dict, exact_nom: dict) -> dict:
+    """Per observable, across boards (``ref``: the nominal board on the same noise and sizes;
+    ``exact_nom``: exact theory of the nominal realised board):
+
+    - ``before``: board - exact theory of the requested model (includes the short runs'
+      common sampling error);
+    - ``vs_nominal_board``: board - nominal board: the tolerance effect alone (common random
+      numbers), to be compared with ``predicted`` = exact(effective model of the board) -
+      exact(nominal realised model), an independent route;
+    - ``after``: the same tolerance effect left after calibration: (board - nominal board) -
+      (exact at the board's calibrated parameters - exact nominal);
+    - ``after_vs_theory``: board - exact theory at its calibrated parameters (raw)."""
+    out = {}
+    for k, theory in exact_req.items():
+        obs = np.array([b["observed"][k] for b in boards])
+        cal = np.array([b["exact_calibrated"][k] for b in boards])
+        eff = np.array([b["exact_effective"][k] for b in boards])
+        out[k] = {"nominal_board": ref[k], "theory_requested": theory,
+                  "theory_nominal": exact_nom[k],
+                  "before": _stats(obs - theory),
+                  "vs_nominal_board": _stats(obs - ref[k]),
+                  "predicted": _stats(eff - exact_nom[k]),
+                  "after": _stats(obs - ref[k] - (cal - exact_nom[k])),
+                  "after_vs_theory": _stats(obs - cal)}
+    return out
+
+
+def calibration_errors(boards: list) -> dict:
+    """Calibrated minus effective (first-order prediction from the drawn parts) parameters."""
+    out = {}
+    for p in ("tau_m", "delta", "a", "gamma"):
+        e = [b["calibrated"][p] - b["effective"][p] for b in boards]
+        r = [b["calibrated"][p] / b["effective"][p] - 1.0 for b in boards]
+        out[p] = {"abs": _stats(e), "rel": _stats(r),
+                  "max_abs_rel": float(np.max(np.abs(r)))}
+    g = [b["calibrated"]["gamma_variance"] / b["effective"]["gamma"] - 1.0 for b in boards]
+    out["gamma_variance_route"] = {"rel": _stats(g),
+                                   "se_rel": float(np.mean([b["calibrated"]["gamma_variance_se"]
+                                                            / b["calibrated"]["gamma_variance"]
+                                                            for b in boards]))}
+    return out
+
+
+CLASS_PARTS = {"resistors": ("R1", "R2,R3", "R4", "R5"), "references": ("VR1,VR2",),
+               "opamp_offsets": ("U1,U2",), "diodes": ("D1-D4",), "capacitors": ("C1",)}
+
+
+def recommend_matching(sens: dict, fraction: float = 0.25) -> dict:
+    """Classes whose spread of some stationary observable exceeds ``fraction`` of the total:
+    those must be trimmed or matched (the calibration absorbs static errors only if the
+    experiment is compared at calibrated parameters)."""
+    total = sens["all"]
+    dominant = {}
+    for k in total:
+        if k.startswith("_"):
+            continue
+        ranked = sorted(((sens[c][k]["std"], c) for c in tolerance.CLASSES), reverse=True)
+        dominant[k] = [{"class": c, "std": s, "share": (s / total[k]["std"]) ** 2 if total[k]["std"] > 0 else 0.0}
+                       for s, c in ranked]
+    must = sorted({d["class"] for rows in dominant.values() for d in rows
+                   if d["share"] > fraction})
+    return {"dominant": dominant, "must_trim_or_match": must,
+            "bom_refs": [r for c in must for r in CLASS_PARTS.get(c, ())]}
+
+
+def _clean(obj):
+    """JSON-safe: NaN/inf -> None, numpy -> python."""
+    if isinstance(obj, dict):
+        return {str(k): _clean(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_clean(v) for v in obj]
+    if isinstance(obj, (np.floating, float)):
+        x = float(obj)
+        return x if math.isfinite(x) else None
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    return obj

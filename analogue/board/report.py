@@ -1,0 +1,190 @@
+"""``index.html`` of the board job, through the project's jinja2 page writer (autoescape on:
+every text here is escaped; only the link to schematic.svg is markup we write ourselves)."""
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+from markupsafe import Markup
+
+from ..report.html import Figure, Section, Table, write_page
+from .calibration import ADC_SPEC
+from .friction import __doc__ as FRICTION_DOC
+
+__all__ = ["write_report"]
+
+
+def _schematic_png(design, out: Path) -> Path | None:
+    """The same drawing rasterised (the page embeds PNG); the SVG is the deliverable."""
+    from .schematic import draw_schematic
+    try:
+        return draw_schematic(design, out / "schematic.png", fmt="png")
+    except Exception:  # noqa: BLE001 - a missing matplotlib backend must not lose the report
+        return None
+
+
+def _pm(s: dict) -> str:
+    if s.get("std") is None:
+        return f"{s['mean']:.4g}"
+    return f"{s['mean']:+.4g} ± {s['std']:.3g}"
+
+
+def write_report(out: Path, exp, design, metrics: dict) -> Path:
+    out = Path(out)
+    prov = metrics["provenance"]
+    st = prov["settings"]
+    quick = prov["quick"]
+    sections = []
+
+    # ------------------------------------------------------------------ design
+    comp = Table("Component values: ideal (from the mapping), rounded (E-series), relative error "
+                 "(enters the budget as 'rounding')", ["part", "ideal", "on the board", "rel. error", "role"],
+                 [list(r) for r in metrics["board"]["components"]])
+    sections.append(Section("Design choices and reasons", paragraphs=[
+        *metrics["board"]["notes"],
+        ("Friction element: the diode bridge sits in the integrator's feedback between the virtual "
+        "ground and the output; its two nodes are fed by rail-referenced current sources (op-amp "
+        "servo + MOSFET + sense resistor), so no source floats and each has volts of compliance. "
+        "A floating two-terminal regulator cannot do this (it would have to deliver power near "
+        "v = 0): with 1.5 V of headroom friction collapses into a dead zone "
+        "(tests/integration/test_board_nominal.py reproduces it)."),
+        ("Force and noise enter as voltages through resistors into the virtual ground, where they "
+        "are exact currents; the position is integrated digitally from the sampled velocity."),
+        (f"Rails ±{design.spec.rails:g} V, machine unit {design.spec.machine_unit:g} V; every node "
+        "of the deck is checked to stay within the rails (test_every_node_stays_within_the_rails)."),
+        ("Op-amps are our own macromodels (gain, GBW, slew rate, offset, bias current, output "
+        "resistance, rail clamps) with typical and worst-case sets for TL072- and OPA2140-class "
+        "parts; no vendor model is shipped (analogue.board.opamp.vendor_model_path validates a "
+        "file the user downloads and refuses .control/.exec/shell/.include lines)."),
+    ], tables=[comp]))
+
+    # ------------------------------------------------------------------ schematic + BOM
+    with (out / "bom.csv").open(encoding="utf-8") as fh:
+        bom = list(csv.reader(fh))
+    figs = []
+    png = _schematic_png(design, out)
+    if png is not None:
+        figs.append(Figure(png, "Schematic drawn from the design (schemdraw); vector version "
+                                "schematic.svg."))
+    sections.append(Section("Schematic and bill of materials", paragraphs=[
+        Markup('Vector schematic: <a href="schematic.svg">schematic.svg</a>; '
+               'netlist: <a href="board.cir">board.cir</a>; BOM: <a href="bom.csv">bom.csv</a>.')],
+        figures=figs, tables=[Table("Bill of materials (one channel)", bom[0], bom[1:])]))
+
+    # ------------------------------------------------------------------ nominal
+    rows, classes = [], []
+    for c in metrics["comparisons"]:
+        b = c["budget"]
+        rows.append([c["observable"], c["circuit"], c["circuit_stderr"], c["theory"],
+                     c["z"] if c["z"] is not None else float("nan"), b["rounding"], b["smoothing"],
+                     b["bandwidth"], b["integration"], b["statistical"], b["dominant"],
+                     c["within_budget"]])
+        classes.append("ok" if c["within_budget"] else "fail")
+    sections.append(Section("Nominal board against exact theory", paragraphs=[
+        (f"{st['replicas']} replicas × {st['t_end']} tau_m (burn-in {st['burn_in']}), started from "
+        "the stationary law of the realised model; theory: exact finite-noise values of the "
+        "requested ideal model (sgn friction, white noise). Budget terms: rounding (E-series "
+        "model minus requested, exact theory), smoothing (bridge tanh width, exact theory), "
+        f"bandwidth (SDE pair coloured minus white, {st['pair_replicas']} replicas, |d| + 2 se), "
+        f"integration (reltol 1e-3 against 1e-4 on the same noise, {st['integ_replicas']} "
+        "replicas), statistical = 3 standard errors (jackknife over replicas).")],
+        tables=[Table("Nominal board vs exact theory", ["observable", "board", "stderr", "theory",
+                                                        "z", "rounding", "smoothing", "bandwidth",
+                                                        "integration", "3 se", "dominant", "within budget"],
+                      rows, row_classes=classes)]))
+
+    # ------------------------------------------------------------------ Monte Carlo
+    mc = metrics["monte_carlo"]
+    rows = [[k, v["theory_requested"], v["nominal_board"], _pm(v["before"]), _pm(v["vs_nominal_board"]),
+             _pm(v["predicted"]), _pm(v["after"])] for k, v in mc.items()]
+    n_boards = st["boards"]
+    sections.append(Section(f"Tolerance Monte Carlo ({n_boards} boards)", paragraphs=[
+        f"{n_boards} boards drawn with a seeded generator (seed {prov['seeds']['monte_carlo']}; same seed, "
+        f"same boards), each simulated in ngspice for {st['mc_replicas']} replicas × {st['mc_t_end']} "
+        "tau_m with the same DAC sequences as the nominal reference (common random numbers: the "
+        "board-to-board spread is the tolerances', not sampling noise)."
+        + (" This is the --quick run: fewer boards and shorter runs than the full job (20 boards)."
+           if quick else ""),
+        ("Before calibration: board minus exact theory of the requested model (bias ± spread "
+        "across boards; the bias includes the common statistical error of the short runs). "
+        "Board minus nominal board on the same noise: the tolerance effect alone, before "
+        "calibration. Predicted: exact theory at each board's first-order effective model "
+        "(analogue.board.tolerance.effective_model) minus exact theory of the nominal board, an "
+        "independent route to the same number. After calibration: the tolerance effect that "
+        "remains once theory is evaluated at the parameters the calibration procedure measured "
+        "on each board, (board - nominal board) - (theory(calibrated) - theory(nominal)).")],
+        tables=[Table("Observables across boards", ["observable", "theory (requested)",
+                                                    "nominal board (MC runs)", "before calibration",
+                                                    "board - nominal board", "predicted (effective model)",
+                                                    "left after calibration"], rows)]))
+
+    # ------------------------------------------------------------------ sensitivities
+    sens = metrics["sensitivities"]
+    obs_names = [k for k in sens["all"] if not k.startswith("_")]
+    classes_ = [c for c in sens if c != "all"] + ["all"]
+    rows = [[c] + [sens[c][k]["std"] for k in obs_names] for c in classes_]
+    prow = [[c] + [sens[c]["_params_std"][p] for p in ("tau_m", "delta", "a", "gamma", "epsilon", "offset")]
+            for c in classes_]
+    contrib = sens["all"]["_param_contrib"]
+    params = ("tau_m", "delta", "a", "gamma", "epsilon", "offset")
+    stat = {c["observable"]: c["circuit_stderr"] for c in metrics["comparisons"]}
+    crow = [[k] + [contrib[k][p] for p in params] + [sens["all"][k]["std"],
+            sens["all"][k]["std"] / stat[k] if stat.get(k) else float("nan")] for k in obs_names]
+    must = metrics["matching"]["must_trim_or_match"]
+    sections.append(Section("Which tolerances must be trimmed or matched", paragraphs=[
+        (f"Standard deviation of each observable (work rate-function points I(w) included) caused "
+        f"by each tolerance class alone, over {st['sens_boards']} drawn boards, propagated through "
+        "the gradients of exact theory with respect to (tau_m, Delta, a, gamma, epsilon, ADC "
+        "offset)."),
+        "Classes carrying more than a quarter of the variance of some observable: "
+        + (", ".join(must) if must else "none") + ". The BOM marks their parts."],
+        tables=[Table("Spread per tolerance class", ["class"] + obs_names, rows),
+                Table("Spread per model parameter (all tolerances): which part to trim - tau_m: R "
+                      "and C; Delta: the sense resistors R_S and references; a: R_F, the force "
+                      "reference, the integrator offset and the current-source mismatch; gamma: "
+                      "R_N, C and the DAC level; offset: the integrator op-amp's offset at the ADC. "
+                      "Last column: total spread / standard error of the nominal board's estimate "
+                      "(below 1: the tolerances are not resolved at this statistical error).",
+                      ["observable", "tau_m", "Delta", "a", "gamma", "epsilon", "ADC offset",
+                       "total", "total / nominal se"], crow),
+                Table("Parameter spread per tolerance class (absolute)", ["class", "tau_m", "Delta",
+                      "a", "gamma", "epsilon", "ADC offset"], prow, collapsed=True)]))
+
+    # ------------------------------------------------------------------ calibration
+    ce = metrics["calibration_errors"]
+    rows = [[p, _pm(ce[p]["rel"]), ce[p]["max_abs_rel"]] for p in ("tau_m", "delta", "a", "gamma")]
+    rows.append(["gamma (OU variance route)", _pm(ce["gamma_variance_route"]["rel"]),
+                 ce["gamma_variance_route"]["se_rel"]])
+    sections.append(Section("Acquisition and calibration", paragraphs=[
+        "ADC: " + "; ".join(f"{k}: {v}" for k, v in ADC_SPEC.items()),
+        ("Procedure (analogue.board.calibration): tau_m from friction-off step responses at ±10 V "
+        "force; Delta from the terminal velocities with friction on at ±10 V; a from the drift "
+        "(offset force of the step responses plus the friction asymmetry); D (gamma) by regressing "
+        "the friction-off Ornstein-Uhlenbeck response on the known DAC sequence, and by the OU "
+        "variance (shown for comparison, with its standard error)."),
+        ("Errors: calibrated minus the board's first-order effective parameters (from its drawn "
+        "parts), relative, mean ± spread over the Monte Carlo boards.")],
+        tables=[Table("Calibration errors", ["parameter", "relative error", "max |rel| (or se)"], rows)]))
+
+    # ------------------------------------------------------------------ OTA
+    ota = metrics["ota"]
+    rows = [[k, ota["bridge"][k][0], ota["bridge"][k][1], ota["ota"][k][0], ota["ota"][k][1]]
+            for k in ota["bridge"]]
+    sections.append(Section("Alternative friction elements", paragraphs=[
+        ("OTA (LM13700 class, behavioural: I_abc tanh(k V/(2 V_T))): no floating source and a "
+        "width tunable with the input divider k, but its input offset (0.4-4 mV) appears at the "
+        "velocity as vos/k and must be trimmed, and its output mirrors' mismatch (a few %) is a "
+        "friction asymmetry. Nominal OTA board (k = 1, width 2 V_T = 52 mV, half the 1N4148 "
+        "bridge's) on the same noise as the bridge board:"),
+        FRICTION_DOC.split("A comparator")[1].join(["A comparator", ""]) if "A comparator" in FRICTION_DOC else ""],
+        tables=[Table("Bridge vs OTA, same replicas and noise", ["observable", "bridge", "se",
+                                                                 "OTA", "se"], rows)]))
+
+    sections.append(Section("Provenance", paragraphs=[
+        (f"Seeds: {prov['seeds']}; ngspice {prov['ngspice_version']}; wall time {prov['wall_time_s']:.0f} s "
+        f"({', '.join(f'{k} {v:.0f}' for k, v in prov['timings_s'].items())}); settings {st}.")]))
+
+    intro = [(f"Board for experiment {exp.name}: tau_m = {exp.model.tau_m:g}, Delta = {exp.model.delta:g}, "
+             f"a = {exp.model.a:g}, gamma = {exp.model.gamma:g}."),
+             "Everything on this page was produced by `analogue board`; metrics.json holds the numbers."]
+    return write_page(out / "index.html", f"A board you can build: {exp.name}", intro, sections)
