@@ -444,8 +444,11 @@ def run_deck(text: str, *, timeout: float = 3600.0, t_stop: float | None = None,
         raw = work / "out.raw"
         out_p, err_p = work / "stdout.txt", work / "stderr.txt"
         t0 = _time.perf_counter()
-        with open(out_p, "wb") as out, open(err_p, "wb") as err:
-            proc = _spawn([exe, "-b", "-r", raw.name, "deck.cir"], work, out, err)
+        try:
+            with open(out_p, "wb") as out, open(err_p, "wb") as err:
+                proc = _spawn([exe, "-b", "-r", raw.name, "deck.cir"], work, out, err)
+        except OSError as exc:
+            raise NgspiceError(f"could not start {exe}: {_one_line(str(exc))}") from None
         _track(proc, group)
         try:
             returncode = _wait(proc, timeout)

@@ -140,6 +140,11 @@ class _Bad(Exception):
     """An entry that cannot be used (the message says why, in one line)."""
 
 
+class _NoAccess(_Bad):
+    """An entry this user may not read (another user's, written private): not damaged, so
+    not quarantined; it is recomputed and, where the directory allows, replaced."""
+
+
 def _read_npz(path: Path) -> dict:
     """Arrays of an uncompressed ``.npz`` written by :meth:`RunStore.put`, parsed within the
     file's own size: a damaged header can neither allocate beyond it nor load objects."""
@@ -215,6 +220,8 @@ class RunStore:
             return None
         if p.is_symlink() or not p.is_file():
             raise _Bad("not a regular file")
+        if not os.access(p, os.R_OK):
+            raise _NoAccess(f"not readable by this user (mode {p.stat().st_mode & 0o777:o})")
         try:
             arrays = _read_npz(p)
         except _Bad:
@@ -262,6 +269,10 @@ class RunStore:
         quarantine directory; None is returned so that the caller recomputes it."""
         try:
             return self._load(key, check)
+        except _NoAccess as exc:
+            log.warning("analogue: run store: entry %s... is %s; it will be recomputed",
+                        key[:12], exc)
+            return None
         except _Bad as exc:
             self._quarantine_and_warn(key, str(exc))
             return None

@@ -271,3 +271,27 @@ def test_get_reports_problems_without_moving_on_check(tmp_path, caplog):
         assert st.get(key) is None
     assert not st.path(key).exists() and len(st.quarantined()) == 1
     assert json.loads(st.quarantined()[0].with_suffix(".json").read_text())["key"] == key
+
+
+def test_entry_of_another_user_not_readable_is_recomputed_not_quarantined(store, caplog,
+                                                                         monkeypatch):
+    """A private entry written by another user of a shared store is not damage: one warning,
+    recomputed, not moved to quarantine.  (Root reads every file, so unreadability is
+    simulated by os.access answering False for that one file.)"""
+    root, ref = store
+    victim = ref.meta["store_keys"][2]
+    path = RunStore(root).path(victim)
+    real_access = os.access
+
+    def access(p, mode, *a, **kw):
+        if Path(p) == path and mode == os.R_OK and not state["replaced"]:
+            return False
+        return real_access(p, mode, *a, **kw)
+
+    state = {"replaced": False}
+    monkeypatch.setattr(store_mod.os, "access", access)
+    warnings = _rerun(root, caplog, 1, ref)
+    assert len(warnings) == 1 and "not readable by this user" in warnings[0]
+    assert not (root / "quarantine").exists()
+    state["replaced"] = True
+    assert _rerun(root, caplog, 0, ref) == []  # the recomputed entry replaced it
