@@ -166,6 +166,11 @@ class BoardDesign:
         return self.noise_ts / self.theta
 
     @property
+    def x_volts(self) -> float:
+        """Volts per unit position at the position integrator (spring boards)."""
+        return self.kappa * self.theta / (self.values["R_X"] * self.values["C_X"])
+
+    @property
     def i_delta(self) -> float:
         """Current of each bridge source, v_set / R_S."""
         return self.spec.v_set / self.values["R_S"]
@@ -184,7 +189,11 @@ class BoardDesign:
                    "C_AC": "AC-coupling capacitor of the noise chain",
                    "R_B1": "Bessel low-pass resistor", "R_B2": "Bessel low-pass resistor",
                    "C_B1": "Bessel low-pass feedback capacitor",
-                   "C_B2": "Bessel low-pass capacitor to ground"}
+                   "C_B2": "Bessel low-pass capacitor to ground",
+                   "C_X": "position integrator capacitor (reset switch across it)",
+                   "R_X": "position integrator input resistor",
+                   "R_K": "spring resistor, -V(x)/R_K into the virtual ground",
+                   "R_I": "inverter resistors (two)"}
         return [(k, self.ideal[k], self.values[k], self.rounding[k], meaning.get(k, ""))
                 for k in self.values]
 
@@ -194,13 +203,22 @@ def choose_kappa(model: Model, spec: BoardSpec, v0=()) -> tuple[float, float]:
 
     kappa = min(sigma_volts/std, machine_unit/v_max): about 1 V of stationary spread unless
     the initial velocities or the stationary tails (to e^-32 of the peak) would leave the
-    machine unit."""
-    lo, hi = stationary_range(model)
+    machine unit.  With a spring the spread is that of the spring-free model and the largest
+    |v| also covers the release from x0 (energy: |v| <= sqrt(spring) |x0| + the spring-free
+    tails)."""
+    base = _velocity_only(model)
+    lo, hi = stationary_range(base)
     v_max = max([abs(lo), abs(hi)] + [abs(float(x)) for x in v0])
+    if model.spring > 0:
+        v_max = max(v_max, math.sqrt(model.spring) * abs(model.x0) + max(abs(lo), abs(hi)))
     if spec.kappa is not None:
         return spec.kappa, v_max
-    std = stationary_std(model)
+    std = stationary_std(base)
     return min(spec.sigma_volts / std, spec.machine_unit / v_max), v_max
+
+
+def _velocity_only(model: Model) -> Model:
+    return model.replace(spring=0.0, x0=0.0) if model.spring > 0 else model
 
 
 def bessel2_sallen_key(fc: float, r: float) -> tuple[float, float]:
@@ -226,6 +244,11 @@ def design_board(model: Model, spec: BoardSpec | None = None, v0=()) -> BoardDes
         raise TypeError(f"spec must be a BoardSpec, got {type(spec).__name__}")
     if model.delta <= 0:
         raise ValueError("model.delta must be > 0 for the board (its friction element is the bridge)")
+    for name, off in (("cubic", model.cubic == 0), ("stribeck", model.stribeck is None),
+                      ("shot", getattr(model, "shot", None) is None)):
+        if not off:
+            raise ValueError(f"model.{name} is not built on the board yet (it realises tau_m, Delta, "
+                             f"a, gamma and the spring); set {name} to its default")
     kappa, v_max = choose_kappa(model, spec, v0)
     if kappa * v_max > spec.machine_unit * (1 + 1e-9):
         raise ValueError(f"kappa={kappa:.4g} V puts |v| = {v_max:.4g} at {kappa * v_max:.3g} V, beyond "
@@ -270,14 +293,26 @@ def design_board(model: Model, spec: BoardSpec | None = None, v0=()) -> BoardDes
     if model.a < 0:
         a_real = -a_real
     d_real = (spec.dac_rms / values["R_N"]) ** 2 * noise_ts / 2.0
+    spring_real = 0.0
+    if model.spring > 0:
+        # position integrator U5 (R_X from the output, C_X feedback): V(x) = kappa theta/(R_X C_X) x;
+        # inverter U6 (two R_I); spring current -V(x)/R_K into the virtual ground:
+        # spring = theta^2/(R_X C_X R_K C) (with R_X C_X = theta: V(x) = kappa x)
+        ideal.update({"C_X": cap, "R_X": theta / cap, "R_K": theta / (model.spring * cap), "R_I": 100e3})
+        for k in ("C_X", "R_X", "R_K", "R_I"):
+            values[k] = round_to_series(ideal[k], cs if k == "C_X" else rs)
+            rounding[k] = values[k] / ideal[k] - 1.0
+        spring_real = theta ** 2 / (values["R_X"] * values["C_X"] * values["R_K"] * cap)
     realised = model.replace(tau_m=r_tot * cap / theta, delta=theta * i_amp / ck, a=a_real,
-                             gamma=ck ** 2 / (theta * d_real), epsilon=eps_volts / kappa)
-    notes = ((f"kappa = {kappa:.4g} V per unit velocity: stationary std {stationary_std(model):.4g} "
-             f"-> {kappa * stationary_std(model):.3g} V; largest |v| {v_max:.3g} -> "
+                             gamma=ck ** 2 / (theta * d_real), epsilon=eps_volts / kappa,
+                             spring=spring_real)
+    std = stationary_std(_velocity_only(model))
+    notes = ((f"kappa = {kappa:.4g} V per unit velocity: stationary std {std:.4g} "
+             f"-> {kappa * std:.3g} V; largest |v| {v_max:.3g} -> "
              f"{kappa * v_max:.3g} V (machine unit {spec.machine_unit} V, rails +-{spec.rails} V)"),
              (f"bridge tanh width w = 2 N V_T + RS I = {eps_volts * 1e3:.4g} mV "
              f"({spec.diode}, N = {part.N}, V_T = {thermal_voltage(temp_k) * 1e3:.4g} mV) -> epsilon = "
-             f"{eps_volts / kappa:.4g} = {eps_volts / kappa / stationary_std(model):.3g} std"),
+             f"{eps_volts / kappa:.4g} = {eps_volts / kappa / std:.3g} std"),
              DIELECTRIC_ADVICE)
     return BoardDesign(model=model, spec=spec, kappa=kappa, theta=theta, eps_volts=eps_volts,
                        noise_ts=noise_ts, ideal=ideal, values=values, rounding=rounding,

@@ -104,6 +104,12 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
     model = exp.model
     if model.delta <= 0:
         raise ValueError(f"experiment {exp.name!r}: the board needs Delta > 0 (its friction element)")
+    if model.spring > 0:
+        raise ValueError(f"experiment {exp.name!r} has a spring: the board job compares stationary "
+                         "velocity observables, which exact theory gives for the velocity-only "
+                         "members; the spring board (position integrator feedback) is built by "
+                         "analogue.board.netlist.build_board_deck and checked against the "
+                         "noise-free equations in tests/integration/test_board_spring.py")
     seed = exp.seed if seed is None else seed
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

@@ -172,6 +172,20 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
         lines += noise_chain.bessel_lines(f"n{j}", f"d{j}", f"bo{j}", design, "opa_bf", val_)
         lines += [f"C{j}ac bo{j} ac{j} {_n(val_['C_AC'], 'C_AC')}",
                   f"R{j}n ac{j} {sj} {_n(val_['R_N'], 'R_N')}"]
+        spring = "R_K" in val_
+        if spring:
+            # position integrator (reset = the .ic below) and inverter; spring current
+            # -V(x)/R_K into the virtual ground
+            lines += [f"XU{j}x 0 sx{j} vcc vee ox{j} opa_int",
+                      f"R{j}x {o} sx{j} {_n(val_['R_X'], 'R_X')}",
+                      f"C{j}x sx{j} ox{j} {_n(val_['C_X'], 'C_X')}",
+                      f"XU{j}i 0 si{j} vcc vee oi{j} opa_int",
+                      f"R{j}i1 ox{j} si{j} {_n(val_['R_I'], 'R_I')}",
+                      f"R{j}i2 si{j} oi{j} {_n(val_['R_I'], 'R_I')}",
+                      f"R{j}k oi{j} {sj} {_n(val_['R_K'], 'R_K')}"]
+            vx = design.x_volts * design.model.x0
+            ic.append(f"v(ox{j})={_n(vx)} v(xu{j}x.g)={_n(vx)} v(sx{j})=0 "
+                      f"v(oi{j})={_n(-vx)} v(xu{j}i.g)={_n(-vx)} v(si{j})=0")
         vo = -design.kappa * v0[j]
         # the virtual ground's own equilibrium, -vos - V(out)/a0: holding it at 0 through the
         # operating point would charge the AC-coupling capacitor to the offset, which then
@@ -183,16 +197,19 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
     lines.append(".ic " + " ".join(ic))
     lines.append(f".options reltol={_n(reltol)} abstol=1e-12 vntol=1e-7 method=gear "
                  f"temp={_n(b.temperature)} tnom=27")
-    vectors = {"v": [f"v(o{j})" for j in range(v0.size)], "x": None}
+    spring = "R_K" in val_
+    vectors = {"v": [f"v(o{j})" for j in range(v0.size)],
+               "x": [f"v(ox{j})" for j in range(v0.size)] if spring else None}
     if not save_all:
-        lines.append(".save " + " ".join(vectors["v"]))
+        lines.append(".save " + " ".join(vectors["v"] + (vectors["x"] or [])))
     max_step = ts / 2.0
     lines.append(f".tran {_n(sample_dt * theta)} {_n(t_end * theta)} 0 {_n(max_step)}")
     lines.append(".end")
     text = "\n".join(lines) + "\n"
     if opamp.forbidden_deck_lines(text):
         raise ValueError("internal error: the board deck contains a forbidden line")
-    return BoardDeck(text=text, vectors=vectors, to_model_v=design.to_model_v, to_model_x=1.0,
+    return BoardDeck(text=text, vectors=vectors, to_model_v=design.to_model_v,
+                     to_model_x=1.0 / design.x_volts if spring else 1.0,
                      time_scale=theta, seed=int(seed), replicas=int(v0.size),
                      sha256=hashlib.sha256(text.encode()).hexdigest(), noise_files=tuple(files),
                      noise_dt=0.0)

@@ -79,3 +79,16 @@ def test_vendor_model_path_refuses_control_blocks(tmp_path):
         odd = tmp_path / "a b.lib"
         odd.write_text(".subckt VAMP 1 2 3 4 5\n.ends\n")
         opamp.vendor_model_path(odd, "VAMP")
+
+
+def test_spring_design_and_refused_members():
+    spring = Model(tau_m=3.0, delta=0.5, a=0.0, gamma=20.0, spring=1.0, x0=2.0)
+    d = design_board(spring)
+    ck = d.values["C"] * d.kappa
+    # independent route: spring force -V(x)/R_K with V(x) = kappa theta x/(R_X C_X)
+    k = d.theta * (d.x_volts / d.values["R_K"]) / ck
+    assert d.realised.spring == pytest.approx(k, rel=1e-12)
+    assert d.realised.spring == pytest.approx(1.0, rel=0.02)
+    assert d.kappa * (2.0 * math.sqrt(1.0)) <= 10.0
+    with pytest.raises(ValueError, match="cubic"):
+        design_board(Model(tau_m=1.0, delta=0.7, a=0.2, gamma=10.0, cubic=0.5))
