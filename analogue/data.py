@@ -176,9 +176,10 @@ def ensemble_from_xarray(ds) -> Ensemble:
 
 def _encoding(ds) -> dict:
     # No fill value: a NaN in the data stays a NaN and nothing else is masked.  gzip level 4
-    # with shuffle: a 200 x 801 float64 circuit ensemble shrinks to about 60 % (noise-like
-    # mantissas compress poorly; the exactness matters more than the size).
-    enc = {name: {"_FillValue": None} for name in list(ds.coords) + list(ds.data_vars)}
+    # with shuffle: measured on a 32 x 2001 stationary circuit run, 888 kB for 1041 kB of
+    # float64 (85 %: noise-like mantissas compress poorly; exactness matters more than size).
+    enc: dict[str, dict] = {name: {"_FillValue": None}
+                            for name in list(ds.coords) + list(ds.data_vars)}
     for name in ds.data_vars:
         enc[name].update(zlib=True, complevel=4, shuffle=True)
     return enc

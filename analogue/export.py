@@ -34,7 +34,7 @@ def _role_transition(v0: float) -> str:
 
 
 def load_runs(experiment, *, quick: bool = False, store=None, workers: int | None = None,
-              scheduler: str | None = None, progress: bool | None = False,
+              scheduler: str | None = None, progress: bool = False,
               timeout: float | None = None) -> dict[str, Ensemble]:
     """The circuit runs of ``experiment`` (a name in ``circuits/`` or a TOML path), by role.
 
@@ -57,8 +57,9 @@ def load_runs(experiment, *, quick: bool = False, store=None, workers: int | Non
     from .report.plan import RunOptions
     from .report.runs import run_experiment_runs
 
-    if not isinstance(quick, bool):
-        raise TypeError(f"quick must be True or False, got {quick!r}")
+    for name, flag in (("quick", quick), ("progress", progress)):
+        if not isinstance(flag, bool):
+            raise TypeError(f"{name} must be True or False, got {flag!r}")
     exp = load_experiment(experiment)
     opts = RunOptions(workers=workers, scheduler=scheduler,
                       store=None if store is None else Path(store), quick=quick,
@@ -132,7 +133,7 @@ def _write_text(path: Path, text: str) -> None:
 # --------------------------------------------------------------------------------- export
 def export_experiment(experiment, out, *, report=None, quick: bool = False, store=None,
                       workers: int | None = None, scheduler: str | None = None,
-                      progress: bool | None = False, timeout: float | None = None) -> list[Path]:
+                      progress: bool = False, timeout: float | None = None) -> list[Path]:
     """Write every run of ``experiment`` as ``<out>/<role>.nc`` (read them with
     :func:`analogue.open_ensemble` or ``xarray.open_dataset``), plus ``<out>/metrics.csv``
     (one row per circuit-versus-theory comparison) when a report of the experiment exists

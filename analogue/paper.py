@@ -116,7 +116,10 @@ def number_labels(tex: str) -> dict[str, tuple[str, str]]:
         if macro is not None:
             if macro not in macros:
                 continue
-            kind, env = re.fullmatch(r"\\(begin|end)\{([\w*]+)\}", macros[macro]).groups()
+            spec = re.fullmatch(r"\\(begin|end)\{([\w*]+)\}", macros[macro])
+            if spec is None:
+                continue
+            kind, env = spec.groups()
         if kind == "begin":
             if env == "subequations":
                 eq_no += 1

@@ -49,9 +49,9 @@ def record_runs(experiment: str, runs: dict, *, quick: bool, store=None) -> Path
     Merges with what the index already holds (other roles, the other size)."""
     if not isinstance(experiment, str) or not _NAME.fullmatch(experiment):
         raise ValueError(f"experiment must be an experiment name, got {experiment!r}")
-    roots = {e.meta.get("store") for e in runs.values()}
+    roots = {e.meta.get("store") for e in runs.values()} - {None}
     if store is None:
-        if len(roots) != 1 or None in roots:
+        if len(roots) != 1:   # not stored, or (never in practice) in two stores
             return None
         store = next(iter(roots))
     st = open_store(store)

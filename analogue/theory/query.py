@@ -88,7 +88,8 @@ class TheoryTable:
         ``"null_reasons"``."""
         out = []
         for row in self.rows:
-            rec, why = {}, {}
+            rec: dict = {}
+            why: dict = {}
             for col, val in zip(self.header, row):
                 if isinstance(val, float) and not math.isfinite(val):
                     rec[col] = None
@@ -104,7 +105,8 @@ class TheoryTable:
     def as_text(self) -> str:
         """Aligned columns (numbers right-aligned, text left-aligned); missing values are
         ``n/a`` with the reasons listed under the table."""
-        cells, notes = [], {}
+        cells: list = []
+        notes: dict = {}
         for row in self.rows:
             line = []
             for col, val in zip(self.header, row):
