@@ -35,6 +35,7 @@ from ..model import Model
 from . import limits
 from . import ngspice as _ng
 from .deck_size import DEFAULT_REPLICAS_PER_DECK
+from .store_index import note_keys
 from .store import SCHEMA_VERSION, batch_key, open_store
 
 __all__ = [
@@ -421,6 +422,7 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
                                xs_names=tuple(vec["x_spring"]) if vec.get("x_spring") else None,
                                xs_initial=float(getattr(deck, "x_spring_initial", 0.0))))
         keys.append(batch_key(deck.text, times, version))
+    note_keys(keys)  # an experiment's index (analogue store ls) lists every entry it used
     if offsets[-1] != len(v0):
         raise ValueError(f"v0 has {len(v0)} entries but the decks hold {offsets[-1]} replicas")
 

@@ -15,10 +15,14 @@ index only names entries: deleting one is always safe, the next run recomputes w
 """
 from __future__ import annotations
 
+import contextvars
+import functools
 import json
+import logging
 import os
 import re
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -27,7 +31,10 @@ from .store import RunStore, open_store
 __all__ = [
     "INDEX_DIR",
     "StoreUsage",
+    "collecting_keys",
     "format_size",
+    "indexing_runs",
+    "note_keys",
     "parse_size",
     "prune",
     "read_indexes",
@@ -37,16 +44,62 @@ __all__ = [
 
 INDEX_DIR = "index"
 _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,31}$")
+log = logging.getLogger(__name__)
+
+# Store keys used while an experiment's runs are made, including those of runs that are not
+# among its named roles (the tolerance calibration of analogue.circuit.tolerances): every
+# run_decks call notes its keys into each collector that is open (a context variable, so that
+# concurrent threads or tasks do not mix their keys).
+_COLLECTORS: contextvars.ContextVar[tuple] = contextvars.ContextVar("analogue_store_keys",
+                                                                    default=())
+
+
+@contextmanager
+def collecting_keys():
+    """Collect (into the yielded set) the store keys of every deck run or read inside."""
+    bag: set = set()
+    token = _COLLECTORS.set(_COLLECTORS.get() + (bag,))
+    try:
+        yield bag
+    finally:
+        _COLLECTORS.reset(token)
+
+
+def note_keys(keys) -> None:
+    """Called by the runner with the keys of the decks it runs or reads."""
+    for bag in _COLLECTORS.get():
+        bag.update(keys)
+
+
+def indexing_runs(fn):
+    """Decorator for ``run_experiment_runs(exp, opts, ...)``: record the runs it returns, and
+    every other store entry it used, in the experiment's index.  A failure to write the index
+    (read-only store) is a warning: the runs are still returned."""
+    @functools.wraps(fn)
+    def wrapper(exp, opts, *args, **kwargs):
+        with collecting_keys() as used:
+            runs = fn(exp, opts, *args, **kwargs)
+        from ..export import runs_by_role
+        try:
+            record_runs(exp.name, runs_by_role(runs), quick=bool(runs.quick), extra_keys=used,
+                        store=getattr(opts, "store", None))
+        except OSError as exc:
+            log.warning("run store index not written: %s", exc)
+        return runs
+    return wrapper
 
 
 def _index_dir(store: RunStore) -> Path:
     return store.root / INDEX_DIR
 
 
-def record_runs(experiment: str, runs: dict, *, quick: bool, store=None) -> Path | None:
+def record_runs(experiment: str, runs: dict, *, quick: bool, store=None,
+                extra_keys=()) -> Path | None:
     """Record the store keys of ``runs`` (role -> Ensemble with ``meta["store_keys"]``) as
-    experiment ``experiment``'s; returns the index file (None when the runs were not stored).
-    Merges with what the index already holds (other roles, the other size)."""
+    experiment ``experiment``'s, and ``extra_keys`` (entries it used besides, e.g. the
+    tolerance calibration) under the role ``other``; returns the index file (None when the runs
+    were not stored).  Merges with what the index already holds (other roles, the other
+    size)."""
     if not isinstance(experiment, str) or not _NAME.fullmatch(experiment):
         raise ValueError(f"experiment must be an experiment name, got {experiment!r}")
     roots = {e.meta.get("store") for e in runs.values()} - {None}
@@ -61,10 +114,18 @@ def record_runs(experiment: str, runs: dict, *, quick: bool, store=None) -> Path
     data = _read(path) or {"experiment": experiment, "runs": {}}
     now = time.time()
     size = "quick" if quick else "full"
+    named: set = set()
     for role, ens in runs.items():
         keys = [k for k in ens.meta.get("store_keys", []) if isinstance(k, str)]
+        named.update(keys)
         data["runs"][f"{size}/{role}"] = {"keys": keys, "replicas": int(ens.replicas),
                                           "updated": now}
+    # accumulated, not replaced: a repeated call may reuse an in-process memo (the tolerance
+    # choice) and touch fewer entries than the first one did
+    previous = data["runs"].get(f"{size}/other", {}).get("keys", [])
+    other = sorted((set(extra_keys) | set(previous)) - named)
+    if other:
+        data["runs"][f"{size}/other"] = {"keys": other, "replicas": 0, "updated": now}
     data["updated"] = now
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")

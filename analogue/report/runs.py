@@ -26,6 +26,7 @@ import numpy as np
 
 from ..circuit.experiments import Experiment
 from ..circuit.simulate import DEFAULT_REPLICAS_PER_DECK
+from ..circuit.store_index import indexing_runs
 from ..ensemble import Ensemble
 from ..model import Model
 from .plan import ReportSettings, RunOptions
@@ -143,6 +144,7 @@ def _check_coupled(nominal: Ensemble, check: Ensemble, what: str) -> None:
                            "paths (noise not reproduced?); integration budget unavailable")
 
 
+@indexing_runs  # the store's index by experiment (analogue store ls): every entry used
 def run_experiment_runs(exp: Experiment, opts: RunOptions,
                         settings: ReportSettings | None = None) -> ExperimentRuns:
     from ..circuit.simulate import simulate
@@ -195,20 +197,7 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
                                 replicas=n1, seed=seeds["stationary"], sample_dt=exp.sample_dt,
                                 circuit=exp.check_spec(stat_spec), replicas_per_deck=size, **kw)
     _check_coupled(stationary, check_stationary, "stationary check")
-    return _indexed(ExperimentRuns(exp=exp, settings=settings, quick=opts.quick,
-                                   transition=transition, stationary=stationary,
-                                   noise_free=noise_free, check_transition=check_transition,
-                                   check_stationary=check_stationary,
-                                   wall_time=time.perf_counter() - t_start, seeds=seeds))
-
-
-def _indexed(runs: ExperimentRuns) -> ExperimentRuns:
-    """Record the runs' store keys under the experiment's name (``analogue store ls``)."""
-    from ..circuit.store_index import record_runs
-    from ..export import runs_by_role
-    try:
-        record_runs(runs.exp.name, runs_by_role(runs), quick=runs.quick)
-    except OSError as exc:  # a read-only store still serves the runs; only the index is lost
-        import logging
-        logging.getLogger(__name__).warning("run store index not written: %s", exc)
-    return runs
+    return ExperimentRuns(exp=exp, settings=settings, quick=opts.quick, transition=transition,
+                          stationary=stationary, noise_free=noise_free,
+                          check_transition=check_transition, check_stationary=check_stationary,
+                          wall_time=time.perf_counter() - t_start, seeds=seeds)

@@ -89,10 +89,11 @@ def test_export_writes_every_run_and_metrics_csv(tiny, tmp_path):
 
     # the runs are indexed under the experiment's name (analogue store ls)
     from analogue.circuit.store_index import usage
+    # (the named runs and whatever else they needed: the tolerance calibration)
     keys = {k for ens in runs.values() for k in ens.meta["store_keys"]}
     u = usage(store)
-    assert u.experiments["tiny"]["entries"] == len(keys) == u.total_entries
-    assert u.unindexed_entries == 0
+    assert u.unindexed_entries == 0, u
+    assert u.experiments["tiny"]["entries"] == u.total_entries >= len(keys)
 
     rows = list(csv.DictReader((out / "metrics.csv").open()))
     assert len(rows) == 1 and rows[0]["experiment"] == "tiny"
