@@ -529,12 +529,19 @@ def theory(quantity, experiment_arg, experiment, tau_m, delta, a, gamma, mass, e
               default=None, help="Run-store directory (default $ANALOGUE_STORE or ~/.cache/analogue/runs).")
 @click.option("--seed", type=click.IntRange(0, 2**31 - 1), default=None,
               help="Master seed (default: the experiment's).")
-def board(experiment, out, quick, workers, board_store, seed):
+@click.option("--opamp-model", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="A vendor op-amp model you downloaded (.lib/.cir; never shipped here) for the "
+                   "nominal board; needs --opamp-subckt.")
+@click.option("--opamp-subckt", default=None, help="Name of its .subckt (pins in+ in- V+ V- out).")
+def board(experiment, out, quick, workers, board_store, seed, opamp_model, opamp_subckt):
     """A board you can build for EXPERIMENT: op-amp realisation with E-series parts, noise
     chain, tolerance Monte Carlo, calibration, schematic.svg and bom.csv."""
     from .board.job import run_board_job
+    if (opamp_model is None) != (opamp_subckt is None):
+        raise click.UsageError("--opamp-model and --opamp-subckt go together")
+    vendor = (opamp_model, opamp_subckt) if opamp_model is not None else None
     index = run_board_job(experiment, out, quick=quick, store=board_store, workers=workers,
-                          seed=seed, log=lambda msg: click.echo(msg, err=True))
+                          seed=seed, log=lambda msg: click.echo(msg, err=True), vendor=vendor)
     click.echo(f"board report: {index}")
 
 

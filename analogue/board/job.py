@@ -93,9 +93,11 @@ def _stats(x) -> dict:
 
 
 def run_board_job(experiment: str, out, *, quick: bool = False, store=None, workers=None,
-                  seed: int | None = None, log=print, settings: JobSettings | None = None) -> Path:
+                  seed: int | None = None, log=print, settings: JobSettings | None = None,
+                  vendor: tuple | None = None) -> Path:
     """Run the job; returns the path of index.html.  ``settings`` overrides the sizes of
-    ``QUICK``/``FULL`` (tests use tiny ones)."""
+    ``QUICK``/``FULL`` (tests use tiny ones).  ``vendor`` = (path, subckt): a downloaded op-amp
+    model for the nominal board (the Monte Carlo keeps the macromodel, whose offsets it draws)."""
     t_start = _time.perf_counter()
     if settings is not None and not isinstance(settings, JobSettings):
         raise TypeError(f"settings must be a JobSettings, got {type(settings).__name__}")
@@ -124,10 +126,14 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
     log(f"board: nominal board, {st.replicas} replicas x {st.t_end} tau_m")
     t0 = _time.perf_counter()
     v0 = sample_stationary(design.realised, st.replicas, seed + 1)
+    if vendor is not None:
+        from .opamp import vendor_model_path
+        vendor = (str(vendor_model_path(vendor[0], vendor[1])), vendor[1])
     ens = run_board(design, nominal, v0=v0, t_end=st.t_end, sample_dt=SAMPLE_DT, seed=seed,
-                    store=store, workers=workers)
+                    store=store, workers=workers, vendor=vendor)
     tight = run_board(design, nominal, v0=v0[:st.integ_replicas], t_end=st.t_end,
-                      sample_dt=SAMPLE_DT, seed=seed, store=store, workers=workers, reltol=1e-4)
+                      sample_dt=SAMPLE_DT, seed=seed, store=store, workers=workers, reltol=1e-4,
+                      vendor=vendor)
     from ..report.observables import subset
     integ = budget.integration_pair(fn, subset(ens, np.arange(st.integ_replicas)), tight)
     timings["nominal_s"] = _time.perf_counter() - t0
@@ -206,7 +212,8 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
                                  "sensitivities": seed + 4, "monte_carlo": seed + 5},
                        "ngspice_version": ng.ngspice_version(), "deck_hashes": ens.meta["deck_sha256"],
                        "wall_time_s": wall, "quick": quick, "settings": asdict(st),
-                       "python": platform.python_version(), "timings_s": timings},
+                       "python": platform.python_version(), "timings_s": timings,
+                       "vendor_opamp": list(vendor) if vendor else None},
         "board": {"spec": design.spec.as_dict(), "kappa": design.kappa,
                   "components": [list(r) for r in design.table()], "notes": list(design.notes)},
         "monte_carlo": mc, "calibration_errors": cal_err, "sensitivities": sens,

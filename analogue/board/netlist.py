@@ -100,14 +100,18 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
                      sample_dt: float, seed: int, noise_dir, first_replica: int = 0,
                      reltol: float = 1e-4, save_all: bool = False,
                      friction_kind: str = "bridge", ota: dict | None = None,
-                     noise_off: bool = False) -> BoardDeck:
+                     noise_off: bool = False, vendor: tuple | None = None) -> BoardDeck:
     """Deck for ``len(v0)`` replicas of ``board`` started at ``v0`` (model units).
 
     Replica ``j`` is driven by the DAC sequence ``(seed, first_replica + j)``
     (:func:`analogue.board.noise_chain.dac_sequence`), written to ``noise_dir`` (created).
     ``save_all``: save every node (for the rails check).  ``friction_kind``: ``"bridge"`` or
     ``"ota"`` (then ``ota`` = dict(i_abc, k, vos, asymmetry)).  ``noise_off``: the DAC stays
-    at mid-scale (0 V; calibration runs).
+    at mid-scale (0 V; calibration runs).  ``vendor``: ``(path, subckt)`` of an op-amp model the
+    user downloaded (validated by :func:`analogue.board.opamp.vendor_model_path`, pins in+ in-
+    V+ V- out); every op-amp of the board then uses it.  ngspice runs here refuse ``.include``
+    (:func:`analogue.circuit.ngspice.run_deck`), so the validated file's text is inlined into the
+    deck built on the user's machine (it is never part of this repository).
     """
     from pathlib import Path
     if not isinstance(design, BoardDesign):
@@ -135,8 +139,18 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
     lines = [f"board {val.check_name(design.spec.opamp, 'opamp')} {part.name}",
              (f"* analogue board deck: kappa={_n(design.kappa)} V/unit theta={_n(theta)} s "
              f"TS={_n(ts)} s seed={int(seed)}")]
-    for role in ROLES:
-        lines.append(opamp.subcircuit(b.opamps[role], f"opa_{role}"))
+    include = None
+    if vendor is not None:
+        if not (isinstance(vendor, tuple) and len(vendor) == 2):
+            raise TypeError("vendor must be a tuple (path, subckt)")
+        vpath = opamp.vendor_model_path(vendor[0], vendor[1])
+        include = f"* vendor op-amp model inlined from {vpath}\n" + vpath.read_text(errors="replace").strip()
+        for role in ROLES:
+            lines += [f".subckt opa_{role} inp inn vcc vee out",
+                      f"X1 inp inn vcc vee out {vendor[1]}", f".ends opa_{role}"]
+    else:
+        for role in ROLES:
+            lines.append(opamp.subcircuit(b.opamps[role], f"opa_{role}"))
     dmodels = [f"dbr{k}" for k in range(4)]
     for name, scale in zip(dmodels, b.diode_is):
         lines.append(friction.diode_model_line(name, part, is_scale=scale))
@@ -206,8 +220,11 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
     lines.append(f".tran {_n(sample_dt * theta)} {_n(t_end * theta)} 0 {_n(max_step)}")
     lines.append(".end")
     text = "\n".join(lines) + "\n"
+    if include is not None:   # the validated vendor text (no .control/.include/shell lines)
+        head, rest = text.split("\n", 1)
+        text = f"{head}\n{include}\n{rest}"
     if opamp.forbidden_deck_lines(text):
-        raise ValueError("internal error: the board deck contains a forbidden line")
+        raise ValueError("the board deck contains a forbidden line (.control/.exec/shell/.include/.lib)")
     return BoardDeck(text=text, vectors=vectors, to_model_v=design.to_model_v,
                      to_model_x=1.0 / design.x_volts if spring else 1.0,
                      time_scale=theta, seed=int(seed), replicas=int(v0.size),

@@ -172,7 +172,8 @@ def vendor_model_path(path, subckt: str) -> Path:
     """Validate a vendor op-amp model the user downloaded: an existing regular file under 1 MB,
     with a safe path (letters, digits, ``_ . / + -``), containing ``.subckt SUBCKT`` with
     five pins, and no ``.control``/``.exec``/``shell``/``.include``/``.lib`` lines.  Returns
-    the resolved path (to be ``.include``-d by the deck writer; the text is not copied)."""
+    the resolved path; the deck writer inlines the checked text into decks built on the user's
+    machine (nothing of it enters this repository)."""
     if not isinstance(path, (str, Path)):
         raise TypeError(f"vendor model path must be a str or Path, got {type(path).__name__}")
     subckt = val.check_name(subckt, "vendor subcircuit name")

@@ -45,7 +45,7 @@ def noise_directory(store) -> Path:
 def run_board(design: BoardDesign, board: BoardInstance, *, v0, t_end: float, sample_dt: float,
               seed: int, store=None, workers=None, per_deck: int = DEFAULT_PER_DECK,
               reltol: float = DEFAULT_RELTOL, first_replica: int = 0, friction_kind="bridge",
-              ota=None) -> Ensemble:
+              ota=None, vendor=None) -> Ensemble:
     """Simulate ``len(v0)`` replicas of ``board``; returns an Ensemble in model units."""
     v0 = np.atleast_1d(np.asarray(v0, dtype=float))
     times = time_grid(t_end, sample_dt)
@@ -56,7 +56,7 @@ def run_board(design: BoardDesign, board: BoardInstance, *, v0, t_end: float, sa
         decks.append(build_board_deck(design, board, v0=part, t_end=t_end, sample_dt=sample_dt,
                                       seed=seed, noise_dir=ndir,
                                       first_replica=first_replica + start, reltol=reltol,
-                                      friction_kind=friction_kind, ota=ota))
+                                      friction_kind=friction_kind, ota=ota, vendor=vendor))
     t0 = _time.perf_counter()
     v, x, _, info = run_decks(decks, times, v0, store=store, workers=workers, progress=False)
     meta = {"source": "board", "board": board.label, "seed": seed, "model": design.model.as_dict(),

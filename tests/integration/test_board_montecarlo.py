@@ -91,3 +91,20 @@ def test_board_cli_refuses_unknown_experiment(tmp_path):
     res = CliRunner().invoke(main, ["board", "no_such_experiment", "--out", str(tmp_path)])
     assert res.exit_code == 2
     assert "experiment" in res.output
+
+
+def test_vendor_model_file_is_validated_and_used(tmp_path):
+    from analogue.board import opamp
+    lib = tmp_path / "my_amp.lib"
+    # a "downloaded" model: here our own macromodel text under another name
+    lib.write_text("* user's vendor file\n" + opamp.subcircuit(opamp.get_opamp("OPA2140"), "VENDAMP") + "\n")
+    deck = build_board_deck(DESIGN, nominal_instance(DESIGN), v0=[0.5], t_end=0.5, sample_dt=0.01,
+                            seed=2, noise_dir=tmp_path, vendor=(lib, "VENDAMP"))
+    assert "X1 inp inn vcc vee out VENDAMP" in deck.text and ".include" not in deck.text
+    plot = ng.run_deck(deck.text, t_stop=0.5 * DESIGN.theta).plot
+    assert plot.n_points > 10
+    bad = tmp_path / "bad.lib"
+    bad.write_text(".subckt VENDAMP 1 2 3 4 5\n.ends\n.control\nshell echo hi\n.endc\n")
+    with pytest.raises(ValueError, match="forbidden"):
+        build_board_deck(DESIGN, nominal_instance(DESIGN), v0=[0.5], t_end=0.5, sample_dt=0.01,
+                         seed=2, noise_dir=tmp_path, vendor=(bad, "VENDAMP"))
