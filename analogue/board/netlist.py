@@ -174,13 +174,9 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
             lines += friction.ota_lines(f"b{j}", sj, o, temperature_k=temp_k, **(ota or {}))
         if np.isfinite(val_["R_F"]):
             lines.append(f"R{j}f f {sj} {_n(val_['R_F'], 'R_F')}")
-        if noise_off:
-            volts = np.zeros(n_samples)
-            path = noise_dir / f"dac_zero_{n_samples}.txt"
-        else:
-            volts = noise_chain.dac_sequence(design, seed, r, n_samples)
-            path = noise_dir / f"dac_{design.spec.dac_bits}b_{int(seed)}_{r}_{n_samples}.txt"
-        sha = noise_chain.write_dac_file(path, volts, ts)
+        volts = (np.zeros(n_samples) if noise_off
+                 else noise_chain.dac_sequence(design, seed, r, n_samples))
+        path, sha = noise_chain.write_dac_file(noise_dir, volts, ts)
         files.append(str(path))
         lines += noise_chain.dac_lines(f"n{j}", f"d{j}", path, sha)
         lines += noise_chain.bessel_lines(f"n{j}", f"d{j}", f"bo{j}", design, "opa_bf", val_)

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import os
 import re
 from pathlib import Path
 
@@ -69,9 +70,11 @@ def dac_sequence(design: BoardDesign, seed: int, replica: int, n: int) -> np.nda
     return np.clip(volts, -spec.dac_range, spec.dac_range - lsb)
 
 
-def write_dac_file(path: Path, volts: np.ndarray, ts: float) -> str:
-    """Write the filesource table (time, value); returns the sha256 of the file's bytes."""
-    path = Path(path)
+def write_dac_file(directory: Path, volts: np.ndarray, ts: float) -> tuple[Path, str]:
+    """Write the filesource table (time, value) as ``directory/dac_<sha256>.txt`` (named by its
+    content, so concurrent jobs never overwrite each other's sequences; written atomically);
+    returns (path, sha256)."""
+    directory = Path(directory)
     # mid-scale (0 V) while the integrator is held in reset, sample k from (k + 1) TS on:
     # the AC-coupling capacitor then starts uncharged (a first sample held through the
     # operating point would charge it and leave a decaying force offset).
@@ -79,8 +82,13 @@ def write_dac_file(path: Path, volts: np.ndarray, ts: float) -> str:
     volts = np.concatenate([[0.0], volts])
     text = "".join(f"{a:.12e} {b:.9e}\n" for a, b in zip(t, volts))
     data = text.encode()
-    path.write_bytes(data)
-    return hashlib.sha256(data).hexdigest()
+    sha = hashlib.sha256(data).hexdigest()
+    path = directory / f"dac_{sha}.txt"
+    if not path.exists():
+        tmp = path.with_suffix(f".tmp{os.getpid()}")
+        tmp.write_bytes(data)
+        os.replace(tmp, path)
+    return path, sha
 
 
 def check_path(path) -> str:
