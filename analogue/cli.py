@@ -257,8 +257,23 @@ def _run_options(f):
     return f
 
 
+def _reach_scheduler(address: str, timeout: float = 5.0) -> None:
+    """Fail at once, naming the option, when nothing listens at the scheduler's address
+    (distributed's own client would wait 30 s per run and then fail inside a report)."""
+    import socket
+    rest = address.partition("://")[2]
+    host, _, port = rest.rpartition(":")
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), timeout=timeout).close()
+    except OSError as exc:
+        raise RuntimeError(f"--scheduler {address}: cannot connect ({exc.strerror or exc}); is "
+                           f"the Dask scheduler running there?") from None
+
+
 def _options(workers, scheduler, store, timeout, quick, progress):
     from .report.plan import RunOptions
+    if scheduler is not None:
+        _reach_scheduler(scheduler)
     return RunOptions(workers=workers, scheduler=scheduler, store=store, quick=quick,
                       progress=progress, timeout=timeout)
 

@@ -199,13 +199,19 @@ class Experiment:
         return self.deck(replicas=self.netlist_replicas)
 
 
+def shown_key(key) -> str:
+    """A TOML key as it may appear in a one-line message (quoted when it is not plain)."""
+    return key if isinstance(key, str) and re.fullmatch(r"[A-Za-z0-9_-]{1,64}", key) else repr(key)
+
+
 def _table(data, key: str, allowed: set, where: str) -> dict:
     section = data.get(key, {})
     if not isinstance(section, dict):
         raise ValueError(f"{where}: [{key}] must be a table, got {type(section).__name__}")
     unknown = sorted(set(section) - allowed)
     if unknown:
-        raise ValueError(f"{where}: unknown key {key}.{unknown[0]} (allowed: {', '.join(sorted(allowed))})")
+        raise ValueError(f"{where}: unknown key {key}.{shown_key(unknown[0])} (allowed: "
+                         f"{', '.join(sorted(allowed))})")
     return section
 
 
@@ -350,7 +356,8 @@ def experiment_from_dict(data: dict, where: str = "experiment", source: Path | N
         raise ValueError(f"{where}: the document must be a table")
     unknown = sorted(set(data) - _TOP_KEYS)
     if unknown:
-        raise ValueError(f"{where}: unknown key {unknown[0]} (allowed: {', '.join(sorted(_TOP_KEYS))})")
+        raise ValueError(f"{where}: unknown key {shown_key(unknown[0])} (allowed: "
+                         f"{', '.join(sorted(_TOP_KEYS))})")
     if "name" not in data:
         raise ValueError(f"{where}: missing required key name")
     name = val.check_name(data["name"], f"{where}: name")

@@ -24,6 +24,7 @@ velocities and times, work windows) are checked there, before anything runs.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -141,7 +142,8 @@ def report_settings_from_dict(data, where: str = "experiment") -> ReportSettings
         raise ValueError(f"{where}: [report] must be a table, got {type(data).__name__}")
     unknown = sorted(set(data) - _KEYS)
     if unknown:
-        raise ValueError(f"{where}: unknown key report.{unknown[0]} (allowed: "
+        key = unknown[0] if re.fullmatch(r"[A-Za-z0-9_-]{1,64}", unknown[0]) else repr(unknown[0])
+        raise ValueError(f"{where}: unknown key report.{key} (allowed: "
                          f"{', '.join(sorted(_KEYS))})")
     try:
         return ReportSettings(**data)

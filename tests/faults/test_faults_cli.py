@@ -159,10 +159,12 @@ def test_bad_scheduler_addresses_name_the_option(cli, address):
 def test_good_scheduler_address_is_passed_on(cli, monkeypatch):
     import analogue.report.pipeline as P
     seen = {}
+    import analogue.cli as C
+    monkeypatch.setattr(C, "_reach_scheduler", lambda address: seen.setdefault("reached", address))
     monkeypatch.setattr(P, "run_experiment", lambda name, opts: seen.setdefault("o", opts) and _Done())
     r = cli.invoke(main, ["run", "stick", "--scheduler", "tcp://10.0.0.1:8786"])
     assert r.exit_code == 0, r.output
-    assert seen["o"].scheduler == "tcp://10.0.0.1:8786"
+    assert seen["o"].scheduler == "tcp://10.0.0.1:8786" == seen["reached"]
 
 
 class _Done:
@@ -250,3 +252,20 @@ def test_netlist_writes_next_to_the_file_it_read(cli, tmp_path, monkeypatch):
     deck = tmp_path / "mine.cir"
     assert deck.is_file() and ".tran" in deck.read_text()
     assert list(elsewhere.iterdir()) == []
+
+
+def test_unreachable_scheduler_is_one_line_naming_the_option(cli, monkeypatch):
+    import socket
+    import time
+    s = socket.socket()
+    s.bind(("127.0.0.1", 0))
+    port = s.getsockname()[1]
+    s.close()  # nothing listens there now: connection refused at once
+    import analogue.report.pipeline as P
+    monkeypatch.setattr(P, "run_experiment", _boom(AssertionError("must not run")))
+    t0 = time.perf_counter()
+    r = cli.invoke(main, ["run", "stick", "--scheduler", f"tcp://127.0.0.1:{port}"])
+    assert r.exit_code == 1
+    line = err_line(r)
+    assert "--scheduler" in line and str(port) in line
+    assert time.perf_counter() - t0 < 15

@@ -405,3 +405,13 @@ def test_paper_experiments_are_an_explicit_list():
     assert E.PAPER_EXPERIMENTS[:3] == ("stick", "slip", "work")
     for name in E.PAPER_EXPERIMENTS:
         assert E.standard_circuit(name).is_file()
+
+
+@pytest.mark.parametrize("table", [None, "model", "circuit", "experiment", "netlist", "report"])
+@pytest.mark.parametrize("payload", ["a\nb", "<script>x</script>", "x\r\n.control"])
+def test_payload_keys_are_refused_in_one_line(table, payload):
+    d = doc()
+    (d if table is None else d[table])[payload] = 1.0
+    with pytest.raises(ValueError) as exc:
+        experiment_from_dict(d)
+    assert repr(payload)[1:-1] in one_line(exc)
