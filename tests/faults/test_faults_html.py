@@ -90,3 +90,29 @@ def test_failing_experiments_keep_finished_work_and_are_recorded(tmp_path, monke
     assert all("ngspice failed" in f["error"] for f in failed.values())
     from analogue.report.metrics import validate_metrics
     validate_metrics(metrics)
+
+
+def test_a_failing_figure_keeps_the_other_figures(tmp_path, monkeypatch):
+    import types
+    import analogue.report.pipeline as P
+    png = _png(tmp_path)
+    names = ["fig_prehistory", "fig_boundaries", "fig_propagator", "fig_stationary",
+             "fig_work_paths", "fig_rate_function", "fig_budget"]
+    for n in names:
+        monkeypatch.setattr(P.F, n, lambda *a, n=n, **k: (png, f"caption of {n}"))
+
+    def broken(*a, **k):
+        raise ValueError("no circuit window of work rate 0.2 <here>")
+    monkeypatch.setattr(P.F, "fig_work_paths", broken)
+    runs = types.SimpleNamespace(exp=types.SimpleNamespace(name="work", v0=(0.0,)))
+    fails = P._Failures()
+    figs, errors = P._figures_for(runs, None, tmp_path, fails, "Experiment 'work'")
+    assert len(figs) == 6 and not any("work_paths" in f.caption for f in figs)
+    assert errors == ["figure 'work paths': ValueError: no circuit window of work rate 0.2 <here>"]
+    assert fails.items == [{"section": "Experiment 'work'", "experiment": "work",
+                            "stage": "figure: work paths",
+                            "error": "ValueError: no circuit window of work rate 0.2 <here>"}]
+    page = write_page(tmp_path / "index.html", "T", [],
+                      [Section("Experiment 'work'", figures=figs, error="; ".join(errors))])
+    html = page.read_text()
+    assert html.count("<figure>") == 6 and "&lt;here&gt;" in html
