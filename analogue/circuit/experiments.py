@@ -447,8 +447,20 @@ def resolve_experiment(name: str) -> Path:
                          f"(./circuits, then the standard circuits), got {name!r}") from None
 
 
+# An experiment file is a page of text (the standard ones are ~1 kB); a bound keeps a wrong
+# path (a data file, /dev/zero) from being read into memory.
+MAX_FILE_BYTES = 1 << 20
+
+
 def _read_document(path: Path) -> dict:
     try:
+        if path.exists() and not path.is_dir() and not path.is_file():
+            raise ValueError(f"{path}: not a regular file (a device, pipe or socket), not an "
+                             f"experiment file")
+        size = path.stat().st_size
+        if size > MAX_FILE_BYTES:
+            raise ValueError(f"{path}: {size} bytes, larger than an experiment file can be "
+                             f"({MAX_FILE_BYTES} bytes); is it the right file?")
         raw = path.read_bytes()
     except IsADirectoryError:
         raise ValueError(f"{path}: is a directory, not an experiment file") from None

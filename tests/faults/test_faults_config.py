@@ -415,3 +415,19 @@ def test_payload_keys_are_refused_in_one_line(table, payload):
     with pytest.raises(ValueError) as exc:
         experiment_from_dict(d)
     assert repr(payload)[1:-1] in one_line(exc)
+
+
+@pytest.mark.parametrize("path", ["/dev/zero", "/dev/null"])
+def test_devices_are_not_read(path):
+    with pytest.raises(ValueError, match="regular file") as exc:
+        load_experiment(Path(path))
+    one_line(exc)
+
+
+def test_a_huge_file_is_not_read(tmp_path):
+    p = tmp_path / "huge.toml"
+    with open(p, "wb") as fh:
+        fh.truncate(E.MAX_FILE_BYTES + 1)
+    with pytest.raises(ValueError, match="larger than") as exc:
+        load_experiment(p)
+    assert str(p) in one_line(exc)
