@@ -638,6 +638,12 @@ def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
     if not isinstance(spec, CircuitSpec):
         raise ValueError(f"spec must be a CircuitSpec, got {type(spec).__name__}")
     plain = _is_plain(model)
+    if spec.coulomb == "behavioural-sgn" and (model.spring > 0 or not math.isfinite(model.gamma)):
+        # measured: 2 replicas x 2 time units did not finish in 40 s (two-sided shot noise
+        # with gamma = inf; cubic + spring with gamma = 10), against 0.1-1 s with smoothing
+        raise ValueError("coulomb='behavioural-sgn' has no smoothing: with a spring or without "
+                         "Gaussian noise (gamma=inf) the object rests at v = 0, where the exact "
+                         "sgn makes ngspice chatter; use coulomb='behavioural' or 'diode-bridge'")
     theta, cap = spec.time_scale, spec.capacitance
     eps_target = spec.smoothing * _smoothing_scale(model)
     vt = thermal_voltage()
