@@ -32,7 +32,7 @@ def _debug() -> bool:
     return bool(os.environ.get("ANALOGUE_DEBUG"))
 
 
-def _one_line(text: str) -> str:
+def _one_line(text) -> str:
     """Every line of a message, on one line (ngspice's own error lines included)."""
     return " | ".join(ln.strip() for ln in str(text).splitlines() if ln.strip())
 

@@ -329,7 +329,8 @@ def build_report(names, out: Path, opts: RunOptions, title: str) -> Path:
 
     wall = time.perf_counter() - t0
     provs = {r.exp.name: r.provenance() for r in all_runs}
-    provenance = {
+    software = _software()
+    provenance: dict = {
         "parameters": {k: p["parameters"] for k, p in provs.items()},
         "model_effective": {k: p["model_effective"] for k, p in provs.items()},
         "circuit_spec": {k: p["circuit_spec"] for k, p in provs.items()},
@@ -340,7 +341,7 @@ def build_report(names, out: Path, opts: RunOptions, title: str) -> Path:
         "wall_time_s": wall,
         "quick": opts.quick,
         "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-        "software": _software(),
+        "software": software,
     }
     prov_rows = [[k, json.dumps(v, default=str)[:400]] for k, v in provenance.items()
                  if k not in ("deck_hashes",)]
@@ -358,7 +359,7 @@ def build_report(names, out: Path, opts: RunOptions, title: str) -> Path:
     tmp.write_text(json.dumps(metrics, indent=2, default=str))
     tmp.replace(out / "metrics.json")
 
-    intro = [f"Generated {provenance['created']} by analogue {provenance['software']['analogue']} "
+    intro = [f"Generated {provenance['created']} by analogue {software['analogue']} "
              f"with ngspice {provenance['ngspice_version']} ({'quick' if opts.quick else 'full'} run, "
              f"{wall:.0f} s). Model units throughout: velocity, time and work rate of the "
              "reduced equation dv/dt = -v/tau_m - Delta sgn(v) + a + xi/m (Baule, Touchette & "

@@ -57,7 +57,7 @@ class RunOptions:
     timeout: float | None = None  # seconds per deck; None: simulate's default
 
     def simulate_kwargs(self) -> dict:
-        kw = {"workers": self.workers, "progress": self.progress}
+        kw: dict = {"workers": self.workers, "progress": self.progress}
         if self.scheduler:
             kw["scheduler"] = self.scheduler
         if self.store is not None:
