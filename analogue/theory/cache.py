@@ -25,6 +25,7 @@ run store root (``$ANALOGUE_STORE``, default ``~/.cache/analogue``): ``~/.cache/
 """
 from __future__ import annotations
 
+import dataclasses
 import functools
 import hashlib
 import json
@@ -94,7 +95,6 @@ def _encode(obj) -> bytes:
             raise TypeError("object arrays cannot be part of a theory-cache key")
         return b"array" + a.dtype.str.encode() + str(a.shape).encode() + a.tobytes()
     if hasattr(obj, "__dataclass_fields__"):          # e.g. a Grid
-        import dataclasses
         return type(obj).__name__.encode() + _encode(dataclasses.asdict(obj))
     raise TypeError(f"cannot build a theory-cache key from {type(obj).__name__}")
 
@@ -227,9 +227,24 @@ def _normalise(obj):
     return obj
 
 
+def _import(path: str):
+    import importlib
+    module, _, qualname = path.partition(":")
+    obj = importlib.import_module(module)
+    for part in qualname.split("."):
+        obj = getattr(obj, part)
+    return obj
+
+
+def _scalar(a: np.ndarray):
+    """0-d arrays back to Python scalars (a NamedTuple of floats stays one)."""
+    return a.item() if a.ndim == 0 else a
+
+
 def cached_call(fn, *args, cache=None, **kwargs):
     """``fn(*args, **kwargs)`` through the cache.  ``fn`` must be pure and return an ndarray
-    (or a float, or a tuple of ndarrays); the result comes back with the same structure.
+    (or a float, a tuple of ndarrays, or a NamedTuple or dataclass of floats/arrays such as
+    ``StationaryMoments``); the result comes back with the same type and values.
     ``cache``: see :func:`open_cache` (False: call ``fn`` directly)."""
     store = open_cache(cache)
     if store is None:
@@ -245,12 +260,27 @@ def cached_call(fn, *args, cache=None, **kwargs):
         kind = meta.get("kind")
         if kind == "tuple":
             return tuple(arrays[f"r{i}"] for i in range(int(meta["n"])))
+        if kind == "namedtuple":
+            cls = _import(meta["type"])
+            return cls(*(_scalar(arrays[f"r{i}"]) for i in range(int(meta["n"]))))
+        if kind == "dataclass":
+            cls = _import(meta["type"])
+            return cls(**{name: _scalar(arrays[f"r{i}"]) for i, name in enumerate(meta["fields"])})
         if kind == "float":
             return float(arrays["r0"])
         return arrays["r0"]
     store.misses += 1
     out = fn(*args, **kwargs)
-    if isinstance(out, tuple):
+    extra = {}
+    if dataclasses.is_dataclass(out) and not isinstance(out, type):
+        names = [f.name for f in dataclasses.fields(out)]
+        arrays = {f"r{i}": np.asarray(getattr(out, n)) for i, n in enumerate(names)}
+        kind = "dataclass"
+        extra = {"type": f"{type(out).__module__}:{type(out).__qualname__}", "fields": names}
+    elif isinstance(out, tuple) and hasattr(out, "_fields"):    # a NamedTuple comes back as one
+        arrays, kind = {f"r{i}": np.asarray(o) for i, o in enumerate(out)}, "namedtuple"
+        extra = {"type": f"{type(out).__module__}:{type(out).__qualname__}"}
+    elif isinstance(out, tuple):
         arrays, kind = {f"r{i}": np.asarray(o) for i, o in enumerate(out)}, "tuple"
     elif isinstance(out, float):
         arrays, kind = {"r0": np.asarray(out)}, "float"
@@ -258,6 +288,7 @@ def cached_call(fn, *args, cache=None, **kwargs):
         arrays, kind = {"r0": np.asarray(out)}, "array"
     if all(a.dtype != object for a in arrays.values()):
         meta = {"function": name, "kind": kind, "n": len(arrays), "code_version": code_version(),
+                **extra,
                 "args": [_describe(a) for a in args],
                 "kwargs": {k: _describe(v) for k, v in kwargs.items()}}
         try:

@@ -114,3 +114,12 @@ def test_decorator_keeps_the_pure_function_and_adds_cache_keyword(store):
 
 def test_code_version_is_stable_within_a_process():
     assert tc.code_version() == tc.code_version() and len(tc.code_version()) == 64
+
+
+def test_named_tuple_results_come_back_as_the_same_type(store):
+    from analogue.theory import exact
+    first = tc.cached_call(exact.stationary_moments, M, cache=store)
+    second = tc.cached_call(exact.stationary_moments, M, cache=store)
+    assert store.hits == 1
+    assert type(second) is type(first) and second == first
+    assert isinstance(second.variance, float)
