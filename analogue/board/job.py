@@ -175,7 +175,7 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
         cal_model = cal.model(model, design.realised.epsilon)
         exact_cal = theory_observables(cal_model, 0.0, thr)
         exact_eff = theory_observables(eff, tolerance.readout_offset(design, b), thr)
-        boards.append({"label": b.label, "draws": {k: (list(v) if isinstance(v, tuple) else v)
+        boards.append({"label": b.label, "offset": tolerance.readout_offset(design, b), "draws": {k: (list(v) if isinstance(v, tuple) else v)
                                                    for k, v in b.draws.items()},
                        "observed": obs, "effective": asdict_model(eff), "calibrated": cal.as_dict(),
                        "exact_requested": exact_req, "exact_calibrated": exact_cal,
@@ -183,7 +183,9 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
         log(f"board: MC board {i + 1}/{st.boards} done")
     timings["monte_carlo_s"] = _time.perf_counter() - t0
     mc = summarise_mc(boards, ref, exact_req, theory_observables(design.realised, 0.0, thr))
+    mc_rate = rate_function_effect(design, boards, grads)
     cal_err = calibration_errors(boards)
+    figure_density(design, ens, st.burn_in, out / "density.png")
 
     # ------------------------------------------------------------------ 5. OTA alternative
     log("board: OTA friction element (nominal)")
@@ -216,7 +218,7 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
                        "vendor_opamp": list(vendor) if vendor else None},
         "board": {"spec": design.spec.as_dict(), "kappa": design.kappa,
                   "components": [list(r) for r in design.table()], "notes": list(design.notes)},
-        "monte_carlo": mc, "calibration_errors": cal_err, "sensitivities": sens,
+        "monte_carlo": mc, "monte_carlo_rate_function": mc_rate, "calibration_errors": cal_err, "sensitivities": sens,
         "matching": matched, "ota": {"ota": ota_obs, "bridge": bridge_same, "settings": ota},
         "boards": boards,
     }
@@ -256,6 +258,51 @@ def summarise_mc(boards: list, ref: dict, exact_req: dict, exact_nom: dict) -> d
                   "after": _stats(obs - ref[k] - (cal - exact_nom[k])),
                   "after_vs_theory": _stats(obs - cal)}
     return out
+
+
+def rate_function_effect(design, boards: list, grads: dict) -> dict:
+    """Work rate-function points I(w) of the Monte Carlo boards, linearised around the nominal
+    board through exact-theory gradients: the shift each board's effective parameters cause
+    (before calibration), and the part the calibration leaves (effective minus calibrated
+    parameters; the ADC offset is not calibrated and stays)."""
+    x0 = tolerance._vector(design, design.realised, 0.0)
+    out = {}
+    for k, g in grads.items():
+        if not k.startswith("I(w"):
+            continue
+        before, after = [], []
+        for b in boards:
+            e, c = b["effective"], b["calibrated"]
+            xe = np.array([e["tau_m"], e["delta"], e["a"], e["gamma"], e["epsilon"], b["offset"]])
+            xc = np.array([c["tau_m"], c["delta"], c["a"], c["gamma"], e["epsilon"], 0.0])
+            before.append(float((xe - x0) @ g))
+            after.append(float((xe - xc) @ g))
+        out[k] = {"before": _stats(before), "after": _stats(after)}
+    return out
+
+
+def figure_density(design, ens, burn_in: float, path: Path) -> Path:
+    """Stationary histogram of the nominal board against exact p_s of the requested model
+    (sgn friction) and of the realised board (tanh width epsilon)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    i0 = int(np.searchsorted(ens.t, ens.t[0] + burn_in - 1e-12))
+    v = ens.v[:, i0:].ravel()
+    lo, hi = np.quantile(v, [0.0005, 0.9995])
+    grid = np.linspace(lo, hi, 2001)
+    fig, ax = plt.subplots(figsize=(7, 3.6))
+    ax.hist(v, bins=120, range=(lo, hi), density=True, color="#bbb", label="nominal board (ngspice)")
+    ax.plot(grid, design.model.stationary_pdf(grid), "k-", lw=1.2, label="exact p_s, requested model")
+    ax.plot(grid, design.realised.stationary_pdf(grid), "C3--", lw=1.0,
+            label=f"exact p_s, realised board (epsilon = {design.realised.epsilon:.3g})")
+    ax.set_xlabel("v")
+    ax.set_ylabel("density")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
 
 
 def calibration_errors(boards: list) -> dict:

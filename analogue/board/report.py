@@ -80,7 +80,11 @@ def write_report(out: Path, exp, design, metrics: dict) -> Path:
                      b["bandwidth"], b["integration"], b["statistical"], b["dominant"],
                      c["within_budget"]])
         classes.append("ok" if c["within_budget"] else "fail")
-    sections.append(Section("Nominal board against exact theory", paragraphs=[
+    dens = out / "density.png"
+    sections.append(Section("Nominal board against exact theory", figures=[Figure(
+        dens, "Stationary velocity histogram of the nominal board against exact p_s: the requested "
+              "model (sgn friction, cusp at v = 0) and the realised board (E-series values, the "
+              "bridge's tanh width).")] if dens.exists() else [], paragraphs=[
         (f"{st['replicas']} replicas × {st['t_end']} tau_m (burn-in {st['burn_in']}), started from "
         "the stationary law of the realised model; theory: exact finite-noise values of the "
         "requested ideal model (sgn friction, white noise). Budget terms: rounding (E-series "
@@ -117,6 +121,15 @@ def write_report(out: Path, exp, design, metrics: dict) -> Path:
                                                     "nominal board (MC runs)", "before calibration",
                                                     "board - nominal board", "predicted (effective model)",
                                                     "left after calibration"], rows)]))
+
+    rf = metrics.get("monte_carlo_rate_function") or {}
+    if rf:
+        sections[-1].tables.append(Table(
+            "Work rate-function points I(w) across the same boards (exact-theory gradients at each "
+            "board's effective parameters; after calibration: the part the calibrated parameters do "
+            "not capture, i.e. the calibration errors and the uncalibrated ADC offset)",
+            ["point", "before calibration", "after calibration"],
+            [[k, _pm(v["before"]), _pm(v["after"])] for k, v in rf.items()]))
 
     # ------------------------------------------------------------------ sensitivities
     sens = metrics["sensitivities"]
