@@ -29,18 +29,55 @@ from ..model import Model
 from .exact_grid import resolved_grid
 from .fokker_planck import Grid
 from .propagation import initial_delta, propagate
-from .stationary import (StationaryMoments, autocorrelation, half_line_moments, sample_stationary,
-                         stationary_moments)
+from .stationary import (StationaryMoments, autocorrelation, half_line_moments, sample_stationary)
+from .stationary import stationary_moments as _stationary_moments
 
-from .work_statistics import rate_function, scgf, work_pdf
+from . import family as _family
+from .work_statistics import rate_function as _paper_rate_function, scgf as _paper_scgf, work_pdf
 
-__all__ = ["propagator", "stationary_moments", "StationaryMoments", "autocorrelation",
+__all__ = ["propagator", "propagator_atom", "stationary_moments", "StationaryMoments", "autocorrelation",
            "sample_stationary", "scgf", "rate_function", "work_pdf"]
 
 
 def _check_model(model) -> None:
     if not isinstance(model, Model):
         raise ValueError(f"model must be an analogue.Model, got {type(model).__name__}")
+
+
+def stationary_moments(model: Model, h: float | None = None) -> StationaryMoments:
+    """Exact stationary moments; the paper's model by :mod:`.stationary`, every other 1-D
+    member of the family by :mod:`.family` (with ``p_zero``, the atom at v = 0)."""
+    _check_model(model)
+    if not model.is_paper:
+        return _family.stationary_moments(model, h=h)
+    return _stationary_moments(model, h=h)
+
+
+def scgf(model: Model, k, *, h: float | None = None):
+    """Work SCGF (:func:`.work_statistics.scgf`; family members: :func:`.family.scgf`)."""
+    _check_model(model)
+    if not model.is_paper:
+        return _family.scgf(model, k, h=h)
+    return _paper_scgf(model, k, h=h)
+
+
+def rate_function(model: Model, w, *, h: float | None = None):
+    """Work rate function (:func:`.work_statistics.rate_function`; family members:
+    :func:`.family.rate_function`, whose scaling with gamma = inf is documented there)."""
+    _check_model(model)
+    if not model.is_paper:
+        return _family.rate_function(model, w, h=h)
+    return _paper_rate_function(model, w, h=h)
+
+
+def propagator_atom(model: Model, t, v0: float, t0: float = 0.0, *, h: float | None = None):
+    """``P(v(t) = 0 | v0)``: the atom of the transition law (pure shot noise, stick regime);
+    0 for the paper's model."""
+    _check_model(model)
+    if model.is_paper:
+        t_arr = np.asarray(t, dtype=float)
+        return 0.0 if t_arr.ndim == 0 else np.zeros(t_arr.shape)
+    return _family.propagator_atom(model, t, v0, t0, h=h)
 
 
 def propagator(model: Model, v, t, v0: float, t0: float = 0.0, *, grid: Grid | None = None,
@@ -77,6 +114,10 @@ def propagator(model: Model, v, t, v0: float, t0: float = 0.0, *, grid: Grid | N
     (measured 2e-4); the t -> inf limit is the exact ``p_s`` (eq. p_stat) to ~1e-12.
     """
     _check_model(model)
+    if not model.is_paper:
+        if grid is not None or method != "auto":
+            raise ValueError("grid and method apply to the paper's model only")
+        return _family.propagator(model, v, t, v0, t0, h=h)
     v = np.asarray(v, dtype=float)
     if not np.all(np.isfinite(v)):
         raise ValueError("v must be finite")

@@ -60,6 +60,8 @@ class StationaryMoments(Mapping):
     p_positive  : P(v > 0);  p_negative: P(v < 0) (each computed directly, not as 1 - other)
     mean_sign   : <sgn v> (epsilon = 0) or <tanh(v/epsilon)>
     diffusion   : Green-Kubo D_x = int_0^inf <dv(0) dv(t)> dt; Var x(t) ~ 2 D_x t
+    p_zero      : P(v = 0), the atom of the law (probability of being stuck): 0 except for
+                  pure shot noise in the stick regime (:mod:`analogue.theory.family`)
     """
 
     mean: float
@@ -69,6 +71,7 @@ class StationaryMoments(Mapping):
     mean_sign: float
     diffusion: float
     drift: float
+    p_zero: float = 0.0
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -362,9 +365,13 @@ def sample_stationary(model: Model, size, seed=None) -> np.ndarray:
     Gaussian's survival function in log space (``ndtri_exp``: exact, stable far in the tails).
     ``epsilon > 0``: inverse of the CDF tabulated by the trapezoid rule on a grid of spacing
     ``min(sqrt(tau_m/gamma)/400, epsilon/20)`` over the mode +- 40 widths (CDF error O(h^2)).
-    ``seed``: None, an int, a SeedSequence or a numpy Generator.
+    ``seed``: None, an int, a SeedSequence or a numpy Generator.  Other members of the model
+    family: :func:`analogue.theory.family.sample_stationary`.
     """
     _check_model(model)
+    if not model.is_paper:
+        from .family import sample_stationary as family_sample
+        return family_sample(model, size, seed)
     sizes = np.atleast_1d(np.asarray(size, dtype=object))
     if not all(isinstance(s, (int, np.integer)) and not isinstance(s, bool) for s in sizes):
         raise ValueError(f"size must be an int or a tuple of ints, got {size!r}")

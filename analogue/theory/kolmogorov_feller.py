@@ -1,0 +1,334 @@
+"""Conservative discretisation of the Kolmogorov-Feller (master) equation for shot noise.
+
+With Poissonian kicks (rate ``lambda``, sizes ``z`` of density ``rho``) the velocity law obeys
+
+    dp/dt = -d/dv [f(v) p] + (1/gamma) p'' + lambda [ integral p(v - z) rho(z) dz - p(v) ],
+
+``f`` the force law of :meth:`analogue.Model.drift` (theory.md, "The extensions, in
+equations").  Two discretisations, both exactly mass-conserving generators ``dP/dt = L P``:
+
+* **gamma = inf (pure shot noise).**  Cells ``[j h, (j+1) h]`` with ``v = 0`` on a cell *edge*,
+  plus, in the stick regime (``|a| <= Delta(0)``, sgn law), a separate state **S = "stuck at
+  v = 0"** that carries the atom of the stationary law.  The drift is upwind finite volumes:
+  the flux through an edge ``e`` is ``f(e) P_upstream / h``; at the edge ``v = 0`` the one-sided
+  values ``f(0+) = a - Delta(0)`` and ``f(0-) = a + Delta(0)`` are used, so the flow into the
+  stuck state is exactly the arrival flux ``|f(0+-)| p(0+-)`` of the continuum equation and S
+  only empties by kicks (rate lambda).  First order in h: moments are Richardson-extrapolated
+  over (h, h/2) by the callers.
+* **gamma finite (shot + Gaussian).**  The Scharfetter-Gummel drift-diffusion generator of
+  :mod:`analogue.theory.fokker_planck` on nodes (cells centred on nodes), plus the jumps; no
+  atom (diffusion leaves 0 at once).
+
+Jumps: the exact **cell-integrated exponential kernel**.  For mass uniform in a cell, a kick of
+exponential size (mean ``mu``) lands ``d >= 1`` cells further with probability
+
+    P_d = (mu/h) (e^{h/mu} - 1) (1 - e^{-h/mu}) e^{-d h/mu},   P_0 = 1 - (mu/h)(1 - e^{-h/mu}),
+
+(the P_0 part stays in its cell); from S (a point at the edge 0) it lands in cell ``j >= 0``
+with probability ``e^{-j h/mu} - e^{-(j+1) h/mu}``.  Two-sided kicks use each direction with
+weight 1/2.  Mass that would leave the grid is put into the outermost cell (conservation).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import sparse
+
+from ..model import Model
+from .fokker_planck import Grid, generator as sg_generator
+
+__all__ = ["ShotGrid", "shot_generator", "jump_kernel", "has_atom", "premultiplier"]
+
+
+def premultiplier(mean: float, h: float, n_cells: int, two_sided: bool, extra: int = 0):
+    """The discrete ``(1 + mu d/dv)`` (one-sided) or ``(1 - mu^2 d^2/dv^2)`` (two-sided): the
+    bidiagonal ``N = I - q S`` (S the shift to the next cell, ``q = e^{-h/mu}``), or
+    ``(I - q S^T)(I - q S)``.  It maps the geometric (exponential) kernel to a banded one, so
+    ``N L`` is banded but for a few rows (the folds at the ends, the stuck state): the
+    theory.md ODE reduction done on the grid, which makes sparse LU cheap.  ``extra`` identity
+    rows are appended (the stuck state)."""
+    q = math.exp(-h / mean)
+    S = sparse.diags([np.ones(n_cells - 1)], [-1], shape=(n_cells, n_cells))
+    I = sparse.identity(n_cells)
+    N = I - q * S
+    if two_sided:
+        N = (I - q * S.T) @ N
+    if extra:
+        N = sparse.block_diag([N, sparse.identity(extra)])
+    return sparse.csc_matrix(N)
+
+
+def has_atom(model: Model) -> bool:
+    """True when the stationary law has an atom at v = 0: no Gaussian noise, the exact sgn law,
+    and the stick regime ``|a| <= Delta(0)`` (the flow reaches 0 in finite time from both sides
+    and stays until the next kick)."""
+    return (not math.isfinite(model.gamma) and model.epsilon == 0
+            and abs(model.a) <= model.static_friction)
+
+
+@dataclass(frozen=True)
+class ShotGrid:
+    """Discretisation of one member: velocities ``v`` of the states (cell centres, or nodes;
+    with an atom the last state is S at v = 0), spacing ``h``, and the generator split as
+    ``L = base + rate (K - I)``: ``base`` the drift(-diffusion) part, K the jump kernel of
+    :func:`jump_kernel` (plus the landing column of S)."""
+
+    v: np.ndarray
+    h: float
+    atom: bool
+    nodal: bool  # True: nodes of a Scharfetter-Gummel grid (gamma finite); False: cells (+ S)
+    base: sparse.csc_matrix
+    shot: object = None           # analogue.ShotNoise or None
+    col_s: np.ndarray | None = None  # landing distribution of a kick from S (cells)
+
+    @property
+    def n_cells(self) -> int:
+        return self.v.size - (1 if self.atom else 0)
+
+    @property
+    def L(self) -> sparse.csc_matrix:
+        """The explicit generator (dense band of width ~45 mean/h for the jumps)."""
+        if self.shot is None:
+            return self.base
+        n = self.n_cells
+        K = jump_kernel(self.shot.mean, self.h, n, self.shot.two_sided)
+        if self.atom:
+            K = sparse.bmat([[K, sparse.csc_matrix(self.col_s[:, None])],
+                             [sparse.csc_matrix((1, n)), sparse.csc_matrix((1, 1))]])
+        return (self.base + self.shot.rate * (K - sparse.identity(self.v.size))).tocsc()
+
+    @property
+    def premultiplier(self) -> sparse.csc_matrix | None:
+        if self.shot is None:
+            return None
+        return premultiplier(self.shot.mean, self.h, self.n_cells, self.shot.two_sided,
+                             int(self.atom))
+
+    def banded_L(self) -> sparse.csc_matrix:
+        """``N L`` in closed form (see :func:`banded_jump_kernel`): banded but for a few rows,
+        built without ever forming the dense band of L."""
+        N = self.premultiplier
+        if N is None:
+            return self.base
+        n = self.n_cells
+        NK = banded_jump_kernel(self.shot.mean, self.h, n, self.shot.two_sided)
+        if self.atom:
+            Ncol = premultiplier(self.shot.mean, self.h, n, self.shot.two_sided) @ self.col_s
+            Ncol[np.abs(Ncol) < 1e-16] = 0.0
+            NK = sparse.bmat([[NK, sparse.csc_matrix(Ncol[:, None])],
+                              [sparse.csc_matrix((1, n)), sparse.csc_matrix((1, 1))]])
+        return sparse.csc_matrix(N @ self.base + self.shot.rate * (NK - N))
+
+    @property
+    def n(self) -> int:
+        return self.v.size
+
+    def weights_to_density(self, p: np.ndarray):
+        """(continuous density at ``v`` of the cells/nodes, atom mass)."""
+        if self.atom:
+            return p[..., :-1] / self.h, p[..., -1]
+        return p / self.h, np.zeros(p.shape[:-1])
+
+    def landing(self, u: float) -> np.ndarray:
+        """Probabilities over the states of the landing point ``u + z`` of one kick from the
+        point ``u`` (exact cell integrals of the exponential law; beyond the grid: end cell)."""
+        shot = self.shot
+        n = self.n_cells
+        centres = self.v[:n]
+        lo_e, hi_e = centres - 0.5 * self.h, centres + 0.5 * self.h
+        out = np.zeros(self.n)
+        dirs = [(1.0, 1)] if not shot.two_sided else [(0.5, 1), (0.5, -1)]
+        for w, sgn in dirs:
+            a = np.maximum(sgn * (lo_e if sgn > 0 else hi_e) - sgn * u, 0.0)
+            b = np.maximum(sgn * (hi_e if sgn > 0 else lo_e) - sgn * u, 0.0)
+            cell = np.exp(-a / shot.mean) - np.exp(-b / shot.mean)
+            cell = np.clip(cell, 0.0, None)
+            out[:n] += w * cell
+            out[n - 1 if sgn > 0 else 0] += w * max(0.0, 1.0 - cell.sum())
+        return out
+
+    def initial(self, v0: float) -> np.ndarray:
+        """Unit mass at ``v0``: the stuck state for v0 == 0 with an atom, else split linearly
+        between the two neighbouring states of the same side of 0."""
+        p = np.zeros(self.n)
+        if self.atom and v0 == 0.0:
+            p[-1] = 1.0
+            return p
+        centres = self.v[:-1] if self.atom else self.v
+        if not centres[0] <= v0 <= centres[-1]:
+            raise ValueError(f"v0={v0!r} lies outside the grid [{centres[0]}, {centres[-1]}]")
+        j = int(np.clip(np.searchsorted(centres, v0) - 1, 0, centres.size - 2))
+        theta = (v0 - centres[j]) / (centres[j + 1] - centres[j])
+        if not self.nodal and (centres[j] < 0 < centres[j + 1]):
+            # do not smear across the edge v = 0 (the kink/atom lives there)
+            p[j if v0 < 0 else j + 1] = 1.0
+            return p
+        p[j], p[j + 1] = 1.0 - theta, theta
+        return p
+
+
+def jump_kernel(mean: float, h: float, n: int, two_sided: bool) -> sparse.csc_matrix:
+    """Column-stochastic matrix K (n x n) of the destination cell of one kick from each cell
+    (module docstring), mass beyond the ends folded into the end cells (exact geometric sums;
+    the band is cut where ``q^d < e^{-45}``, whose mass also goes to the fold)."""
+    r = h / mean
+    dmax = min(n - 1, int(math.ceil(45.0 / r)) + 1)
+    d = np.arange(1, dmax + 1)
+    c = (math.expm1(r) / r) * (-math.expm1(-r))
+    pd = c * np.exp(-d * r)
+    p0 = 1.0 - (-math.expm1(-r)) / r
+    i = np.arange(n)
+    parts = [sparse.diags([np.full(n, p0)], [0], shape=(n, n))]
+    dirs = [(1.0, 1)] if not two_sided else [(0.5, 1), (0.5, -1)]
+    for w, sign in dirs:
+        parts.append(sparse.diags([np.full(n - dd, w * pd[dd - 1]) for dd in d],
+                                  [-sign * dd for dd in d], shape=(n, n)))
+        # whatever of this direction is not on the band goes to the end cell it points to
+        lands = np.minimum(n - 1 - i if sign > 0 else i, dmax)
+        on_band = c * (np.exp(-r) - np.exp(-(lands + 1) * r)) / (1.0 - np.exp(-r))
+        end = np.full(n, n - 1 if sign > 0 else 0)
+        parts.append(sparse.csc_matrix((w * ((1.0 - p0) - on_band), (end, i)), shape=(n, n)))
+    return sparse.csc_matrix(sum(parts[1:], parts[0]))
+
+
+def banded_jump_kernel(mean: float, h: float, n: int, two_sided: bool) -> sparse.csc_matrix:
+    """``N K`` in closed form, N of :func:`premultiplier`, K the kernel of :func:`jump_kernel`
+    with the full (untruncated) geometric band and exact folds.  Writing
+    ``K = P_0 I + w_u (T + e_{n-1} f_u^T) + w_d (T^T + e_0 f_d^T)`` with ``T_{i+d,i} = c q^d``
+    (``c = (e^r - 1)(1 - e^{-r})/r``, ``r = h/mean``, ``q = e^{-r}``), fold sums
+    ``f_u[i] = c q^{n-i}/(1-q)``, ``f_d[i] = c q^{i+1}/(1-q)``, and S the shift down:
+    one-sided ``(I - qS) T = c q S``; two-sided ``N T = c q (S - q S^T S)`` and
+    ``N T^T = c q (S^T - q S S^T) + q^2 e_0 (row 0 of T^T)``,
+    ``N e_{n-1} = e_{n-1} - q e_{n-2}``, ``N e_0 = (1 + q^2) e_0 - q e_1``."""
+    r = h / mean
+    q = math.exp(-r)
+    c = (math.expm1(r) / r) * (-math.expm1(-r))
+    p0 = 1.0 - (-math.expm1(-r)) / r
+    i = np.arange(n)
+    f_u = c * np.exp(-(n - i) * r) / (1.0 - q)
+    f_d = c * np.exp(-(i + 1) * r) / (1.0 - q)
+    N = premultiplier(mean, h, n, two_sided)
+    S = sparse.diags([np.ones(n - 1)], [-1], shape=(n, n))
+    if not two_sided:
+        fold = sparse.csc_matrix((f_u, (np.full(n, n - 1), i)), shape=(n, n))
+        return sparse.csc_matrix(p0 * N + c * q * S + fold)
+    d1 = sparse.diags([np.r_[np.ones(n - 1), 0.0]], [0])
+    d0 = sparse.diags([np.r_[0.0, np.ones(n - 1)]], [0])
+    row0 = np.where(i >= 1, c * np.exp(-i * r), 0.0) * q * q
+    up = c * q * (S - q * d1) + sparse.csc_matrix(
+        (np.r_[f_u, -q * f_u], (np.r_[np.full(n, n - 1), np.full(n, n - 2)], np.r_[i, i])),
+        shape=(n, n))
+    down = (c * q * (S.T - q * d0)
+            + sparse.csc_matrix((row0, (np.zeros(n, int), i)), shape=(n, n))
+            + sparse.csc_matrix((np.r_[(1 + q * q) * f_d, -q * f_d],
+                                 (np.r_[np.zeros(n, int), np.ones(n, int)], np.r_[i, i])),
+                                shape=(n, n)))
+    return sparse.csc_matrix(p0 * N + 0.5 * (up + down))
+
+
+def _grid_range(model: Model, v0s=()) -> tuple[float, float]:
+    shot = model.shot
+    tau = model.tau_m
+    lam, mu = (shot.rate, shot.mean) if shot is not None else (0.0, 0.0)
+    # Stationary excursions: the drift-free reach tau (|a| + lambda mu) plus 45 jump means and
+    # 10 standard deviations of the linear-friction (Gamma-like) law, plus the Gaussian reach.
+    reach = tau * (abs(model.a) + lam * mu) + 45.0 * mu + 10.0 * math.sqrt(lam * tau) * mu
+    if math.isfinite(model.gamma):
+        reach += model._support_bound(45.0)
+    lo = -reach
+    if shot is not None and not shot.two_sided and not math.isfinite(model.gamma):
+        # one-sided kicks, no diffusion: on v < 0 the drift is >= -v/tau_m + a > 0 below
+        # tau_m a, so nothing below min(0, tau_m a) is ever visited (from such starts).
+        lo = min(0.0, tau * model.a)
+    hi = reach
+    for v0 in v0s:
+        lo, hi = min(lo, float(v0) - 1e-12), max(hi, float(v0) + 1e-12)
+    return lo, hi
+
+
+def default_spacing(model: Model) -> float:
+    """Spacing resolving the jump mean/25, the Gaussian width/40, the Stribeck length/10 and
+    the kink length 1/(gamma (Delta(0) + |a|))/2 (when gamma is finite)."""
+    scales = []
+    if model.shot is not None:
+        scales.append(model.shot.mean / 25.0)
+    if math.isfinite(model.gamma):
+        scales.append(math.sqrt(model.tau_m / model.gamma) / 40.0)
+        if model.static_friction > 0:
+            scales.append(0.5 / (model.gamma * (model.static_friction + abs(model.a))))
+    if model.stribeck is not None:
+        scales.append(model.stribeck[1] / 10.0)
+    if model.epsilon > 0:
+        scales.append(model.epsilon / 8.0)
+    return min(scales)
+
+
+def shot_generator(model: Model, h: float | None = None, v0s=(), max_states: int = 20_000) -> ShotGrid:
+    """Generator of the Kolmogorov-Feller equation of ``model`` (module docstring)."""
+    if h is None:
+        h = default_spacing(model)
+    lo, hi = _grid_range(model, v0s)
+    shot = model.shot
+    if math.isfinite(model.gamma):
+        grid = Grid.span(lo, hi, h)
+        if grid.n > max_states:
+            raise ValueError(f"grid would need {grid.n} states (> {max_states}); pass a coarser h")
+        return ShotGrid(grid.v, h, False, True, sg_generator(model, grid).tocsc(), shot)
+    # gamma = inf: cells [j h, (j+1) h]
+    j_lo = min(int(math.floor(lo / h)), -1)
+    j_hi = max(int(math.ceil(hi / h)), 1)
+    n = j_hi - j_lo
+    if n + 1 > max_states:
+        raise ValueError(f"grid would need {n + 1} states (> {max_states}); pass a coarser h")
+    edges = h * np.arange(j_lo, j_hi + 1, dtype=float)
+    centres = 0.5 * (edges[1:] + edges[:-1])
+    zero_edge = -j_lo  # edges[zero_edge] == 0: between cell zero_edge-1 and cell zero_edge
+    f = model.drift(edges[1:-1])  # interior edges
+    up = np.maximum(f, 0.0) / h     # cell e-1 -> cell e  (e = interior edge index 1..n-1)
+    down = np.maximum(-f, 0.0) / h  # cell e -> cell e-1
+    atom = has_atom(model)
+    iz = zero_edge - 1  # index into the interior-edge arrays of the edge v = 0
+    if model.epsilon == 0:
+        f_plus = model.a - model.static_friction
+        f_minus = model.a + model.static_friction
+        if atom:
+            up[iz] = down[iz] = 0.0
+        else:  # slip: flux through 0 from the upstream side
+            up[iz] = max(f_minus, 0.0) / h
+            down[iz] = max(-f_plus, 0.0) / h
+    m = n + (1 if atom else 0)
+    rows, cols, vals = [], [], []
+    e = np.arange(1, n)
+    rows += [e, e - 1]
+    cols += [e - 1, e]
+    vals += [up, down]
+    out = np.zeros(m)
+    out[e - 1] += up
+    out[e] += down
+    if atom:
+        s = n
+        into_from_above = -(model.a - model.static_friction) / h  # cell zero_edge -> S
+        into_from_below = (model.a + model.static_friction) / h   # cell zero_edge-1 -> S
+        rows += [np.array([s]), np.array([s])]
+        cols += [np.array([zero_edge]), np.array([zero_edge - 1])]
+        vals += [np.array([into_from_above]), np.array([into_from_below])]
+        out[zero_edge] += into_from_above
+        out[zero_edge - 1] += into_from_below
+    L = sparse.csc_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                          shape=(m, m)) - sparse.diags(out)
+    col_s = None
+    if shot is not None and atom:
+        # kicks from S: exact landing probabilities from the point v = 0
+        jj = np.arange(max(n - zero_edge, zero_edge))
+        land = np.exp(-jj * h / shot.mean) * -math.expm1(-h / shot.mean)
+        w_up = 0.5 if shot.two_sided else 1.0
+        col_s = np.zeros(n)
+        col_s[zero_edge:] += w_up * land[:n - zero_edge]
+        col_s[-1] += w_up - w_up * land[:n - zero_edge].sum()  # beyond the grid: end cell
+        if shot.two_sided:
+            col_s[zero_edge - 1 - np.arange(zero_edge)] += 0.5 * land[:zero_edge]
+            col_s[0] += 0.5 - 0.5 * land[:zero_edge].sum()
+    v = np.concatenate([centres, [0.0]]) if atom else centres
+    return ShotGrid(v, h, atom, False, L.tocsc(), shot, col_s)
