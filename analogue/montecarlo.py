@@ -54,11 +54,25 @@ def default_dt(model: Model) -> float:
     relaxation time of the smooth law at ``v = 0``.
     """
     dt = model.tau_m / 500.0
-    if model.delta > 0:
-        t_kink = 2.0 / (model.gamma * (model.delta + abs(model.a)) ** 2)
+    d0 = model.static_friction
+    if d0 > 0 and math.isfinite(model.gamma):
+        t_kink = 2.0 / (model.gamma * (d0 + abs(model.a)) ** 2)
         dt = min(dt, t_kink / 50.0)
-        if model.epsilon > 0:
-            dt = min(dt, 0.1 * model.epsilon / model.delta)
+    if d0 > 0 and model.epsilon > 0:
+        dt = min(dt, 0.1 * model.epsilon / d0)
+    # Family members: resolve the spring period, the Stribeck length crossed at the typical
+    # speed, and keep the explicit cubic term stable (dt * 3 cubic v^2 <= 1/50 at 6 speeds).
+    v_typ = max(model.velocity_scale, abs(model.attractor), 1e-300)
+    if model.shot is not None:
+        v_typ = max(v_typ, model.shot.mean)
+    if model.spring > 0:
+        dt = min(dt, 2.0 * math.pi / math.sqrt(model.spring) / 500.0)
+    if model.stribeck is not None:
+        dt = min(dt, model.stribeck[1] / (50.0 * 6.0 * v_typ))
+    if model.cubic > 0:
+        dt = min(dt, 1.0 / (50.0 * 3.0 * model.cubic * (6.0 * v_typ) ** 2))
+    if model.shot is not None:
+        dt = min(dt, 0.05 / model.shot.rate)
     return dt
 
 
@@ -72,14 +86,14 @@ def _streams(seed):
     if isinstance(seed, numbers.Integral) and seed < 0:
         raise ValueError(f"seed must be >= 0, got {seed}")
     root = np.random.default_rng(seed)
-    init, noise = root.spawn(2)
-    return init, noise
+    init, noise, kicks = root.spawn(3)  # spawn keys 0, 1 as before: old seeds reproduce
+    return init, noise, kicks
 
 
 def standard_noise(seed, replicas: int, n_steps: int) -> np.ndarray:
     """The standard normals (shape (replicas, n_steps)) that :func:`simulate_sde` draws for
     ``seed`` (an int or SeedSequence): passing them as ``noise=`` reproduces the seeded run."""
-    _, rng = _streams(seed)
+    _, rng, _ = _streams(seed)
     return rng.standard_normal((int(n_steps), int(replicas))).T
 
 
@@ -172,7 +186,12 @@ def simulate_sde(model: Model, *, v0, t_end: float, replicas: int, seed=None, dt
     if sample_dt is not None and sample_dt > t_end * (1 + 1e-12):
         raise ValueError(f"sample_dt={sample_dt!r} must be <= t_end={t_end!r}")
     dt, per, n_steps = _time_grid(model, t_end, dt, sample_dt)
-    init_rng, noise_rng = _streams(seed)
+    init_rng, noise_rng, kick_rng = _streams(seed)
+    if not model.is_noisy:
+        raise ValueError("the model is noise-free (gamma = inf, shot = None): use "
+                         "Model.deterministic, or set a finite gamma or shot noise")
+    if noise is not None and not math.isfinite(model.gamma):
+        raise ValueError("noise= gives Gaussian increments, but gamma = inf (no Gaussian noise)")
 
     if noise is not None:
         noise = np.asarray(noise, dtype=float)
@@ -198,12 +217,41 @@ def simulate_sde(model: Model, *, v0, t_end: float, replicas: int, seed=None, dt
         v0_meta = float(v0) if np.ndim(v0) == 0 else "array"
 
     tau, g = model.tau_m, model.gamma
+    n_out = n_steps // per + 1
+    if not math.isfinite(g):
+        v_out, x_out, n_kicks = _event_driven(model, v, n_out, per * dt, dt, kick_rng)
+    else:
+        v_out, x_out, n_kicks = _stepped(model, v, n_steps, per, dt, scheme, noise, noise_rng,
+                                         kick_rng)
+
+    t = np.arange(n_out) * (per * dt)
+    meta = {"source": "sde", "seed": int(seed) if isinstance(seed, numbers.Integral) else None,
+            "dt": dt, "sample_dt": per * dt, "scheme": scheme,
+            "noise": "given" if noise is not None else "seeded", "v0": v0_meta,
+            "replicas": replicas, "model": model.as_dict()}
+    if model.shot is not None:
+        meta["kicks"] = int(n_kicks)
+        meta["shot_scheme"] = ("compound Poisson sum per step" if math.isfinite(g)
+                               else "event-driven, exact between kicks" if _closed_form_flow(model)
+                               else "event-driven, RK4 between kicks")
+    if model.spring > 0:
+        meta["position"] = "model.x0 + x (x = integral of v, x[:, 0] = 0)"
+    return Ensemble(t, v_out, x_out, meta)
+
+
+# ----------------------------------------------------------------- time-stepped (gamma finite)
+def _stepped(model, v, n_steps, per, dt, scheme, noise, noise_rng, kick_rng):
+    """The exponential/Euler schemes of the module docstring; family terms (cubic, Stribeck
+    via ``model.coulomb``, spring with the position ``x0 + x``) enter the friction held over
+    the step; shot kicks are added at the end of each step as the exact compound-Poisson sum
+    of the step (count ~ Poisson(rate dt), sum of that many exponentials: a Gamma variable)."""
+    tau, g = model.tau_m, model.gamma
+    replicas = v.size
     if scheme == "exponential":
         r = math.exp(-dt / tau)
         lin, push, amp = r, tau * (1.0 - r), math.sqrt(tau / g * (1.0 - r * r))
     else:
         lin, push, amp = 1.0 - dt / tau, dt, math.sqrt(2.0 * dt / g)
-
     n_out = n_steps // per + 1
     v_out = np.empty((replicas, n_out))
     x_out = np.empty((replicas, n_out))
@@ -211,23 +259,175 @@ def simulate_sde(model: Model, *, v0, t_end: float, replicas: int, seed=None, dt
     v_out[:, 0] = v
     x_out[:, 0] = 0.0
     block = max(1, _BLOCK_NUMBERS // replicas)
-    a = model.a
+    a, cubic, spring, shot = model.a, model.cubic, model.spring, model.shot
+    n_kicks = 0
     for start in range(0, n_steps, block):
         stop = min(n_steps, start + block)
         xi = (noise[:, start:stop].T if noise is not None
               else noise_rng.standard_normal((stop - start, replicas)))
         for j, k in enumerate(range(start, stop)):
-            v_new = lin * v + push * (a - model.coulomb(v)) + amp * xi[j]
+            force = a - model.coulomb(v)
+            if cubic:
+                force = force - cubic * v**3
+            if spring:
+                force = force - spring * (model.x0 + x)
+            v_new = lin * v + push * force + amp * xi[j]
+            if shot is not None:
+                kick = _compound_poisson(shot, dt, replicas, kick_rng)
+                n_kicks += int(np.count_nonzero(kick))
+                v_new = v_new + kick
             x += 0.5 * dt * (v + v_new)
             v = v_new
             if (k + 1) % per == 0:
                 i = (k + 1) // per
                 v_out[:, i] = v
                 x_out[:, i] = x
+    return v_out, x_out, n_kicks
 
-    t = np.arange(n_out) * (per * dt)
-    meta = {"source": "sde", "seed": int(seed) if isinstance(seed, numbers.Integral) else None,
-            "dt": dt, "sample_dt": per * dt, "scheme": scheme,
-            "noise": "given" if noise is not None else "seeded", "v0": v0_meta,
-            "replicas": replicas, "model": model.as_dict()}
-    return Ensemble(t, v_out, x_out, meta)
+
+def _compound_poisson(shot, dt, replicas, rng):
+    counts = rng.poisson(shot.rate * dt, replicas)
+    if not shot.two_sided:
+        return rng.gamma(counts, shot.mean) if counts.any() else np.zeros(replicas)
+    up = rng.binomial(counts, 0.5)
+    return rng.gamma(up, shot.mean) - rng.gamma(counts - up, shot.mean)
+
+
+def _kick(shot, size, rng):
+    z = rng.exponential(shot.mean, size)
+    if shot.two_sided:
+        z = np.where(rng.random(size) < 0.5, z, -z)
+    return z
+
+
+# ------------------------------------------------------------ event-driven (pure shot noise)
+def _closed_form_flow(model) -> bool:
+    """True when the flow between kicks is the paper's closed form (linear viscous friction and
+    a constant sgn friction, no spring): the event-driven scheme is then exact."""
+    return (model.cubic == 0 and model.stribeck is None and model.spring == 0
+            and model.epsilon == 0)
+
+
+def _flow_exact(model, v, s):
+    """Noise-free flow of the paper's law over durations ``s`` (arrays): ``(v(s), int_0^s v)``.
+
+    Mirrored so that the start lies on the upper half line (u = sgn v >= 0, a' = sgn a): there
+    ``u(t) = (u + b) e^{-t/tau} - b`` with ``b = (Delta - a') tau`` (eq. sol_basic), which
+    reaches 0 at ``t1 = tau ln(1 + u/b)`` if b > 0; then the object sticks (|a| <= Delta) or
+    crosses and relaxes on the other side, ``-|b2| (1 - e^{-t'/tau})``, b2 = (Delta + a') tau."""
+    tau, d, a = model.tau_m, model.delta, model.a
+    leave = math.copysign(1.0, a) if abs(a) > d else 0.0
+    sgn = np.where(v != 0, np.sign(v), leave)
+    u = sgn * v
+    ap = sgn * a
+    b = (d - ap) * tau
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t1 = np.where(b > 0, tau * np.log1p(np.where(b > 0, u / np.where(b > 0, b, 1.0), 0.0)), np.inf)
+    s1 = np.minimum(s, t1)
+    e1 = np.exp(-s1 / tau)
+    u_end = (u + b) * e1 - b
+    dx = (u + b) * tau * (1.0 - e1) - b * s1
+    after = s > t1
+    if abs(a) <= d:
+        u_end = np.where(after, 0.0, u_end)
+    else:
+        t2 = np.where(after, s - t1, 0.0)
+        b2 = np.abs((d + ap) * tau)
+        e2 = np.exp(-t2 / tau)
+        u_end = np.where(after, -b2 * (1.0 - e2), u_end)
+        dx = dx + np.where(after, -b2 * (t2 - tau * (1.0 - e2)), 0.0)
+    u_end = np.where(sgn == 0, 0.0, u_end)
+    dx = np.where(sgn == 0, 0.0, dx)
+    return sgn * u_end, sgn * dx
+
+
+def _rhs(model, v, pos, sgn):
+    """dv/dt with the friction sign fixed to ``sgn`` (0: the smooth tanh law)."""
+    fr = model.coulomb(v) if model.epsilon > 0 else sgn * model.friction_magnitude(v)
+    out = model.a - v / model.tau_m - fr
+    if model.cubic:
+        out = out - model.cubic * v**3
+    if model.spring:
+        out = out - model.spring * pos
+    return out
+
+
+def _flow_rk4(model, v, x, s, dt):
+    """Noise-free flow of any member over durations ``s`` by RK4 substeps of at most ``dt``
+    (per replica: ``s/n`` with n common), the friction sign fixed over each substep.  A sign
+    change within a substep means v reached 0: the replica sticks (v = 0, x frozen) if
+    ``|a - spring (x0 + x)| <= Delta(0)``, else it crosses (its new side is kept).  A stuck
+    replica stays until a kick, or leaves at once when the static force exceeds Delta(0)."""
+    n = max(1, int(math.ceil(float(np.max(s)) / dt - 1e-9))) if s.size else 0
+    h = s / max(n, 1)
+    smooth = model.epsilon > 0
+    for _ in range(n):
+        pos = model.x0 + x
+        if smooth:
+            sgn = np.zeros_like(v)
+        else:
+            f0 = model.a - model.spring * pos
+            leave = np.where(np.abs(f0) > model.static_friction, np.sign(f0), 0.0)
+            sgn = np.where(v != 0, np.sign(v), leave)
+        moving = (sgn != 0) | smooth
+        k1v = _rhs(model, v, pos, sgn)
+        k1x = v
+        k2v = _rhs(model, v + 0.5 * h * k1v, pos + 0.5 * h * k1x, sgn)
+        k2x = v + 0.5 * h * k1v
+        k3v = _rhs(model, v + 0.5 * h * k2v, pos + 0.5 * h * k2x, sgn)
+        k3x = v + 0.5 * h * k2v
+        k4v = _rhs(model, v + h * k3v, pos + h * k3x, sgn)
+        k4x = v + h * k3v
+        v_new = v + h / 6.0 * (k1v + 2 * k2v + 2 * k3v + k4v)
+        dx = h / 6.0 * (k1x + 2 * k2x + 2 * k3x + k4x)
+        if not smooth:
+            crossed = moving & (np.sign(v_new) != sgn)
+            if crossed.any():
+                # linear estimate of the arrival at 0 for the position; then stick or cross
+                theta = np.where(crossed, np.abs(v) / np.maximum(np.abs(v) + np.abs(v_new), 1e-300), 1.0)
+                pos_c = pos + theta * dx
+                stick = crossed & (np.abs(model.a - model.spring * pos_c) <= model.static_friction)
+                dx = np.where(stick, theta * 0.5 * h * v, dx)
+                v_new = np.where(stick, 0.0, v_new)
+        v = np.where(moving, v_new, 0.0)
+        x = x + np.where(moving, dx, 0.0)
+    return v, x
+
+
+def _event_driven(model, v, n_out, sample_dt, dt, rng):
+    """Pure shot noise (gamma = inf): kicks at exact exponential waiting times per replica;
+    between kicks the noise-free flow, exact (:func:`_flow_exact`) for the paper's friction law,
+    RK4 (:func:`_flow_rk4`) for the other members.  Vectorised over replicas: each round
+    moves every replica to its next kick or the next output time, whichever is first."""
+    shot = model.shot
+    replicas = v.size
+    v = v.astype(float).copy()
+    x = np.zeros(replicas)
+    v_out = np.empty((replicas, n_out))
+    x_out = np.empty((replicas, n_out))
+    v_out[:, 0], x_out[:, 0] = v, 0.0
+    t_now = np.zeros(replicas)
+    t_kick = rng.exponential(1.0 / shot.rate, replicas)
+    exact = _closed_form_flow(model)
+    n_kicks = 0
+    for i in range(1, n_out):
+        t_stop = i * sample_dt
+        while True:
+            target = np.minimum(t_kick, t_stop)
+            s = target - t_now
+            if exact:
+                v_new, dx = _flow_exact(model, v, s)
+                v, x = v_new, x + dx
+            else:
+                v, x = _flow_rk4(model, v, x, s, dt)
+            t_now = target
+            kicked = t_kick <= t_stop
+            if not kicked.any():
+                break
+            m = int(kicked.sum())
+            n_kicks += m
+            v[kicked] += _kick(shot, m, rng)
+            t_kick[kicked] += rng.exponential(1.0 / shot.rate, m)
+        t_now[:] = t_stop
+        v_out[:, i], x_out[:, i] = v, x
+    return v_out, x_out, n_kicks
