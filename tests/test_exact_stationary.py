@@ -176,8 +176,10 @@ def test_large_gamma_is_finite_and_consistent():
 def test_mapping_interface():
     s = exact.stationary_moments(Model(1.0, 0.7, 0.2, 10.0))
     d = s.as_dict()
-    assert set(d) == {"mean", "variance", "p_positive", "p_negative", "mean_sign", "diffusion", "drift"}
-    assert dict(s) == d and s["variance"] == s.variance and len(s) == 7
+    assert set(d) == {"mean", "variance", "p_positive", "p_negative", "mean_sign", "diffusion", "drift",
+                      "p_zero"}  # p_zero: the atom at v = 0 (family members; 0 here)
+    assert d["p_zero"] == 0.0
+    assert dict(s) == d and s["variance"] == s.variance and len(s) == 8
     with pytest.raises(KeyError):
         s["nope"]
     with pytest.raises(Exception):
