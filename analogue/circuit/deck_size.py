@@ -109,7 +109,10 @@ def _calibrate(model: Model, spec, *, store, scheduler, workers) -> dict:
     t_cal = CAL_HOLDS * mapping.noise_dt
     out = {}
     for r in CAL_SIZES:
-        kw = {"v0": "stationary", "t_end": t_cal, "replicas": r, "seed": CAL_SEED, "replicas_per_deck": r,
+        # (shot noise, springs, gamma = inf: no exp(-gamma U) sampler; start at rest on the
+        # attractor, as the tolerance calibration does)
+        v0 = "stationary" if model.is_gradient else float(model.attractor)
+        kw = {"v0": v0, "t_end": t_cal, "replicas": r, "seed": CAL_SEED, "replicas_per_deck": r,
                   "store": store, "progress": False, "workers": workers}
         if scheduler is not None:
             kw["scheduler"] = scheduler

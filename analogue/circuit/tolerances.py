@@ -266,7 +266,11 @@ def _calibrate(model: Model, spec: CircuitSpec, candidates, *, store, workers, s
     memo_key = (repr(model.as_dict()), repr(spec), tuple(candidates), CAL_HOLDS, CAL_REPLICAS)
     if store is False and memo_key in _MEMO:
         return _MEMO[memo_key]
-    kw = {"v0": "stationary", "t_end": t_cal, "replicas": CAL_REPLICAS, "seed": CAL_SEED,
+    # Start from the stationary law where it is exp(-gamma U) (1-D Gaussian members); shot
+    # noise, springs and gamma = inf have no such sampler (it returned NaN for shot noise):
+    # start those at rest on the deterministic attractor.
+    v0 = "stationary" if model.is_gradient else float(model.attractor)
+    kw = {"v0": v0, "t_end": t_cal, "replicas": CAL_REPLICAS, "seed": CAL_SEED,
               "replicas_per_deck": CAL_DECK, "store": store, "workers": workers, "scheduler": scheduler,
               "progress": False}
     if scheduler is None:
