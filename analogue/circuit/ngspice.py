@@ -201,7 +201,8 @@ def _version_of(executable: str) -> str:
                 proc = _spawn([executable, "-v"], tmp, out, err)
             _track(proc, None)
             try:
-                _wait(proc, VERSION_TIMEOUT)
+                with interrupt_guard():
+                    _wait(proc, VERSION_TIMEOUT)
             finally:
                 _untrack(proc, None)
         except subprocess.TimeoutExpired:
@@ -451,7 +452,11 @@ def run_deck(text: str, *, timeout: float = 3600.0, t_stop: float | None = None,
             raise NgspiceError(f"could not start {exe}: {_one_line(str(exc))}") from None
         _track(proc, group)
         try:
-            returncode = _wait(proc, timeout)
+            # Called from the main thread (a script, a calibration run), a signal must not
+            # kill us and orphan ngspice in its own session: guard this wait too (a no-op in
+            # worker threads, whose caller's guard covers them; re-entrant).
+            with interrupt_guard():
+                returncode = _wait(proc, timeout)
         except subprocess.TimeoutExpired:
             raise NgspiceError(_with_said(f"ngspice did not finish within timeout={timeout} s",
                                           _said(_read_tail(out_p), _read_tail(err_p)))) from None

@@ -223,6 +223,9 @@ def test_simulate_timeout_keyword_holds(fake, tmp_path):
     assert "timeout=1.5" in _one_line(exc)
     assert _leftover_dirs(fake.tmp) == []
     assert not ng._ACTIVE
+    deadline = time.monotonic() + 5  # SIGKILL is delivered asynchronously
+    while any(_alive(p) for p in _pids(fake.state)) and time.monotonic() < deadline:
+        time.sleep(0.05)
     assert not any(_alive(p) for p in _pids(fake.state))
 
 

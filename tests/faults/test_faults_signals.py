@@ -293,3 +293,51 @@ def _alive(pid: int) -> bool:
             return fh.read().rsplit(")", 1)[1].split()[0] != "Z"
     except OSError:
         return False
+
+
+DIRECT = textwrap.dedent("""
+    import sys
+    from analogue.circuit import ngspice as ng
+    deck = "t\\nC1 v1 0 1e-6\\nR1 v1 0 1e3\\n.tran 1e-5 1e-3 uic\\n.end\\n"
+    try:
+        ng.run_deck(deck, timeout=250)
+    except KeyboardInterrupt as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        sys.exit(getattr(exc, "exit_code", 1))
+""")
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP])
+def test_run_deck_called_directly_is_guarded_too(tmp_path, sig):
+    """ngspice runs in its own session, so a caller dying on SIGTERM would orphan it: run_deck
+    guards itself when called from the main thread (calibration runs, scripts), not only
+    simulate's batches."""
+    tmp, bindir, state = tmp_path / "tmp", tmp_path / "bin", tmp_path / "state"
+    for d in (tmp, bindir, state):
+        d.mkdir()
+    exe = bindir / "ngspice"
+    exe.write_text("#!/bin/sh\n"
+                   'if [ "$1" = "-v" ]; then echo "** ngspice-99 : fake"; exit 0; fi\n'
+                   'echo "$$" >> "$STATE/pids"\nsleep 300 &\necho "$!" >> "$STATE/pids"\nwait\n')
+    exe.chmod(0o755)
+    script = tmp_path / "direct.py"
+    script.write_text(DIRECT)
+    marker = uuid.uuid4().hex
+    env = _env(tmp, marker)
+    env.update(PATH=f"{bindir}{os.pathsep}{env['PATH']}", STATE=str(state))
+    proc = subprocess.Popen([sys.executable, str(script)], env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while not ((state / "pids").exists() and len((state / "pids").read_text().split()) >= 2):
+        assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
+        time.sleep(0.05)
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 128 + sig, (proc.returncode, err)
+    assert signal.Signals(sig).name in err and len(err.strip().splitlines()) == 1
+    pids = [int(p) for p in (state / "pids").read_text().split()]
+    deadline = time.monotonic() + 10
+    while any(_alive(p) for p in pids) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert not any(_alive(p) for p in pids)
+    assert list(tmp.glob("analogue-ngspice-*")) == []
