@@ -120,3 +120,14 @@ def test_spring_window_moments_vs_euler():
     compare("spring", per, ref, budget)
     # the inductor readback is the same position up to the leak (tau_L = 300)
     assert exp.mapping().spring_leak_time == pytest.approx(300.0)
+
+
+@pytest.mark.parametrize("name", ["cubic", "stribeck"])
+def test_quadrature_matches_exact_theory(name):
+    """This file's quadrature reference agrees with analogue.theory.exact, so the circuit's
+    z-scores hold against either."""
+    from analogue.theory import exact
+    model = load_experiment(name).model
+    mine, theirs = exact_moments(model), exact.stationary_moments(model)
+    assert mine["mean"] == pytest.approx(theirs.mean, rel=1e-6)
+    assert mine["var"] == pytest.approx(theirs.variance, rel=1e-6)
