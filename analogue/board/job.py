@@ -137,6 +137,14 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
     from ..report.observables import subset
     integ = budget.integration_pair(fn, subset(ens, np.arange(st.integ_replicas)), tight)
     timings["nominal_s"] = _time.perf_counter() - t0
+    log("board: trajectory check against the equations driven by the same DAC sequences")
+    from .trajectory import compare_paths, reference_paths
+    k = min(4, st.replicas)
+    ref_paths = reference_paths(design, seed=seed, replicas=range(k), v0=v0[:k], t_end=st.t_end,
+                                times=ens.t)
+    skip = int(np.searchsorted(ens.t, st.burn_in))
+    traj = {**compare_paths(ens.v[:k], ref_paths, skip), "replicas": k,
+            "stationary_std": float(np.std(ens.v[:, skip:]))}
     log("board: noise-chain SDE pair (bandwidth budget)")
     col, white = budget.bandwidth_pair(design, v0=sample_stationary(design.realised, st.pair_replicas, seed + 2),
                                        t_end=st.t_end, replicas=st.pair_replicas, seed=seed + 3,
@@ -218,6 +226,7 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
                        "vendor_opamp": list(vendor) if vendor else None},
         "board": {"spec": design.spec.as_dict(), "kappa": design.kappa,
                   "components": [list(r) for r in design.table()], "notes": list(design.notes)},
+        "trajectory_check": traj,
         "monte_carlo": mc, "monte_carlo_rate_function": mc_rate, "calibration_errors": cal_err, "sensitivities": sens,
         "matching": matched, "ota": {"ota": ota_obs, "bridge": bridge_same, "settings": ota},
         "boards": boards,

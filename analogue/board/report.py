@@ -23,6 +23,20 @@ def _schematic_png(design, out: Path) -> Path | None:
         return None
 
 
+def _trajectory_text(tc) -> str:
+    if not tc:
+        return ""
+    return (f"Trajectory by trajectory: the first {tc['replicas']} replicas of the board against the "
+            "realised equations (tanh friction) driven by the same seeded DAC sequences through the "
+            "exact numpy model of the DAC hold, Bessel filter and AC coupling "
+            f"(analogue.board.trajectory): rms path difference {tc['rms']:.2g} (stationary spread "
+            f"{tc['stationary_std']:.2g}), largest {tc['max']:.2g}, time averages {tc['board_mean']:.4g} "
+            f"(board) and {tc['reference_mean']:.4g} (equations). A built board fed the same "
+            "sequence is checked the same way: where the board's mean departs from theory by more "
+            "than the budget's systematic terms, the equations on the same noise show whether it "
+            "is the noise realisation or the circuit.")
+
+
 def _pm(s: dict) -> str:
     if s.get("std") is None:
         return f"{s['mean']:.4g}"
@@ -91,7 +105,8 @@ def write_report(out: Path, exp, design, metrics: dict) -> Path:
         "model minus requested, exact theory), smoothing (bridge tanh width, exact theory), "
         f"bandwidth (SDE pair coloured minus white, {st['pair_replicas']} replicas, |d| + 2 se), "
         f"integration (reltol 1e-3 against 1e-4 on the same noise, {st['integ_replicas']} "
-        "replicas), statistical = 3 standard errors (jackknife over replicas).")],
+        "replicas), statistical = 3 standard errors (jackknife over replicas)."),
+        _trajectory_text(metrics.get("trajectory_check"))],
         tables=[Table("Nominal board vs exact theory", ["observable", "board", "stderr", "theory",
                                                         "z", "rounding", "smoothing", "bandwidth",
                                                         "integration", "3 se", "dominant", "within budget"],
