@@ -613,9 +613,9 @@ def _spring_leak(model: Model, tau_leak: float) -> dict:
     # frictionless velocity spread sqrt(tau_m/gamma) (Gaussian), else the mean jump
     spread = model.velocity_scale if math.isfinite(model.gamma) else model.shot.mean
     return {"spring_leak_time": tau_leak,
-            "spring_leak_var_v": abs(leaky[0, 0] / ideal[0, 0] - 1.0),
-            "spring_leak_var_x": abs(leaky[1, 1] / ideal[1, 1] - 1.0),
-            "spring_creep": creep / spread}
+            "spring_leak_var_v": float(abs(leaky[0, 0] / ideal[0, 0] - 1.0)),
+            "spring_leak_var_x": float(abs(leaky[1, 1] / ideal[1, 1] - 1.0)),
+            "spring_creep": float(creep / spread)}
 
 
 def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:

@@ -131,3 +131,28 @@ def test_quadrature_matches_exact_theory(name):
     mine, theirs = exact_moments(model), exact.stationary_moments(model)
     assert mine["mean"] == pytest.approx(theirs.mean, rel=1e-6)
     assert mine["var"] == pytest.approx(theirs.variance, rel=1e-6)
+
+
+def test_spring_window_moments_vs_package_monte_carlo():
+    """The same comparison against analogue.montecarlo.simulate_sde (the project's Monte
+    Carlo for the family): window averages from the same initial state."""
+    from analogue.montecarlo import simulate_sde
+    exp, ens = circuit_run("spring")
+    model = exp.model
+    mc = simulate_sde(model, v0=exp.v0[0], t_end=exp.t_end, replicas=1000, seed=3,
+                      sample_dt=exp.sample_dt)
+    b = exp.mapping().bias
+    out = {}
+    for label, e in (("circuit", ens), ("mc", mc)):
+        sel = e.t >= exp.burn_in
+        v, x = e.v[:, sel], model.x0 + e.x[:, sel]
+        out[label] = {"v2": (v * v).mean(axis=1), "x2": (x * x).mean(axis=1),
+                      "stuck": (np.abs(v) < 0.05).mean(axis=1)}
+    budget = {"v2": b["spring_leak_var_v"] + b["noise"], "x2": b["spring_leak_var_x"],
+              "stuck": b["smoothing"]}
+    for key in out["circuit"]:
+        c, r = out["circuit"][key], out["mc"][key]
+        se = math.hypot(c.std(ddof=1) / math.sqrt(c.size), r.std(ddof=1) / math.sqrt(r.size))
+        diff = c.mean() - r.mean()
+        print(f"spring vs montecarlo {key}: circuit {c.mean():.4f}, MC {r.mean():.4f}, z = {diff / se:.2f}")
+        assert abs(diff) < 4 * se + budget[key] * abs(r.mean())
