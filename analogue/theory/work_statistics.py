@@ -654,10 +654,20 @@ def work_pdf(model: Model, w, tau, *, h: float | None = None, modes: int = 48,
     ``G(k_c + iy)/G(k_c)`` does not depend on W), serves every W within 2 standard deviations
     of the tilted law's mean ``K'(k_c)`` (the integral then loses at most a factor e^2 to
     cancellation; the trapezoid step is 0.5/sqrt(K'') instead of 0.7, so aliases lie >= 12.6
-    standard deviations away).  A W whose shared integral is not resolved is computed alone
-    (``share=False`` path, with its fallbacks).  Measured on the report's grids (Fig. 8
-    model, tau = 1, 2, 5, 10): 5-10x less time, densities equal to the per-w route to
-    ~1e-7 relative (see benchmarks/bench_theory.py).
+    standard deviations away), with the mode basis centred on ``k_c``.  A W whose shared
+    integral is not resolved (too small against the integrand: cancellation; an undecayed
+    tail; h and h/2 disagreeing by more than 0.01 in ln p) waits for a later group centred
+    nearer to it, and the lowest W of a group is computed alone (``share=False`` path, with
+    its fallbacks) if its own group fails.  Measured on 30 w over +-4 sd (the report's range),
+    gamma = 10, under load: Fig. 8 model tau = 2 / 5 / 10: 23 / 19 / 29 s -> 2.4 / 2.8 / 3.2 s;
+    OU tau = 1 / 2 / 5 / 10: 6-8x; OU against the closed form: 6e-6 (tau = 1), 2e-8 (tau >= 2).
+    In the stick regime the shared densities differ from the per-w ones by up to 1.7e-3 near
+    w = 0: that is aliasing of the per-w step 0.7 (per-w with step 0.5 / 0.35 moves to within
+    2e-4 / 5e-5 of the shared values, which change by 1e-5 between steps 0.5 and 0.35; Fig. 8
+    model, tau = 5, w = 0.002).  At the peak near w = 0 of that regime both routes also depend
+    on the contour abscissa and the mode basis at the 1e-3 level (tau = 2, w = 0.0076: 10.2891
+    per-w, 10.2881 shared alone, 10.2985 shared in a group of 9), which bounds the accuracy of
+    the density there; the circuit's statistical errors are >= 1e-2.
     """
     model = _check_model(model)
     _force(model)  # refuses a = 0: the work is identically zero
@@ -690,6 +700,11 @@ _GROUP_SD = 2.0     # shared contour: W within this many tilted standard deviati
 _DY_SHARED = 0.5    # its trapezoid step in units of 1/sqrt(K''(k_c))
 _MIN_SHARED = 0.02  # a shared integral below this many 1/sd is recomputed alone
 _RICHARDSON_GAP = 0.01   # ... and so is one whose ln p differs by more between h and h/2
+# y range of a shared contour before the tail test, in 1/sqrt(K''), as for per-w contours.
+# (In the stick regime |f| can level off near 1e-7 -- Fig. 8 model, tau = 2 -- so that members
+# with small integrals fail the tail test and are recomputed alone; 400 widths did not help:
+# the plateau stayed, at 2.5x the cost.)
+_Y_MAX_SHARED = 150.0
 
 
 def _work_pdf_shared(model, w, tau, h, modes, mean):
@@ -701,14 +716,16 @@ def _work_pdf_shared(model, w, tau, h, modes, mean):
         i = todo[0]
         Wi = float(w[i]) * tau
         k0 = float(k0s[i])
-        g1 = _grid_for(model, k0, h, extra=_tilt_centres(model, 0.0))
-        g2 = Grid(h / 2.0, 2 * g1.i_min, 2 * g1.i_max)
-        group, done, kc = None, False, k0
-        for m, centre in ((modes, False), (2 * modes, False), (2 * modes, True)):
-            red2 = _Reduced(model, k0 if not centre else kc, g2, m)
+        probe = _grid_for(model, k0, h, extra=_tilt_centres(model, 0.0))
+        group = None
+        # (the basis is re-centred on the shared contour below, so a third attempt centred
+        # on the saddle, as in _work_pdf_one, would repeat the second)
+        for m in (modes, 2 * modes):
+            red2 = _Reduced(model, k0, probe, m)  # coarse grid: only locates the saddles
             ks, Ks, curv = _saddle(model, red2, Wi, tau, red2.k0)
-            # the group's contour sits 2 standard deviations above the lowest W
-            target = Wi + _GROUP_SD * math.sqrt(curv)
+            # the group's contour sits 1 standard deviation above the lowest W (members from
+            # Wi - sd to Wi + 3 sd); far members that fail stay for the next group
+            target = Wi + math.sqrt(curv)
             try:
                 kc, K2, curvc = _saddle(model, red2, target, tau, ks)
             except ValueError:       # the reduced K' cannot reach the target: no group
@@ -720,14 +737,13 @@ def _work_pdf_shared(model, w, tau, h, modes, mean):
             group = [j for j in todo if abs(float(w[j]) * tau - target) <= _GROUP_SD * sd]
             if i not in group:
                 group = [i] + group
-            if kc != red2.k0:
-                # the basis is centred on the shared contour (the members' saddles lie around
-                # it); at Wi's Legendre point it misrepresented far members (measured: factors
-                # up to 1e14 at 2 sd in the stick regime)
-                g1 = _grid_for(model, kc, h, extra=_tilt_centres(model, 0.0))
-                g2 = Grid(h / 2.0, 2 * g1.i_min, 2 * g1.i_max)
-                red2 = _Reduced(model, kc, g2, m)
-                K2, _ = red2.log_g_and_derivatives(kc, tau)
+            # the basis is centred on the shared contour (the members' saddles lie around
+            # it); at Wi's Legendre point it misrepresented far members (measured: factors
+            # up to 1e14 at 2 sd in the stick regime)
+            g1 = _grid_for(model, kc, h, extra=_tilt_centres(model, 0.0))
+            g2 = Grid(h / 2.0, 2 * g1.i_min, 2 * g1.i_max)
+            red2 = _Reduced(model, kc, g2, m)
+            K2, _ = red2.log_g_and_derivatives(kc, tau)
             f2 = _contour_values(red2, kc, tau, K2, curvc)
             if f2 is None:
                 continue
@@ -745,20 +761,17 @@ def _work_pdf_shared(model, w, tau, h, modes, mean):
                     continue
                 log_p = (4.0 * fine - coarse) / 3.0
                 out[j] = math.exp(math.log(tau) + log_p - kc * W - math.log(math.pi))
-            done = True
             break
-        if not done:
-            group = [i]
-        for j in group:
-            if np.isnan(out[j]):     # not resolved by the shared contour: alone, as before
-                out[j] = _work_pdf_one(model, float(w[j]), tau, h, modes, mean)
-            todo.remove(j)
+        if np.isnan(out[i]):     # the lowest W not resolved by its group: alone, as before
+            out[i] = _work_pdf_one(model, float(w[i]), tau, h, modes, mean)
+        # members not resolved stay for a later group, centred nearer to them
+        todo = [j for j in todo if np.isnan(out[j])]
     return out
 
 
 def _contour_values(red, kc, tau, K, curv):
     """``(dy, f, tail)``: ``f_j = G(k_c + i y_j)/G(k_c)`` on ``y_j = j dy`` (dy =
-    _DY_SHARED/sqrt(K'')) until it decays below _TOL (``tail`` None), or up to 150 widths
+    _DY_SHARED/sqrt(K'')) until it decays below _TOL (``tail`` None), or up to _Y_MAX_SHARED widths
     (``tail = (last, rate)`` for the per-W tail test of :func:`_integrate_contour`); None when
     the reduced generating function violates ``|G(k_c + iy)| <= G(k_c)`` (basis too small)."""
     sy = 1.0 / math.sqrt(curv)
@@ -776,7 +789,7 @@ def _contour_values(red, kc, tau, K, curv):
         last = float(np.max(np.abs(f[-3:])))
         if last < _TOL:
             return dy, np.concatenate(chunks), None
-        if y[-1] > 150.0 * sy:
+        if y[-1] > _Y_MAX_SHARED * sy:
             prev = float(np.max(np.abs(chunks[-2][-3:])))
             rate = math.log(max(prev, 1e-300) / max(last, 1e-300)) / (_CHUNK * dy)
             return dy, np.concatenate(chunks), (last, rate)

@@ -99,19 +99,28 @@ def test_rate_function_curve_matches_pointwise_and_rejects_asymmetric_grids():
 
 
 @pytest.mark.slow
-def test_shared_work_pdf_equals_per_w_contours_and_ou_closed_form():
-    """Shared contours against the per-w contours (Fig. 8 model, the stick regime with its
-    non-Gaussian tilted laws; measured <= 6e-5 relative for densities above 1e-20) and
-    against the OU closed form (measured 1.1e-6, as the per-w route)."""
+def test_shared_work_pdf_equals_per_w_contours_and_ou_closed_form(monkeypatch):
+    """Shared contours against per-w contours over the report's range (+-4 sd) in the stick
+    regime (Fig. 8 model), whose slowly decaying characteristic functions alias the per-w
+    trapezoid step 0.7 by up to 1.7e-3 near w = 0, so the per-w reference runs with step
+    0.35.  Near the peak at w ~ 0 the routes depend on the contour abscissa and mode basis
+    at the 1e-3 level (measured: w = 0.0076 gives 10.2891 per-w, 10.2881 shared alone,
+    10.2985 shared in a group of 9; stable in the step 0.5 -> 0.25), which bounds the
+    accuracy of work_pdf there; elsewhere they agree to ~1e-5.  OU closed form: 2e-8."""
     tau = 2.0
     m = _m(0.5, 10.0)
-    w = np.linspace(-0.45, 0.55, 11)
+    mean = float(ws.scgf_derivative(m, 0.0))
+    sd = float(np.sqrt(ws.work_variance(m, [tau])[0]))
+    w = np.linspace(mean - 4 * sd, mean + 4 * sd, 9)
     shared = ws.work_pdf(m, w, tau)
+    monkeypatch.setattr(ws, "_DY", 0.35)
     alone = ws.work_pdf(m, w, tau, share=False)
-    np.testing.assert_allclose(shared, alone, rtol=3e-4)
+    np.testing.assert_allclose(shared, alone, rtol=2e-3)
+    tails = (shared < 0.1 * shared.max())
+    np.testing.assert_allclose(shared[tails], alone[tails], rtol=1e-4)
     o = Model(tau_m=1.0, delta=0.0, a=0.5, gamma=10.0)
-    w = np.linspace(-0.6, 1.1, 12)
-    np.testing.assert_allclose(ws.work_pdf(o, w, tau), ou.work_pdf(o, w, tau), rtol=1e-5)
+    w = np.linspace(-0.2, 0.7, 10)
+    np.testing.assert_allclose(ws.work_pdf(o, w, tau), ou.work_pdf(o, w, tau), rtol=1e-6)
 
 
 def test_open_question_data_goes_through_the_cache(tmp_path):
