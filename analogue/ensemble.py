@@ -29,7 +29,8 @@ class Ensemble:
         version, deck hash, ...  JSON-serialisable.
     noise : (replicas, n_hold) array or None
         The standard normal numbers that drove each replica, one per noise hold time
-        ``meta["noise_dt"]`` (``simulate(..., return_noise=True)``), when recorded.
+        ``meta["noise_dt"]``, when the producer recorded them (:func:`analogue.simulate`
+        attaches them whenever the circuit's decks record their noise).
 
     ``to_xarray()`` / ``to_netcdf(path)`` give labelled data (dims ``replica``, ``time``);
     :func:`analogue.open_ensemble` reads such a file back, exactly.
@@ -88,8 +89,9 @@ class Ensemble:
         """Pool replicas of two ensembles on the same time grid."""
         if other.t.shape != self.t.shape or not np.allclose(other.t, self.t):
             raise ValueError("cannot pool ensembles on different time grids")
-        meta = dict(self.meta)
-        meta.setdefault("pooled", []).append(other.meta)
+        # A new list: appending to self.meta["pooled"] would change self (and every ensemble
+        # sharing that list) as well.
+        meta = {**self.meta, "pooled": [*self.meta.get("pooled", []), other.meta]}
         noise = None
         if (self.noise is not None and other.noise is not None
                 and self.noise.shape[1] == other.noise.shape[1]):
