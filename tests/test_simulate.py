@@ -144,11 +144,17 @@ def test_fallback_stationary_sampler(monkeypatch, epsilon):
 
 # ------------------------------------------------------------------- the recorded noise
 def test_recorded_noise_drove_the_circuit():
-    """return_noise gives the standard normals of each hold; an independent integrator of
+    """ensemble.noise holds the standard normals of each hold; an independent integrator of
     dv = -U'(v) dt + sqrt(2 h/gamma) z_k (per hold h, held constant, 20 Euler substeps) driven by
     them retraces the circuit's paths; shifting the noise by one hold does not."""
     R, T = 4, 5.0
-    e, z = run(STICK, v0=0.5, t_end=T, replicas=R, seed=2, return_noise=True)
+    e = run(STICK, v0=0.5, t_end=T, replicas=R, seed=2)
+    z = e.noise
+    assert z is not None
+    with pytest.warns(DeprecationWarning, match="ensemble.noise"):
+        e_old, z_old = run(STICK, v0=0.5, t_end=T, replicas=R, seed=2, return_noise=True)
+    np.testing.assert_array_equal(z_old, z)  # the deprecated form still gives the same numbers
+    np.testing.assert_array_equal(e_old.v, e.v)
     h = e.meta["noise_dt"]
     assert z.shape == (R, round(T / h))
     n = z.size
@@ -354,6 +360,20 @@ def test_dask_local_cluster_matches_local():
         assert other.meta["executor"] == "dask"
 
 
+def test_injected_executor_matches_local():
+    """executor= (any concurrent.futures.Executor the caller owns) gives the same arrays as
+    the default pool, and is left open."""
+    import concurrent.futures as cf
+    kw = dict(v0=0.5, t_end=0.5, replicas=3, seed=12, replicas_per_deck=2)
+    local = run(STICK, **kw)
+    with cf.ThreadPoolExecutor(2) as pool:
+        injected = run(STICK, executor=pool, **kw)
+        assert pool.submit(int, 7).result() == 7
+    np.testing.assert_array_equal(local.v, injected.v)
+    np.testing.assert_array_equal(local.x, injected.x)
+    assert injected.meta["executor"] == "ThreadPoolExecutor"
+
+
 # ---------------------------------------------------------------------------- bad input
 BASE = dict(v0=0.0, t_end=1.0, replicas=2, seed=0)
 
@@ -366,7 +386,7 @@ BASE = dict(v0=0.0, t_end=1.0, replicas=2, seed=0)
     ({"v0": [0.0, np.inf]}, "v0"), ({"workers": 0}, "workers"), ({"circuit": 3}, "circuit"),
     ({"circuit": {"nonsense": 1}}, "circuit"), ({"replicas_per_deck": 0}, "replicas_per_deck"),
     ({"timeout": -1}, "timeout"), ({"store": 3.5}, "store"), ({"progress": "yes"}, "progress"),
-    ({"colour": "red"}, "colour"), ({"scheduler": "localhost"}, "scheduler"),
+    ({"scheduler": "localhost"}, "scheduler"),
     ({"return_noise": 1}, "return_noise"),
 ])
 def test_bad_input_names_parameter(change, name):
@@ -374,6 +394,12 @@ def test_bad_input_names_parameter(change, name):
     with pytest.raises(ValueError, match=name):
         analogue.simulate(STICK, store=False, progress=False, **kw) if "store" not in change \
             and "progress" not in change else analogue.simulate(STICK, **kw)
+
+
+def test_unknown_keyword_is_a_type_error():
+    # the signature is explicit (no **kwargs): Python names the unknown keyword itself
+    with pytest.raises(TypeError, match="colour"):
+        analogue.simulate(STICK, store=False, progress=False, colour="red", **BASE)
 
 
 def test_bad_model_and_grid():

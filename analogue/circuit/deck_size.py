@@ -102,7 +102,7 @@ def _check_bounds(bounds) -> tuple[int, int]:
     return lo, hi
 
 
-def _calibrate(model: Model, spec, *, store, scheduler, workers) -> dict:
+def _calibrate(model: Model, spec, *, store, scheduler, workers, executor=None) -> dict:
     from .mapping import map_model
     from .simulate import simulate
     mapping = map_model(model, spec)
@@ -116,6 +116,8 @@ def _calibrate(model: Model, spec, *, store, scheduler, workers) -> dict:
                   "store": store, "progress": False, "workers": workers}
         if scheduler is not None:
             kw["scheduler"] = scheduler
+        if executor is not None:
+            kw["executor"] = executor
         ens = simulate(model, circuit=spec, **kw)
         pts = ens.meta.get("deck_raw_points") or [None]
         if pts[0] is None:
@@ -128,7 +130,7 @@ _MEMO: dict = {}
 
 
 def choose_deck_size(model: Model, spec, *, replicas: int, t_end: float, workers: int,
-                     bounds=DEFAULT_BOUNDS, store=None, scheduler=None,
+                     bounds=DEFAULT_BOUNDS, store=None, scheduler=None, executor=None,
                      measured: dict | None = None,
                      min_replica_holds: int = 0) -> DeckSizeChoice:
     """Replicas per deck for a run of ``replicas`` paths of length ``t_end`` on ``workers``
@@ -152,7 +154,7 @@ def choose_deck_size(model: Model, spec, *, replicas: int, t_end: float, workers
         key = (repr(model.as_dict()), repr(spec))
         if key not in _MEMO:
             _MEMO[key] = _calibrate(model, spec, store=store, scheduler=scheduler,
-                                    workers=workers)
+                                    workers=workers, executor=executor)
         measured = _MEMO[key]
     pred = {r: job_time(r, replicas, holds, workers, measured) for r in allowed}
     best = min(allowed, key=lambda r: (round(pred[r], 6), -r))

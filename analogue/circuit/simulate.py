@@ -10,8 +10,10 @@ deck's factors and stored in the content-addressed run store
 
 Parallelism: locally, ``workers`` ngspice processes run at once (a thread per process is
 enough: the work happens inside ngspice, and the numpy resampling releases the GIL); with
-``scheduler=`` ("tcp://host:port" or a ``distributed.Client``) the same batch function runs on
-a Dask cluster through ``client.get_executor()``.  Results are identical either way.
+``scheduler=`` (a Dask scheduler address such as "tcp://host:port") the same batch function
+runs on a Dask cluster through ``client.get_executor()``; with ``executor=`` any
+``concurrent.futures.Executor`` or a ``distributed.Client`` the caller owns runs it (the way
+emcee takes ``pool=``).  Results are identical either way.
 """
 from __future__ import annotations
 
@@ -24,8 +26,11 @@ import re
 import sys
 import time as _time
 import uuid
+import warnings
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field, is_dataclass
 from numbers import Integral, Real
+from typing import TYPE_CHECKING, Any, Literal, Protocol, Union, overload, runtime_checkable
 
 import numpy as np
 
@@ -38,8 +43,16 @@ from .deck_size import DEFAULT_REPLICAS_PER_DECK
 from .store_index import note_keys
 from .store import SCHEMA_VERSION, batch_key, open_store
 
+if TYPE_CHECKING:
+    from os import PathLike
+
+    from numpy.typing import ArrayLike
+
+    from .mapping import CircuitSpec
+
 __all__ = [
     "BatchTask",
+    "Deck",
     "deck_seeds",
     "initial_velocities",
     "run_batch",
@@ -58,8 +71,6 @@ store_log = logging.getLogger("analogue.circuit.store")
 # microseconds per replica-step.  Large runs choose their deck size per model
 # (analogue.circuit.deck_size); DEFAULT_REPLICAS_PER_DECK (16) is the size of small ones.
 DEFAULT_TIMEOUT = 3600.0
-_EXTRA = ("replicas_per_deck", "store", "progress", "timeout", "scheduler", "return_noise",
-          "return_records", "label")
 # ngspice parses `.options seed=` as a C int; seeds above 2**31 - 1 are ignored with a warning.
 _SEED_MAX = 2**31 - 1
 
@@ -193,6 +204,33 @@ def initial_velocities(model: Model, v0, replicas: int, seed: int) -> np.ndarray
 
 
 # ------------------------------------------------------------------------------ batches
+@runtime_checkable
+class Deck(Protocol):
+    """What :func:`run_decks` needs of a deck (:class:`analogue.circuit.netlist.Deck`,
+    :class:`analogue.board.netlist.BoardDeck`, or a hand-written one in a test).
+
+    ``text``: the complete ngspice netlist; ``vectors``: raw-file vector names per replica,
+    ``{"v": [...], "x": [...] or None, "noise": [...] or None, "x_spring": [...] (optional)}``;
+    model value = raw value * ``to_model_v`` (``to_model_x``); model time = raw time /
+    ``time_scale``; ``replicas``: how many replicas the deck holds.  Optional attributes, read
+    when present: ``noise_dt`` and ``to_model_noise`` (the held noise the deck records) and
+    ``x_spring_initial`` (the spring position at t = 0).
+    """
+
+    @property
+    def text(self) -> str: ...
+    @property
+    def vectors(self) -> Mapping[str, Any]: ...
+    @property
+    def to_model_v(self) -> float: ...
+    @property
+    def to_model_x(self) -> float: ...
+    @property
+    def time_scale(self) -> float: ...
+    @property
+    def replicas(self) -> int: ...
+
+
 @dataclass(frozen=True)
 class BatchTask:
     """Everything one worker needs to run one deck and return arrays in model units.
@@ -338,20 +376,38 @@ _ADDRESS = re.compile(r"(tcp|tls|ws|wss|ucx)://(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9._-
                       r"(?::(\d{1,5}))?/?")
 
 
-def _check_scheduler(scheduler) -> None:
-    """None, an object with ``get_executor`` (a distributed.Client), or a well-formed Dask
-    address: tcp/tls/ws/wss://host[:port] (port 1-65535), inproc://..., ucx:// only when a
-    UCX backend is installed."""
-    if scheduler is None or hasattr(scheduler, "get_executor"):
+def _is_client(obj: object) -> bool:
+    """A ``distributed.Client`` (checked by type when Dask is importable)."""
+    try:
+        from distributed import Client
+    except ImportError:
+        return False
+    return isinstance(obj, Client)
+
+
+def _check_executor(executor: object) -> None:
+    """None, a ``concurrent.futures.Executor`` or a ``distributed.Client``."""
+    if executor is None or isinstance(executor, cf.Executor) or _is_client(executor):
+        return
+    raise ArgumentTypeError(f"executor must be a concurrent.futures.Executor or a "
+                            f"distributed.Client, got {type(executor).__name__}")
+
+
+def _check_scheduler(scheduler: object) -> None:
+    """None or a well-formed Dask scheduler address: tcp/tls/ws/wss://host[:port] (port
+    1-65535), inproc://..., ucx:// only when a UCX backend is installed.  (A
+    ``distributed.Client`` is accepted too, as before ``executor=`` existed.)"""
+    if scheduler is None or _is_client(scheduler):
         return
     if not isinstance(scheduler, str):
         raise ArgumentTypeError(f"scheduler must be a Dask scheduler address such as "
-                                f"'tcp://host:8786' or a distributed.Client, got {scheduler!r}")
-    if scheduler.startswith("inproc://"):
+                                f"'tcp://host:8786' (an executor object goes to executor=), "
+                                f"got {scheduler!r}")
+    if re.fullmatch(r"inproc://\S+", scheduler):
         return
     m = _ADDRESS.fullmatch(scheduler)
     port_ok = m is not None and (m.group(3) is None or 0 < int(m.group(3)) < 65536)
-    if not port_ok:
+    if m is None or not port_ok:
         raise ValueError(f"scheduler must be a Dask scheduler address such as 'tcp://host:8786' "
                          f"(host, then a port 1-65535), got {scheduler!r}")
     if m.group(1) == "ucx":
@@ -361,11 +417,21 @@ def _check_scheduler(scheduler) -> None:
                              f"(distributed-ucxx), which is not installed; use tcp://host:port")
 
 
-def _executor(workers, scheduler, n_tasks):
-    """(executor, closer, client) for the local thread pool (client None) or a Dask cluster."""
+def _executor(workers: int, scheduler: Any, n_tasks: int, executor: Any = None
+              ) -> tuple[cf.Executor, Callable[[], None] | None, Any]:
+    """(executor, closer, client): the local thread pool (client None), a Dask cluster by
+    address, or the caller's ``executor`` (a ``concurrent.futures.Executor``, or a
+    ``distributed.Client`` whose ``get_executor()`` is used).  ``closer`` is None when the
+    caller owns the executor: it is neither shut down nor closed here."""
     _check_scheduler(scheduler)
+    _check_executor(executor)
+    if executor is not None:
+        if _is_client(executor):
+            return executor.get_executor(), None, executor
+        return executor, None, None
     if scheduler is None:
-        return cf.ThreadPoolExecutor(max_workers=max(1, min(workers, n_tasks))), None, None
+        pool = cf.ThreadPoolExecutor(max_workers=max(1, min(workers, n_tasks)))
+        return pool, lambda: pool.shutdown(wait=True), None
     if isinstance(scheduler, str):
         try:
             from distributed import Client
@@ -374,7 +440,7 @@ def _executor(workers, scheduler, n_tasks):
                                "pip install 'analogue[dask]'") from None
         client = Client(scheduler)
         return client.get_executor(), client.close, client
-    return scheduler.get_executor(), None, scheduler
+    return scheduler.get_executor(), None, scheduler  # a Client passed as scheduler=
 
 
 def _stop_remote(client, group) -> None:
@@ -387,26 +453,34 @@ def _stop_remote(client, group) -> None:
                     " ".join(str(exc).split())[:200])
 
 
-def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, progress=None,
-              timeout=DEFAULT_TIMEOUT, records=None, label="ngspice decks"):
+def run_decks(decks: Sequence[Deck], times: ArrayLike, v0: ArrayLike, *,
+              store: str | PathLike[str] | bool | None = None, workers: int | None = None,
+              scheduler: str | None = None, progress: bool | None = None,
+              timeout: float = DEFAULT_TIMEOUT, records: dict[str, Any] | None = None,
+              label: str = "ngspice decks", executor: Any = None
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, dict[str, Any]]:
     """Run (or load from the store) a list of decks and stack their replicas.
 
-    ``decks``: objects with the netlist.Deck interface (``text``, ``vectors``, ``to_model_v``,
-    ``to_model_x``, ``time_scale``, ``replicas``); ``times``: the grid in model units;
+    ``decks``: objects with the :class:`Deck` protocol; ``times``: the grid in model units;
     ``v0``: (sum of replicas,) initial velocities in model units (the decks' ``.ic`` values).
     Returns ``(v, x, noise, info)`` with v, x of shape (replicas, n_t), noise (replicas, n_hold)
     the held velocity noise of each hold interval in model units (None if the decks do not
     record it) and info a JSON-safe dict (store keys, per-deck wall times, how many decks came
     from the store).  ``records``: an optional dict, filled with ``"x_spring"`` (replicas, n_t)
     when the decks read the spring's position back from its inductor.  ``label`` names the
-    run on its progress bar (or plain line).
+    run on its progress bar (or plain line).  ``scheduler`` / ``executor``: where the decks
+    run, as for :func:`simulate`.
     """
     times = np.asarray(times, dtype=float)
+    v0 = np.asarray(v0, dtype=float)
     if workers is None:
         workers = os.cpu_count() or 1
     workers = _int("workers", workers, 1)
     timeout = _real("timeout", timeout)
     _check_scheduler(scheduler)
+    _check_executor(executor)
+    if executor is not None and scheduler is not None:
+        raise ValueError("pass either scheduler= (a Dask address) or executor=, not both")
     st = open_store(store)
     version = _ng.ngspice_version()  # also: a missing ngspice fails here, with the hint
     tasks, keys, offsets = [], [], [0]
@@ -448,16 +522,20 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
                               "info": meta.get("info", {})}
                 from_store += 1
     todo = [t for t in tasks if results[t.index] is None]
-    where = "local" if scheduler is None else "dask"
+    if executor is not None:
+        where = "dask" if _is_client(executor) else type(executor).__name__
+    else:
+        where = "local" if scheduler is None else "dask"
     log.info("analogue.simulate: %d decks, %d from the store, %d to run (%s, %s)", len(tasks),
              from_store, len(todo), where,
-             f"{workers} ngspice processes" if scheduler is None else repr(scheduler))
+             f"{workers} ngspice processes" if where == "local"
+             else repr(executor if executor is not None else scheduler))
     t0 = _time.perf_counter()
     if todo:
         # SIGINT/SIGTERM/SIGHUP kill the ngspice groups and unwind through the finally
         # below (temporary directories removed, finished decks kept in the store).
         with _ng.interrupt_guard():
-            ex, closer, client = _executor(workers, scheduler, len(todo))
+            ex, closer, client = _executor(workers, scheduler, len(todo), executor)
             bar = None
             if _progress_mode(progress, len(todo)) == "bar":
                 from tqdm.auto import tqdm
@@ -503,7 +581,6 @@ def run_decks(decks, times, v0, *, store=None, workers=None, scheduler=None, pro
                         _stop_remote(client, group)  # theirs, on the Dask workers
                 if bar is not None:
                     bar.close()
-                ex.shutdown(wait=True)
                 if closer is not None:
                     closer()
     wall = _time.perf_counter() - t0
@@ -582,8 +659,15 @@ def _check_sizes(*, mapping, replicas, per_deck, workers, t_end, sample_dt, dt_l
                              f"on a larger disk, or pass store=False (results in memory only)")
 
 
-def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, workers=None,
-             **extra) -> Ensemble:
+def simulate(model: Model, *, v0: float | ArrayLike | Literal["stationary"], t_end: float,
+             replicas: int, seed: int, sample_dt: float | None = None,
+             circuit: CircuitSpec | Mapping[str, Any] | None = None, workers: int | None = None,
+             replicas_per_deck: int | None = None,
+             store: str | PathLike[str] | bool | None = None, progress: bool | None = None,
+             label: str | None = None, timeout: float = DEFAULT_TIMEOUT,
+             scheduler: str | None = None, executor: cf.Executor | Any | None = None,
+             return_noise: bool = False, return_records: bool = False
+             ) -> Ensemble | tuple[Ensemble, Any]:
     """Simulate ``replicas`` trajectories of the stick-slip model (eqs. bm, U_pot) in ngspice.
 
     Parameters
@@ -609,17 +693,32 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
         used as given.
     workers : int, optional
         ngspice processes run at once locally; default ``os.cpu_count()``.
-    **extra
-        ``replicas_per_deck`` (default: chosen per model by :mod:`analogue.circuit.deck_size`
-        from measured step counts, recorded in ``meta["deck_size"]``), ``store`` (directory,
-        False to disable; default $ANALOGUE_STORE or ~/.cache/analogue/runs), ``progress`` (None:
-        a tqdm bar when stderr is a terminal; True: the bar on a terminal, else one plain line
-        per call on stderr; False: silent), ``label`` (names the run on its bar or line;
-        default: regime, gamma, v0 and seed), ``timeout`` (seconds per deck, default
-        3600: the deck's ngspice process group is killed and NgspiceError raised),
-        ``scheduler`` ("tcp://host:port" or a distributed.Client: run on a Dask cluster),
-        ``return_noise`` (bool, default False: see Returns), ``return_records`` (bool, default
-        False: see Returns).
+    replicas_per_deck : int, optional
+        Replicas per ngspice deck; default: chosen per model by
+        :mod:`analogue.circuit.deck_size` from measured step counts (``meta["deck_size"]``).
+    store : path, False or None
+        Run-store directory; False disables it (results in memory only); None:
+        $ANALOGUE_STORE or ~/.cache/analogue/runs.
+    progress : bool or None
+        None: a tqdm bar when stderr is a terminal; True: the bar on a terminal, else one
+        plain line per call on stderr; False: silent.
+    label : str, optional
+        Names the run on its bar or line (printable, <= 100 characters); default: regime,
+        gamma, v0 and seed.
+    timeout : float
+        Seconds per deck (default 3600): the deck's ngspice process group is killed and
+        :class:`analogue.circuit.ngspice.NgspiceError` raised.
+    scheduler : str, optional
+        A Dask scheduler address ("tcp://host:port"): the decks run on that cluster (a
+        client is opened and closed by this call).  Needs ``analogue[dask]``.
+    executor : concurrent.futures.Executor or distributed.Client, optional
+        Runs the decks on an executor the caller owns (not shut down here), the way emcee
+        takes ``pool=``; exclusive with ``scheduler``.
+    return_noise : bool
+        Deprecated (DeprecationWarning): the noise is ``ensemble.noise``.  True returns
+        ``(ensemble, ensemble.noise)`` as before.
+    return_records : bool
+        True returns ``(ensemble, records)`` (see Returns).
 
     A request whose arrays or stored bytes cannot fit is refused before anything runs
     (ValueError naming the parameters and the limit; see :mod:`analogue.circuit.limits`).
@@ -632,22 +731,18 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
     Returns
     -------
     Ensemble with ``t`` (0..t_end step sample_dt), ``v`` and ``x`` (replicas, n_t) in model
-    units (x[:, 0] = 0), and ``meta`` holding the provenance.
-    With ``return_noise=True``: ``(ensemble, z)`` where ``z`` (replicas, n_hold) are the
-    standard normal numbers that drove the circuit, one per noise hold time ``h =
-    meta["noise_dt"]``: the velocity-noise increment over hold k is ``sqrt(2 h/gamma) z[:, k]``
-    (the convention of ``analogue.montecarlo.simulate_sde(..., dt=h, noise=z)``, so an SDE
-    integrator can be driven by the very same noise).
+    units (x[:, 0] = 0), ``meta`` holding the provenance and ``noise``: when the decks record
+    their noise, ``z`` (replicas, n_hold) the standard normal numbers that drove the circuit,
+    one per noise hold time ``h = meta["noise_dt"]``: the velocity-noise increment over hold k
+    is ``sqrt(2 h/gamma) z[:, k]`` (the convention of
+    ``analogue.montecarlo.simulate_sde(..., dt=h, noise=z)``, so an SDE integrator can be
+    driven by the very same noise); None otherwise.
     With ``return_records=True``: ``(ensemble, records)``, a dict with ``"x_spring"`` (replicas,
     n_t) the spring's position read back from the inductor current (spring models; it differs
     from ``x0 + x`` by the inductor's leak, see the mapping's budget) and ``"kicks"`` (shot
     noise): per replica ``(times, jumps)`` of the kicks that drove it (model units; times are
     the pulse centres), so a Monte Carlo can be driven by the same realisation.
     """
-    unknown = sorted(set(extra) - set(_EXTRA))
-    if unknown:
-        raise ValueError(f"unknown keyword argument(s) {', '.join(map(repr, unknown))} for "
-                         f"simulate; allowed extras: {', '.join(_EXTRA)}")
     if not isinstance(model, Model):
         raise ArgumentTypeError(f"model must be an analogue.Model, got {type(model).__name__}")
     replicas = _int("replicas", replicas, 1)
@@ -661,12 +756,11 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
     _grid_intervals(t_end, sample_dt, dt_label)  # a count that fits, before anything else
     if workers is not None:
         workers = _int("workers", workers, 1)
-    per_deck = extra.get("replicas_per_deck")
+    per_deck = replicas_per_deck
     if per_deck is not None:
         per_deck = _int("replicas_per_deck", per_deck, 1)
-    timeout = _real("timeout", extra.get("timeout", DEFAULT_TIMEOUT))
-    progress = _bool("progress", extra.get("progress"), allow_none=True)
-    label = extra.get("label")
+    timeout = _real("timeout", timeout)
+    progress = _bool("progress", progress, allow_none=True)
     if label is None:
         where = v0 if isinstance(v0, str) else (f"{float(v0):g}" if np.ndim(v0) == 0
                                                 else "given")
@@ -677,12 +771,18 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
     elif not label.isprintable() or len(label) > 100:
         raise ValueError(f"label must be a printable str of at most 100 characters, got "
                          f"{label!r}")
-    return_noise = _bool("return_noise", extra.get("return_noise", False))
-    return_records = _bool("return_records", extra.get("return_records", False))
+    return_noise = _bool("return_noise", return_noise)
+    return_records = _bool("return_records", return_records)
     if return_noise and return_records:
         raise ValueError("return_noise and return_records cannot both be True")
-    open_store(extra.get("store"))  # validates the store argument early
-    _check_scheduler(extra.get("scheduler"))
+    if return_noise:
+        warnings.warn("simulate(return_noise=True) is deprecated: the recorded noise is "
+                      "ensemble.noise", DeprecationWarning, stacklevel=2)
+    open_store(store)  # validates the store argument early
+    _check_scheduler(scheduler)
+    _check_executor(executor)
+    if executor is not None and scheduler is not None:
+        raise ValueError("pass either scheduler= (a Dask address) or executor=, not both")
 
     spec = _spec(circuit)
     from .mapping import map_model
@@ -690,14 +790,14 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
     # Bad specs and requests that cannot fit fail here, before any calibration runs.
     _check_sizes(mapping=map_model(model, spec), replicas=replicas,
                  per_deck=per_deck or DEFAULT_REPLICAS_PER_DECK, workers=workers, t_end=t_end,
-                 sample_dt=sample_dt, dt_label=dt_label, store=extra.get("store"))
+                 sample_dt=sample_dt, dt_label=dt_label, store=store)
     tol_choice = None
     if spec.unset_tolerances:
         # Tolerances by measured accuracy (cached in the run store): see circuit.tolerances.
         from .tolerances import MIN_CALIBRATED_REPLICA_HOLDS, resolve_spec
         spec, tol_choice = resolve_spec(model, spec, replicas=replicas, t_end=t_end,
-                                        store=extra.get("store"), workers=workers,
-                                        scheduler=extra.get("scheduler"),
+                                        store=store, workers=workers,
+                                        scheduler=scheduler, executor=executor,
                                         min_replica_holds=MIN_CALIBRATED_REPLICA_HOLDS)
     deck_choice = None
     if per_deck is None:
@@ -705,14 +805,14 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
         from .deck_size import choose_deck_size
         deck_choice = choose_deck_size(model, spec, replicas=replicas, t_end=t_end,
                                        workers=workers or os.cpu_count() or 1,
-                                       store=extra.get("store"),
-                                       scheduler=extra.get("scheduler"),
+                                       store=store,
+                                       scheduler=scheduler, executor=executor,
                                        min_replica_holds=min_holds)
         per_deck = deck_choice.replicas_per_deck
     mapping = map_model(model, spec)
     # Before allocating anything: replicas x time points x decks, and the bytes to be stored.
     _check_sizes(mapping=mapping, replicas=replicas, per_deck=per_deck, workers=workers,
-                 t_end=t_end, sample_dt=sample_dt, dt_label=dt_label, store=extra.get("store"))
+                 t_end=t_end, sample_dt=sample_dt, dt_label=dt_label, store=store)
     times = time_grid(t_end, sample_dt)
     sample_dt = float(times[1] - times[0])
     model_eff = mapping.model_effective
@@ -726,10 +826,10 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
                         t_end=t_end, seed=seeds[b], sample_dt=sample_dt)
              for b in range(n_decks)]
     t0 = _time.perf_counter()
-    records = {}
-    v, x, noise, info = run_decks(decks, times, v0_arr, store=extra.get("store"), workers=workers,
-                           scheduler=extra.get("scheduler"), progress=progress, timeout=timeout,
-                           records=records, label=label)
+    records: dict[str, Any] = {}
+    v, x, noise, info = run_decks(decks, times, v0_arr, store=store, workers=workers,
+                           scheduler=scheduler, progress=progress, timeout=timeout,
+                           records=records, label=label, executor=executor)
     table = mapping.table() if hasattr(mapping, "table") else None
     meta = {
         "source": "circuit",
@@ -756,14 +856,17 @@ def simulate(model, *, v0, t_end, replicas, seed, sample_dt=None, circuit=None, 
     }
     if mapping.model.shot is not None:
         meta["shot_width"] = mapping.shot_width
-    ens = Ensemble(times, v, x, _jsonable(meta))
+    z = None
+    if noise is not None and math.isfinite(model.gamma):
+        # The noise node holds the velocity noise, std sqrt(2/(gamma h)) (mapping): standardise.
+        z = noise * math.sqrt(model.gamma * mapping.noise_dt / 2.0)
+    ens = Ensemble(times, v, x, _jsonable(meta), z)
     if return_records:
         if mapping.model.shot is not None:
             records["kicks"] = [k for d in decks for k in d.kicks]
         return ens, records
     if not return_noise:
         return ens
-    if noise is None:
+    if z is None:
         raise ValueError("return_noise: the circuit's decks do not record their noise")
-    # The noise node holds the velocity noise, std sqrt(2/(gamma h)) (mapping): standardise.
-    return ens, noise * math.sqrt(model.gamma * mapping.noise_dt / 2.0)
+    return ens, z

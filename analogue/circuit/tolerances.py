@@ -257,7 +257,8 @@ def reference_spec(spec: CircuitSpec, mapping, tightest: Tolerances) -> CircuitS
 _MEMO: dict = {}
 
 
-def _calibrate(model: Model, spec: CircuitSpec, candidates, *, store, workers, scheduler):
+def _calibrate(model: Model, spec: CircuitSpec, candidates, *, store, workers, scheduler,
+               executor=None):
     """Run (or load) the calibration; returns (results, t_cal)."""
     from .simulate import simulate
     mapping = map_model(model, spec.replace(**FIXED.as_dict()))
@@ -275,6 +276,8 @@ def _calibrate(model: Model, spec: CircuitSpec, candidates, *, store, workers, s
               "progress": False}
     if scheduler is None:
         kw.pop("scheduler")
+    if executor is not None:
+        kw["executor"] = executor
     ref = simulate(model, circuit=reference_spec(spec, mapping, tightest), **kw)
     threshold = 0.1 * model.velocity_scale if math.isfinite(model.gamma) else 0.0
     results = []
@@ -296,7 +299,7 @@ def _has_noise(model: Model) -> bool:
 
 def choose_tolerances(model: Model, spec: CircuitSpec | None = None, *, replicas: int,
                       t_end: float, fraction: float = DEFAULT_FRACTION, candidates=CANDIDATES,
-                      store=None, workers=None, scheduler=None,
+                      store=None, workers=None, scheduler=None, executor=None,
                       min_replica_holds: int = 0) -> ToleranceChoice:
     """The tolerances for a run of ``replicas`` paths of length ``t_end`` (model units) of
     ``model`` in the circuit ``spec`` (module docstring).  Values set in ``spec`` win.
@@ -329,7 +332,8 @@ def choose_tolerances(model: Model, spec: CircuitSpec | None = None, *, replicas
         # with the unset ones from each candidate.
         pool = list(dict.fromkeys(Tolerances(**{**c.as_dict(), **given}) for c in candidates))
     results, t_cal = _calibrate(model, spec.replace(**{k: None for k in unset}), tuple(pool),
-                                store=store, workers=workers, scheduler=scheduler)
+                                store=store, workers=workers, scheduler=scheduler,
+                                executor=executor)
     best, met, name, ratio = select(results, replicas=replicas, t_end=float(t_end), t_cal=t_cal,
                                     fraction=fraction)
     return ToleranceChoice(best.tolerances, "measured", fraction, met, name, ratio, replicas,
