@@ -216,7 +216,7 @@ def simulate_sde(model: Model, *, v0, t_end: float, replicas: int, seed=None, dt
             raise ValueError("v0 must be finite")
         v0_meta = float(v0) if np.ndim(v0) == 0 else "array"
 
-    tau, g = model.tau_m, model.gamma
+    g = model.gamma
     n_out = n_steps // per + 1
     if not math.isfinite(g):
         v_out, x_out, n_kicks = _event_driven(model, v, n_out, per * dt, dt, kick_rng)

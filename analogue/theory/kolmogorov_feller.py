@@ -37,7 +37,8 @@ import numpy as np
 from scipy import sparse
 
 from ..model import Model
-from .fokker_planck import Grid, generator as sg_generator
+from .fokker_planck import Grid
+from .fokker_planck import generator as sg_generator
 
 __all__ = ["ShotGrid", "shot_generator", "jump_kernel", "has_atom", "premultiplier"]
 

@@ -153,3 +153,34 @@ def test_family_sample_stationary_matches_moments():
     z_atom = ((x == 0).mean() - s.p_zero) / math.sqrt(s.p_zero * (1 - s.p_zero) / x.size)
     z_mean = (x.mean() - s.mean) / math.sqrt(s.variance / x.size)
     assert abs(z_atom) < 4 and abs(z_mean) < 4
+
+
+def test_shot_ou_scgf_and_rate_function_closed_form():
+    """Delta = 0, one-sided kicks: each kick z adds z tau_m to int v, so
+    lambda(k) = k F a tau + rate (1/(1 - k F tau mu) - 1); J(w) its Legendre transform."""
+    lam, mu, a = 2.0, 0.3, 0.5
+    m = Model(1.0, 0.0, a, INF, shot=ShotNoise(lam, mu))
+    F = m.force
+    ks = np.array([-0.5, 0.5, 2.0])
+    ref = ks * F * a + lam * (1.0 / (1.0 - ks * F * mu) - 1.0)
+    got = exact.scgf(m, ks)
+    assert np.max(np.abs(got - ref) / np.abs(ref)) < 1e-4  # measured 4.2e-5 at k = 2, 5e-6 below
+    assert float(exact.scgf(m, 0.0)) == pytest.approx(0.0, abs=1e-10)
+    from scipy import optimize
+    for w in (0.45, 0.8):
+        res = optimize.minimize_scalar(
+            lambda k: -(k * w - (k * F * a + lam * (1 / (1 - k * F * mu) - 1))),
+            bounds=(-60.0, 1 / (F * mu) - 1e-9), method="bounded", options={"xatol": 1e-12})
+        assert float(exact.rate_function(m, w)) == pytest.approx(-res.fun, rel=1e-3)
+
+
+def test_gaussian_member_scgf_derivatives_are_mean_and_green_kubo():
+    """lambda'(0) = F <v> (quadrature of exp(-gamma U)) and lambda''(0) = 2 F^2 D_x
+    (Green-Kubo from the Poisson equation): independent routes to the same numbers."""
+    m = Model(1.0, 0.7, 1.2, 10.0, cubic=0.3)
+    s = exact.stationary_moments(m)
+    F, d = m.force, 1e-3
+    lp, l0, lm = exact.scgf(m, [d, 0.0, -d])
+    assert l0 == pytest.approx(0.0, abs=1e-9)
+    assert (lp - lm) / (2 * d) == pytest.approx(F * s.mean, rel=1e-5)
+    assert (lp - 2 * l0 + lm) / d**2 == pytest.approx(2 * F**2 * s.diffusion, rel=1e-3)
