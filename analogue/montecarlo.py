@@ -32,6 +32,7 @@ import numbers
 
 import numpy as np
 
+from .checks import ArgumentTypeError
 from .ensemble import Ensemble
 from .model import Model
 from .theory.stationary import sample_stationary
@@ -169,11 +170,14 @@ def simulate_sde(model: Model, *, v0, t_end: float, replicas: int, seed=None, dt
 
     Returns
     -------
-    Ensemble with t (n_out,), v and x (replicas, n_out), meta: source="sde", seed, dt,
-    sample_dt, scheme, noise ("seeded" or "given"), v0, model parameters.
+    The same :class:`~analogue.Ensemble` type as :func:`analogue.simulate`, with the keywords
+    both share (``v0``, ``t_end``, ``replicas``, ``seed``, ``sample_dt``) meaning the same:
+    t (n_out,), v and x (replicas, n_out), meta: source="sde", seed, dt, sample_dt, t_end,
+    scheme, noise ("seeded" or "given"), v0, model parameters; ``noise``: the given ``noise``
+    array (with ``meta["noise_dt"] = dt``), None when seeded.
     """
     if not isinstance(model, Model):
-        raise ValueError(f"model must be an analogue.Model, got {type(model).__name__}")
+        raise ArgumentTypeError(f"model must be an analogue.Model, got {type(model).__name__}")
     scheme = _ALIASES.get(scheme, scheme) if isinstance(scheme, str) else scheme
     if scheme not in SCHEMES:
         raise ValueError(f"scheme must be one of {SCHEMES} (or an alias), got {scheme!r}")
@@ -228,7 +232,9 @@ def simulate_sde(model: Model, *, v0, t_end: float, replicas: int, seed=None, dt
     meta = {"source": "sde", "seed": int(seed) if isinstance(seed, numbers.Integral) else None,
             "dt": dt, "sample_dt": per * dt, "scheme": scheme,
             "noise": "given" if noise is not None else "seeded", "v0": v0_meta,
-            "replicas": replicas, "model": model.as_dict()}
+            "replicas": replicas, "model": model.as_dict(), "t_end": float(t[-1])}
+    if noise is not None:
+        meta["noise_dt"] = dt  # Ensemble.noise: one standard normal per step, as for simulate
     if model.shot is not None:
         meta["kicks"] = int(n_kicks)
         meta["shot_scheme"] = ("compound Poisson sum per step" if math.isfinite(g)
@@ -236,7 +242,7 @@ def simulate_sde(model: Model, *, v0, t_end: float, replicas: int, seed=None, dt
                                else "event-driven, RK4 between kicks")
     if model.spring > 0:
         meta["position"] = "model.x0 + x (x = integral of v, x[:, 0] = 0)"
-    return Ensemble(t, v_out, x_out, meta)
+    return Ensemble(t, v_out, x_out, meta, noise)
 
 
 # ----------------------------------------------------------------- time-stepped (gamma finite)

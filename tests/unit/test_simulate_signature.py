@@ -77,3 +77,15 @@ def test_injected_executor_is_used_and_left_open() -> None:
     assert ex is pool and closer is None and client is None
     pool.submit(int, 1).result()  # still open: the caller owns it
     pool.shutdown()
+
+
+def test_sde_ensemble_carries_the_noise_that_drove_it() -> None:
+    import numpy as np
+    z = np.random.default_rng(1).standard_normal((3, 100))
+    ens = simulate_sde(MODEL, v0=0.0, t_end=1.0, replicas=3, seed=0, dt=0.01, noise=z)
+    assert isinstance(ens, analogue.Ensemble)
+    np.testing.assert_array_equal(ens.noise, z)
+    assert ens.meta["noise_dt"] == 0.01 and ens.meta["t_end"] == 1.0
+    again = simulate_sde(MODEL, v0=0.0, t_end=1.0, replicas=3, seed=0, dt=0.01, noise=ens.noise)
+    np.testing.assert_array_equal(again.v, ens.v)
+    assert simulate_sde(MODEL, v0=0.0, t_end=1.0, replicas=3, seed=0, dt=0.01).noise is None
