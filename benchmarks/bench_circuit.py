@@ -174,6 +174,11 @@ def ceiling(argv=None):
           f"{tol.worst_observable} at {tol.worst_ratio:.3f} statistical errors), "
           f"{deck.replicas_per_deck} replicas/deck; calibration {t_cal:.1f} s "
           f"(0 s once stored); {_load()}")
+    if deck.predicted_s:
+        print("deck-size cost model, predicted job s by replicas/deck: "
+              + ", ".join(f"{r}: {t:.2f}" for r, t in deck.predicted_s.items())
+              + "; points per hold measured: "
+              + ", ".join(f"{r}: {p:.1f}" for r, p in deck.points_per_hold.items()))
     for k in range(rep):
         rows.append(("ceiling: 2 x ngspice -b, 16/deck, reltol 1e-4 gear", _raw_pair(texts),
                      _load()))

@@ -15,10 +15,11 @@ files and do not depend on the machine's load, so the choice is reproducible), i
 linearly in log r.  A job of N replicas on W workers takes about ``ceil(ceil(N/r)/W) T(r)``;
 the chosen size minimises that over the allowed sizes ``SIZES`` within ``bounds``.
 
-The constants are this 2-core machine's (ngspice 42-45, `benchmarks/bench_circuit.py --fit`):
-0.47 us per replica-iteration at 16 or more replicas and 2.3 us at 1 (theory.md), 2.5
-Newton iterations per point, i.e. 4.9 us per point plus 0.88 us per replica-point; 60 ms to
-start a process and read its deck.
+The constants are this 2-core machine's (ngspice 39; theory.md "Measured later"): 0.47 us
+per replica-iteration at 16 or more replicas and 2.3 us at 1, 2.5 Newton iterations per
+point, i.e. 4.9 us per point plus 0.88 us per replica-point; 60 ms to start a process and
+read its deck.  Only their ratios matter for the choice; ``benchmarks/bench_circuit.py
+--ceiling`` prints the predicted job times next to the measured ones.
 
 The deck size changes which noise drives which replica (the deck seeds), so it changes the
 numbers like a different seed would; it is recorded in ``meta["deck_size"]``.

@@ -338,6 +338,9 @@ def build_report(names, out: Path, opts: RunOptions, title: str) -> Path:
         "replicas": {k: p["replicas"] for k, p in provs.items()},
         "ngspice_version": next(iter(provs.values()))["ngspice_version"] if provs else None,
         "deck_hashes": {k: p["deck_hashes"] for k, p in provs.items()},
+        # how each run's ngspice tolerances and deck size were chosen (circuit.tolerances)
+        "tolerances": {k: p.get("tolerances") for k, p in provs.items()},
+        "deck_size": {k: p.get("deck_size") for k, p in provs.items()},
         "wall_time_s": wall,
         "quick": opts.quick,
         "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
