@@ -10,7 +10,7 @@ wall time of one deck of ``r`` replicas over ``H`` holds is
     T(r) = START_S + H p(r) (POINT_S + REPLICA_POINT_S r),
 
 ``p(r)`` the time points per hold, measured per model by a short calibration run (decks of
-each size in ``CAL_SIZES`` for ``CAL_HOLDS`` holds, same seed; the counts come from the raw
+each size in ``CAL_SIZES`` = 4, 16, 32 for ``CAL_HOLDS`` holds, same seed; the counts come from the raw
 files and do not depend on the machine's load, so the choice is reproducible), interpolated
 linearly in log r.  A job of N replicas on W workers takes about ``ceil(ceil(N/r)/W) T(r)``;
 the chosen size minimises that over the allowed sizes ``SIZES`` within ``bounds``.
@@ -47,13 +47,18 @@ __all__ = [
 START_S = 0.06
 POINT_S = 4.9e-6
 REPLICA_POINT_S = 0.88e-6
-SIZES = (4, 8, 16, 32, 64)
-DEFAULT_BOUNDS = (4, 64)
-CAL_SIZES = (4, 16, 64)
+# 64 left out: the point counts miss that Newton iterations per point grow with r as well (any
+# replica not converged costs all of them another iteration); measured with the stick deck
+# (trap, reltol 1e-4, one process, load ~11): 73-74 us per replica-hold at 16, 65-85 at 32,
+# 92-126 at 64, where the model put 64 level with 32.
+SIZES = (4, 8, 16, 32)
+DEFAULT_BOUNDS = (4, 32)
+CAL_SIZES = (4, 16, 32)
 CAL_HOLDS = 300
 CAL_SEED = 20261123
 # The size every deck had before issue 10 (measured optimum of the stick deck at reltol 1e-4);
-# used for runs too small to pay for a calibration (CAL_SIZES x CAL_HOLDS = 2.5e4 replica-holds).
+# used for runs too small to pay for a calibration (sum CAL_SIZES x CAL_HOLDS = 1.6e4
+# replica-holds).
 DEFAULT_REPLICAS_PER_DECK = 16
 MIN_CALIBRATED_REPLICA_HOLDS = 250_000
 
