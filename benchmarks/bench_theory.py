@@ -96,9 +96,9 @@ def bench_pdf(quick):
             w = np.linspace(centre - 4 * sd, centre + 4 * sd, 30)
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
-                ws._FALLBACKS.clear()
-                old, t_old = _timed(ws.work_pdf, m, w, tau, share=False)
-                fb = {x[0] for x in ws._FALLBACKS}
+                with ws.recorded_fallbacks() as fallbacks:
+                    old, t_old = _timed(ws.work_pdf, m, w, tau, share=False)
+                fb = {x[0] for x in fallbacks}
                 new, t_new = _timed(ws.work_pdf, m, w, tau)
             ok = ~np.isin(w, list(fb))      # compare contour points (fallbacks are O(1) in ln p)
             diff = np.max(np.abs(new[ok] / old[ok] - 1))

@@ -49,13 +49,13 @@ def main(quick=False):
     for name, m in models[: 2 if quick else 4]:
         for tau in taus:
             wp = np.linspace(-1.5, 2.5, 40)
-            ws._FALLBACKS.clear()
-            p, t_pdf = _timed(ws.work_pdf, m, wp, tau)
-            ok = ~np.isin(wp, [x[0] for x in ws._FALLBACKS])     # contour points only
+            with ws.recorded_fallbacks() as fallbacks:
+                p, t_pdf = _timed(ws.work_pdf, m, wp, tau)
+            ok = ~np.isin(wp, [x[0] for x in fallbacks])     # contour points only
             errp = (np.max(np.abs(p[ok] / ou.work_pdf(m, wp[ok], tau) - 1))
                     if m.delta == 0 and ok.any() else float("nan"))
             rows.append((m.gamma, m.delta, f"work_pdf {name} tau={tau:g} (40 w)", t_pdf, errp,
-                         str(len(ws._FALLBACKS))))
+                         str(len(fallbacks))))
     print(f"{'gamma':>7} {'Delta':>5}  {'call':<36} {'seconds':>8}  {'max err vs OU':>13}  fallbacks")
     for g, d, name, t, e, fb in rows:
         print(f"{g:7g} {d:5g}  {name:<36} {t:8.2f}  {e:13.2e}  {fb}")

@@ -110,7 +110,6 @@ SHOT_PULSE_TARGET = 1e-3
 # more than sqrt(2 SWING_LEVEL) = 8 widths sqrt(tau_m/gamma) from the minimum, and in the stick
 # regime at weak noise (where U rises linearly, with slope Delta - |a|) far less.
 SWING_LEVEL = 32.0
-SWING_WIDTHS = math.sqrt(2.0 * SWING_LEVEL)
 
 
 @dataclass(frozen=True)

@@ -152,31 +152,15 @@ def deck_seeds(seed: int, n_decks: int) -> list[int]:
 
 
 def _sample_stationary(model: Model, size: int, rng: np.random.Generator) -> np.ndarray:
-    """Samples from p_s (eq. p_stat); B1's exact sampler when present, else a tabulated
-    inverse CDF of ``model.stationary_pdf``."""
-    try:
-        from ..theory.exact import sample_stationary
-    except ImportError:
-        sample_stationary = None
+    """Samples from p_s (eq. p_stat) with the exact sampler
+    (:func:`analogue.theory.exact.sample_stationary`)."""
+    from ..theory.exact import sample_stationary
     if not model.is_gradient and model.epsilon > 0:
         # Shot noise: the exact (Kolmogorov-Feller) law of the tanh-smoothed member needs a
         # grid resolving epsilon (45k states for epsilon = 0.01, refused); the sgn law's
         # differs from it only within the mapping's smoothing budget.
         model = model.replace(epsilon=0.0)
-    if sample_stationary is not None:
-        return np.asarray(sample_stationary(model, size, seed=rng), dtype=float)
-    # p_s is log-concave with U'' >= 1/tau_m, so its std is below sqrt(tau_m/gamma): +-14
-    # widths around the mode hold all but ~1e-44 of the mass.  Node on v = 0 (the kink).
-    centre = model.potential_minimum()
-    w = 14.0 * model.velocity_scale
-    lo, hi = min(centre - w, -1e-300), max(centre + w, 1e-300)
-    n = 40001
-    h = (hi - lo) / (n - 1)
-    grid = np.unique(np.concatenate([lo + h * np.arange(n), [0.0]]))
-    pdf = model.stationary_pdf(grid)
-    cdf = np.concatenate([[0.0], np.cumsum(0.5 * (pdf[1:] + pdf[:-1]) * np.diff(grid))])
-    cdf /= cdf[-1]
-    return np.interp(rng.random(size), cdf, grid)
+    return np.asarray(sample_stationary(model, size, seed=rng), dtype=float)
 
 
 def initial_velocities(model: Model, v0, replicas: int, seed: int) -> np.ndarray:
@@ -830,13 +814,12 @@ def simulate(model: Model, *, v0: float | ArrayLike | Literal["stationary"], t_e
     v, x, noise, info = run_decks(decks, times, v0_arr, store=store, workers=workers,
                            scheduler=scheduler, progress=progress, timeout=timeout,
                            records=records, label=label, executor=executor)
-    table = mapping.table() if hasattr(mapping, "table") else None
     meta = {
         "source": "circuit",
         "model": model.as_dict(),
         "model_effective": model_eff.as_dict(),
         "circuit_spec": spec,
-        "circuit": table,
+        "circuit": mapping.table(),
         "seed": seed,
         "deck_seeds": seeds,
         "deck_replicas": sizes,

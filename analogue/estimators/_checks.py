@@ -1,11 +1,9 @@
 """Input validation and binning helpers shared by the estimators (no physics here)."""
 from __future__ import annotations
 
-
 import numpy as np
 
 from ..checks import finite, nonnegative, positive  # noqa: F401  (re-exported)
-
 from ..ensemble import Ensemble
 
 
@@ -13,9 +11,6 @@ def ensemble(obj) -> Ensemble:
     if not isinstance(obj, Ensemble):
         raise ValueError(f"ensemble must be an analogue.Ensemble, got {type(obj).__name__}")
     return obj
-
-
-
 
 
 def confidence(value) -> float:

@@ -1,8 +1,7 @@
 """Choice of the Fokker-Planck grid for the exact finite-noise numerics.
 
-:func:`analogue.theory.fokker_planck.auto_grid` resolves the stationary width
-``sqrt(tau_m/gamma)`` and epsilon.  For the propagator and the stationary dynamics two more
-scales matter, so :func:`resolved_grid` also resolves
+:func:`resolved_grid` resolves the stationary width ``sqrt(tau_m/gamma)`` and epsilon.  For
+the propagator and the stationary dynamics two more scales matter, so it also resolves
 
 * the **kink** of ``exp(-gamma U)`` at ``v = 0``: on either side the density decays on the
   length ``1/(gamma |U'(0+-)|)``, which for large gamma in the stick regime is much shorter

@@ -23,7 +23,7 @@ from scipy import sparse
 
 from ..model import Model
 
-__all__ = ["Grid", "auto_grid", "bernoulli", "generator", "symmetric_generator"]
+__all__ = ["Grid", "bernoulli", "generator", "symmetric_generator"]
 
 
 @dataclass(frozen=True)
@@ -57,30 +57,6 @@ class Grid:
     def span(cls, lo: float, hi: float, h: float) -> "Grid":
         """Smallest grid of spacing h covering [lo, hi] (extended to contain 0 inside)."""
         return cls(h, min(int(math.floor(lo / h)), -1), max(int(math.ceil(hi / h)), 1))
-
-
-def auto_grid(model: Model, extra=(), tail: float = 40.0, points_per_width: float = 40.0,
-              h: float | None = None, max_nodes: int = 200_000) -> Grid:
-    """A grid resolving the stationary law and any extra points (initial velocities...).
-
-    Covers the mode of ``exp(-gamma U)`` plus the region where ``gamma (U - U_min) < tail``
-    (U'' >= 1/tau_m bounds it by ``sqrt(2 tail tau_m/gamma)``), and every value in ``extra``
-    with a margin of that width.  The spacing resolves the stationary width
-    ``sqrt(tau_m/gamma)`` and the smoothing width epsilon.
-    """
-    width = model.velocity_scale
-    if h is None:
-        h = width / points_per_width
-        if model.epsilon > 0:
-            h = min(h, model.epsilon / 8.0)
-    c = model.potential_minimum()
-    reach = math.sqrt(2.0 * tail * model.tau_m / model.gamma) + 4 * width
-    pts = [c - reach, c + reach] + [float(e) - reach for e in extra] + [float(e) + reach for e in extra]
-    grid = Grid.span(min(pts), max(pts), h)
-    if grid.n > max_nodes:
-        raise ValueError(f"automatic grid would need {grid.n} nodes (> max_nodes={max_nodes}); "
-                         "pass a coarser h or a smaller range")
-    return grid
 
 
 def bernoulli(x):

@@ -35,7 +35,7 @@ from ..model import Model
 
 __all__ = [
     "stationary_mean", "stationary_variance", "autocovariance", "propagator",
-    "work_mean", "work_variance", "work_cgf", "work_pdf", "scgf", "rate_function",
+    "work_mean", "work_variance", "work_pdf", "scgf", "rate_function",
 ]
 
 
@@ -102,14 +102,6 @@ def work_variance(model: Model, tau):
     x = tau / tm
     bracket = np.where(x < 1e-3, x * x / 2 - x**3 / 6 + x**4 / 24, x + np.expm1(-x))
     return 2.0 * model.force**2 * stationary_variance(model) * tm * tm * bracket
-
-
-def work_cgf(model: Model, k, tau):
-    """Exact finite-tau ``ln E exp(k W_tau) = k <W> + k^2 Var W / 2`` (W Gaussian); k may be
-    complex (characteristic function along ``k = k_r + i y``)."""
-    k = np.asarray(k)
-    k = k.astype(complex) if np.iscomplexobj(k) else k.astype(float)
-    return k * work_mean(model, tau) + 0.5 * k * k * work_variance(model, tau)
 
 
 def work_pdf(model: Model, w, tau):

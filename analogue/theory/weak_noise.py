@@ -448,7 +448,7 @@ def boundaries(model: Model, t, v0, t0=0.0):
 
     * ``"w"``: eq. dpm, ``w^+`` for ``v0 > 0`` and ``w^-`` for ``v0 < 0``: indirect paths (action
       ``U(v)``) beat direct ones between 0 and w.  Only for ``|a| <= Delta`` and ``t >= t_a``.
-    * ``"u"``: eq. vc_b (upper sign for ``v0 > 0``, see theory.md), the limit ``t_b = t_a`` of
+    * ``"u"``: eq. vc_b (upper sign for ``v0 > 0``: the sign of v0 picks the branch), the limit ``t_b = t_a`` of
       indirect crossing paths: between u and 0 the indirect crossing path wins.  Only for
       ``|a| <= Delta`` and ``t >= t_a``.
     * ``"w_cr"``: eq. cond3 (numerical), for ``|a| > Delta`` and v0 on the side opposite to the

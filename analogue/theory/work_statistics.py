@@ -51,6 +51,9 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 
 import numpy as np
 from scipy import integrate, linalg, optimize
@@ -71,6 +74,7 @@ def _single_threaded():
     return _threadpool_limits(1) if _threadpool_limits is not None else contextlib.nullcontext()
 
 __all__ = ["scgf", "scgf_derivative", "rate_function", "rate_function_curve", "work_pdf",
+           "recorded_fallbacks",
            "work_rate_mean", "work_variance",
            "paper_rate_function", "weak_noise_limit_rate_function", "tilted_grid_spacing",
            "tilted_operator"]
@@ -641,7 +645,7 @@ def work_pdf(model: Model, w, tau, *, h: float | None = None, modes: int = 48,
     of 107).  Measured (gamma = 10, tau_m = 1, w in [-1.5, 2.5]): at tau >= 2 the fallback
     is reached only below ~1e-13; at tau = 1 also at some densities 1e-13 .. 1e-6 (contour
     not resolved by 96 modes; 192 modes resolve them at ~30 s per point).  It never raises
-    for finite inputs; the (w, tau) of fallbacks are appended to ``_FALLBACKS``, and a
+    for finite inputs; the (w, tau) of fallbacks are listed by :func:`recorded_fallbacks`, and a
     RuntimeWarning is issued when a fallback density exceeds 1e-8.
     Cost: per w, a Legendre root of the SCGF, two tridiagonal eigen-solves of ``modes``
     vectors and 12-120 dense complex ``modes x modes`` eigen-decompositions per grid
@@ -878,10 +882,10 @@ def _work_pdf_one(model, w, tau, h, modes, mean):
 
     Robustness: the reduced (Galerkin) generating function is checked against the bound
     ``|G(k*+iy)| <= G(k*)`` that every moment generating function obeys; if it fails (the
-    mode basis at the Legendre point k0 cannot represent the far tail), the basis is doubled
-    once, and if that fails too the leading-order saddle-point formula with exact tilting,
-    ``p_W = exp(K(k*) - k* W) / sqrt(2 pi K''(k*))``, is returned (relative error O(1/tau);
-    only reached far in the tail, at densities far below 1e-8).
+    mode basis at the Legendre point k0 cannot represent the far tail), two more bases are
+    tried (twice the modes at k0, then twice the modes centred on the finite-tau saddle), and
+    if all three fail the large-deviation form of :func:`work_pdf` is returned (ln p right to
+    O(1); only reached far in the tail, at densities far below 1e-8).
     """
     k0, lam = _legendre_root(model, w, h, mean)
     W = w * tau
@@ -904,10 +908,11 @@ def _work_pdf_one(model, w, tau, h, modes, mean):
             log_p = (4.0 * (K2 + math.log(integral)) - (K1 + math.log(integral1))) / 3.0
             return math.exp(math.log(tau) + log_p - ks * W - math.log(math.pi))
     # Fallback (far tail): large-deviation density with the Gaussian (Bahadur-Rao) prefactor
-    # from the principal eigenpair only; the overlap factor of the stationary state with the
-    # tilted ground state (too small to compute from eigenvectors in floating point) is left
-    # out, so ln p is right to O(1), i.e. -ln p / tau to O(1/tau).
-    _FALLBACKS.append((w, tau))
+    # from the principal eigenpair and the overlap factor of the stationary state with the
+    # tilted ground state (from log-space ground states: far below 1e-16, eigenvectors alone
+    # cannot give it); the finite-tau boundary terms of ln G are left out, so ln p is right to
+    # O(1), i.e. -ln p / tau to O(1/tau).
+    _note_fallback(w, tau)
     d = 1e-4 * max(abs(k0), 1.0)
     lpp = (_scgf_pair(model, k0 + d, h, check=False)[1]
            - _scgf_pair(model, k0 - d, h, check=False)[1]) / (2 * d)
@@ -962,7 +967,27 @@ def _log_overlap(model, grid, k):
     return float(logsumexp(logs[0] + logs[1]))
 
 
-_FALLBACKS: list = []   # (w, tau) of large-deviation fallbacks, for diagnostics and tests
+_FALLBACK_LOG: ContextVar[list[tuple[float, float]] | None] = ContextVar(
+    "work_pdf_fallbacks", default=None)
+
+
+@contextmanager
+def recorded_fallbacks() -> Iterator[list[tuple[float, float]]]:
+    """Collect the ``(w, tau)`` at which :func:`work_pdf` fell back to the large-deviation
+    form inside the block (diagnostics, benchmarks): ``with recorded_fallbacks() as fb:``.
+    Nothing is kept outside such a block."""
+    log: list[tuple[float, float]] = []
+    token = _FALLBACK_LOG.set(log)
+    try:
+        yield log
+    finally:
+        _FALLBACK_LOG.reset(token)
+
+
+def _note_fallback(w: float, tau: float) -> None:
+    log = _FALLBACK_LOG.get()
+    if log is not None:
+        log.append((w, tau))
 
 
 def _saddle(model, red, W, tau, k0):
