@@ -110,6 +110,18 @@ def build_experiment_report(name, out, opts: RunOptions) -> Path:
     return build_report([exp], Path(out), opts, title=f"analogue report: experiment {exp.name}")
 
 
+def _board_link(out: Path):
+    """The intro's pointer to the buildable board of the stick experiment (issue 13): a link
+    when ``<out>/board/index.html`` exists, else the command that writes it."""
+    from markupsafe import Markup
+    if (Path(out) / "board" / "index.html").exists():
+        return Markup('A board you can build for the stick experiment (op-amp realisation with '
+                      'E-series parts, noise chain, tolerance Monte Carlo, calibration, schematic '
+                      'and BOM): <a href="board/index.html">board/index.html</a>.')
+    return (f"A board you can build for the stick experiment: run `analogue board stick --out "
+            f"{Path(out) / 'board'}` and it is linked here.")
+
+
 def build_paper_report(out, opts: RunOptions) -> Path:
     """The paper's experiments only (:data:`PAPER_EXPERIMENTS`, standard circuits)."""
     return build_report([standard_circuit(n) for n in PAPER_EXPERIMENTS], Path(out), opts,
@@ -371,6 +383,7 @@ def build_report(names, out: Path, opts: RunOptions, title: str) -> Path:
     if fails.items:
         intro.append(f"{len(fails.items)} section(s) failed; they are marked below with their "
                      "errors, and listed in metrics.json under 'failures'.")
+    intro.append(_board_link(out))
     index = write_page(out / "index.html", title, intro, sections)
     _log(f"report written: {index}")
     if fails.items:
