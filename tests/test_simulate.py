@@ -132,10 +132,8 @@ def test_stationary_initial_values_follow_p_s():
 
 
 @pytest.mark.parametrize("epsilon", [0.0, 0.006])
-def test_fallback_stationary_sampler(monkeypatch, epsilon):
-    """Without analogue.theory.exact the tabulated inverse CDF of model.stationary_pdf is used."""
-    import sys
-    monkeypatch.setitem(sys.modules, "analogue.theory.exact", None)  # import now fails
+def test_stationary_sampler_slip(epsilon):
+    """The exact sampler behind v0="stationary" in the slip regime (kinked and smooth law)."""
     from analogue.circuit.simulate import _sample_stationary
     m = SLIP.replace(epsilon=epsilon)
     v0 = _sample_stationary(m, 20000, np.random.default_rng(4))
