@@ -33,7 +33,8 @@ from .stationary import (StationaryMoments, autocorrelation, half_line_moments, 
 from .stationary import stationary_moments as _stationary_moments
 
 from . import family as _family
-from .work_statistics import rate_function as _paper_rate_function, scgf as _paper_scgf, work_pdf
+from .work_statistics import rate_function as _paper_rate_function, scgf as _paper_scgf
+from .work_statistics import work_pdf as _paper_work_pdf
 
 __all__ = ["propagator", "propagator_atom", "stationary_moments", "StationaryMoments", "autocorrelation",
            "sample_stationary", "scgf", "rate_function", "work_pdf"]
@@ -68,6 +69,16 @@ def rate_function(model: Model, w, *, h: float | None = None):
     if not model.is_paper:
         return _family.rate_function(model, w, h=h)
     return _paper_rate_function(model, w, h=h)
+
+
+def work_pdf(model: Model, w, tau, **kwargs):
+    """Finite-time work density (:func:`.work_statistics.work_pdf`); the paper's model only
+    (for family members the SCGF and rate function are available)."""
+    _check_model(model)
+    if not model.is_paper:
+        raise ValueError("work_pdf is implemented for the paper's model only; for the family use "
+                         "exact.scgf / exact.rate_function")
+    return _paper_work_pdf(model, w, tau, **kwargs)
 
 
 def propagator_atom(model: Model, t, v0: float, t0: float = 0.0, *, h: float | None = None):

@@ -216,8 +216,12 @@ def _halves_quad(model: Model) -> _Halves:
 
 def half_line_moments(model: Model, method: str = "auto") -> _Halves:
     """Per-half-line weights and conditional moments; ``method`` is "closed" (sgn law only),
-    "quad", or "auto" (closed for epsilon = 0, quad otherwise)."""
+    "quad", or "auto" (closed for epsilon = 0, quad otherwise).  The paper's model only (the
+    half-line Gaussians and the convexity of U are used); family members: :mod:`.family`."""
     _check_model(model)
+    if not model.is_paper:
+        raise ValueError("half_line_moments is for the paper's model; use "
+                         "analogue.theory.family.stationary_moments for the family")
     if method == "auto":
         method = "closed" if model.epsilon == 0 else "quad"
     if method == "closed":
@@ -269,6 +273,9 @@ def diffusion_coefficient(model: Model, h: float | None = None, richardson: bool
     with ``richardson`` the results on h and h/2 are combined as ``(4 D_{h/2} - D_h)/3``."""
     _check_model(model)
     _check_h(h)
+    if not model.is_paper:
+        from .family import stationary_moments as family_moments
+        return family_moments(model, h=h).diffusion
     coarse, fine = _refined_grids(model, h)
     d_fine = _diffusion_on_grid(model, fine)
     if not richardson:
@@ -321,6 +328,9 @@ def autocorrelation(model: Model, lags, h: float | None = None, richardson: bool
     bounded and, for lags where that bound exceeds 1e-9 C(0), ``expm_multiply`` is used."""
     _check_model(model)
     _check_h(h)
+    if not model.is_paper:
+        from .family import autocorrelation as family_autocorrelation
+        return family_autocorrelation(model, lags, h=h)
     try:
         lags = np.asarray(lags, dtype=float)
     except (TypeError, ValueError):

@@ -91,6 +91,10 @@ class _Frame:
     def of(cls, model: Model) -> "_Frame":
         if not isinstance(model, Model):
             raise ValueError(f"model must be an analogue.Model, got {type(model).__name__}")
+        if model.cubic or model.stribeck is not None or model.spring or model.shot is not None:
+            raise ValueError("analogue.theory.weak_noise is the paper's closed-form theory (cubic=0, "
+                             "stribeck=None, spring=0, shot=None); for the family use "
+                             "analogue.theory.weak_noise_family")
         flip = -1.0 if model.a < 0 else 1.0
         return cls(model.tau_m, model.delta, abs(model.a), flip)
 

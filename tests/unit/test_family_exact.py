@@ -184,3 +184,25 @@ def test_gaussian_member_scgf_derivatives_are_mean_and_green_kubo():
     assert l0 == pytest.approx(0.0, abs=1e-9)
     assert (lp - lm) / (2 * d) == pytest.approx(F * s.mean, rel=1e-5)
     assert (lp - 2 * l0 + lm) / d**2 == pytest.approx(2 * F**2 * s.diffusion, rel=1e-3)
+
+
+def test_family_autocorrelation_ou_shot_and_green_kubo():
+    """Delta = 0: C(t) = rate mu^2 tau e^{-t/tau}; for a Stribeck member the integral of C is the
+    Green-Kubo D_x of stationary_moments (Poisson equation: an independent route)."""
+    m = Model(1.0, 0.0, 0.3, INF, shot=ShotNoise(2.0, 0.3))
+    lags = np.array([0.0, 0.5, 2.0])
+    assert np.allclose(exact.autocorrelation(m, lags), 0.18 * np.exp(-lags), atol=3e-4)
+    ms = Model(1.0, 0.7, 0.9, 10.0, stribeck=(1.0, 0.2))
+    t = np.linspace(0, 12, 241)
+    c = exact.autocorrelation(ms, t)
+    assert c[0] == pytest.approx(exact.stationary_moments(ms).variance, rel=1e-3)
+    assert np.trapezoid(c, t) == pytest.approx(exact.stationary_moments(ms).diffusion, rel=2e-3)
+
+
+def test_paper_only_functions_refuse_family_members():
+    from analogue.theory import weak_noise
+    m = Model(1.0, 0.7, 0.2, 10.0, cubic=0.5)
+    with pytest.raises(ValueError, match="weak_noise_family"):
+        weak_noise.action(m, 0.5, 1.0, 0.2)
+    with pytest.raises(ValueError, match="paper's model only"):
+        exact.work_pdf(m, 0.1, 1.0)
