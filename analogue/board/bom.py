@@ -19,8 +19,14 @@ def bom_rows(design: BoardDesign, matched: tuple = ()) -> list[tuple]:
     v, s = design.values, design.spec
     amp = s.opamp.split("_")[0]
 
+    advice = {"U1,U2": "offset trimmed, or an OPA2140-class integrator (|vos| < 120 uV)",
+              "D1-D4": "matched quad (IS within 2 %)", "C1": "0.5 % (C0G) or measured",
+              "VR1,VR2": "0.05 % references"}
+
     def tol(ref, default):
-        return "0.1 % (matched/trimmed)" if ref in matched else default
+        if ref not in matched:
+            return default
+        return advice.get(ref, "0.1 % (matched pair / trimmed)")
 
     rows = [
         ("C1", "capacitor (mass)", eng(v["C"], "F"), tol("C1", "1 %"), "C0G/NP0 50 V or polypropylene film", 1),
