@@ -12,7 +12,7 @@ from scipy.integrate import trapezoid
 from analogue import Model
 from analogue.theory import weak_noise as wn
 
-STICK = Model(tau_m=1.0, delta=0.7, a=0.3, gamma=10.0)   # paper's Fig. 2 parameters
+STICK_FIG2 = Model(tau_m=1.0, delta=0.7, a=0.3, gamma=10.0)   # paper's Fig. 2 parameters
 SLIP = Model(tau_m=1.0, delta=0.7, a=1.2, gamma=10.0)    # paper's Fig. 4 parameters
 
 
@@ -34,8 +34,8 @@ def jump_is_continuous(f, x, scale):
 
 
 # ----------------------------------------------------------------------------- identities
-@pytest.mark.parametrize("model", [STICK, SLIP, STICK.replace(a=-0.3), SLIP.replace(a=-1.2),
-                                   STICK.replace(a=0.7), STICK.replace(a=0.0)])
+@pytest.mark.parametrize("model", [STICK_FIG2, SLIP, STICK_FIG2.replace(a=-0.3), SLIP.replace(a=-1.2),
+                                   STICK_FIG2.replace(a=0.7), STICK_FIG2.replace(a=0.0)])
 @pytest.mark.parametrize("v0", [1.5, -1.5, 0.4])
 def test_deterministic_path_has_zero_action(model, v0):
     ts = np.array([0.2, 0.7, 1.5, 3.0, 6.0])
@@ -50,7 +50,7 @@ def test_deterministic_path_has_zero_action(model, v0):
 @pytest.mark.parametrize("v0", [1.5, -1.5, 0.0])
 def test_indirect_region_costs_the_potential(a, v0):
     """eqs. Aind2/Aind2b: between u and w (t >= t_a) the action is U(v) with U(0) = 0."""
-    model = STICK.replace(a=a)
+    model = STICK_FIG2.replace(a=a)
     t = 4.0
     b = wn.boundaries(model, t, v0)
     if math.isinf(model.stick_time(v0)):  # a = Delta, v0 > 0: v = 0 is never reached
@@ -76,7 +76,7 @@ def test_delta_zero_is_ornstein_uhlenbeck(a, v0, t):
     assert np.allclose(wn.action(model, v, t, v0), ou, rtol=1e-9, atol=1e-12)
 
 
-@pytest.mark.parametrize("model", [STICK, SLIP, STICK.replace(a=0.7), STICK.replace(delta=0.0)])
+@pytest.mark.parametrize("model", [STICK_FIG2, SLIP, STICK_FIG2.replace(a=0.7), STICK_FIG2.replace(delta=0.0)])
 @pytest.mark.parametrize("v0", [1.5, -1.0, 0.0])
 def test_mirror_symmetry(model, v0):
     """f(v,t|v0;a) = f(-v,t|-v0;-a) (section II).  For a = 0 this is a genuine check of the
@@ -96,7 +96,7 @@ def test_mirror_symmetry(model, v0):
 
 def test_lambda_is_eq_lambda():
     """Lambda in the paper's unscaled form of eq. lambda (moderate times: no overflow)."""
-    m = STICK
+    m = STICK_FIG2
     t0, t, v0 = 0.3, 1.4, -0.8
     v = np.array([-1.0, 0.2, 0.9])
     for sign in (1, -1):
@@ -108,13 +108,13 @@ def test_lambda_is_eq_lambda():
 
 # ----------------------------------------------------------------------------- optimal paths
 FIVE_KINDS = [
-    (STICK, 1.5, 1.0, 0.5, "direct"),
-    (STICK, 1.5, -0.5, 0.5, "direct-crossing"),
-    (STICK, 1.5, 0.3, 3.0, "indirect"),
-    (STICK, 1.5, -0.3, 3.0, "indirect-crossing"),
+    (STICK_FIG2, 1.5, 1.0, 0.5, "direct"),
+    (STICK_FIG2, 1.5, -0.5, 0.5, "direct-crossing"),
+    (STICK_FIG2, 1.5, 0.3, 3.0, "indirect"),
+    (STICK_FIG2, 1.5, -0.3, 3.0, "indirect-crossing"),
     (SLIP, -1.5, -0.3, 2.0, "twice-crossing"),
     (SLIP.replace(a=-1.2), 1.5, 0.3, 2.0, "twice-crossing"),
-    (STICK.replace(a=-0.3), -1.5, 0.3, 3.0, "indirect-crossing"),
+    (STICK_FIG2.replace(a=-0.3), -1.5, 0.3, 3.0, "indirect-crossing"),
     (SLIP, -1.0, 0.5, 2.0, "direct-crossing"),
     (SLIP, -1.5, -0.5, 0.5, "direct"),
 ]
@@ -161,16 +161,16 @@ def test_optimal_path_is_locally_optimal(model, v0, v, t, kind):
 
 
 def test_crossing_time_matches_path():
-    p = wn.optimal_path(STICK, -0.5, 0.5, 1.5)
-    assert wn.crossing_time(STICK, -0.5, 0.5, 1.5) == pytest.approx(p.t_cross, rel=1e-12)
-    tx = wn.crossing_time(STICK, np.array([-0.5, 0.5]), 0.5, 1.5)
+    p = wn.optimal_path(STICK_FIG2, -0.5, 0.5, 1.5)
+    assert wn.crossing_time(STICK_FIG2, -0.5, 0.5, 1.5) == pytest.approx(p.t_cross, rel=1e-12)
+    tx = wn.crossing_time(STICK_FIG2, np.array([-0.5, 0.5]), 0.5, 1.5)
     assert math.isnan(tx[1]) and tx[0] == pytest.approx(p.t_cross)
 
 
 # ----------------------------------------------------------------------------- boundaries
-@pytest.mark.parametrize("model,v0", [(STICK, 1.5), (STICK, -1.5), (STICK.replace(a=-0.3), 1.5),
-                                      (STICK.replace(a=-0.3), -1.5), (STICK, 0.0),
-                                      (STICK.replace(a=0.0), 2.0)])
+@pytest.mark.parametrize("model,v0", [(STICK_FIG2, 1.5), (STICK_FIG2, -1.5), (STICK_FIG2.replace(a=-0.3), 1.5),
+                                      (STICK_FIG2.replace(a=-0.3), -1.5), (STICK_FIG2, 0.0),
+                                      (STICK_FIG2.replace(a=0.0), 2.0)])
 def test_w_and_u_are_where_the_action_switches_continuously(model, v0):
     t_a = model.stick_time(v0)
     for t in (t_a + 0.3, t_a + 1.5, t_a + 3.0):
@@ -202,7 +202,7 @@ def test_w_and_u_are_where_the_action_switches_continuously(model, v0):
 
 def test_w_matches_paper_eq_dpm_and_u_eq_vc_b():
     """My numerically stable form against eq. dpm / eq. vc_b as printed (v0 > 0 upper sign)."""
-    m, v0, t0 = STICK, 1.5, 0.2
+    m, v0, t0 = STICK_FIG2, 1.5, 0.2
     for t in (2.0, 3.0, 5.0):
         k, E = (m.delta - m.a) * m.tau_m, math.exp((t - t0) / m.tau_m)
         w_paper = -(k - E * (k + v0) + math.sqrt((v0**2 + 2 * k * v0) * (E * E - 1)))
@@ -232,10 +232,10 @@ def test_boundaries_apply_only_where_they_should():
     m = Model(1.0, 0.2, 0.5, 1.0)
     assert math.isnan(wn.boundaries(m, 0.6, -2.0)["w_cr"])
     assert wn.optimal_path(m, -1e-9, 0.6, -2.0).kind == "direct"
-    b = wn.boundaries(STICK, np.array([0.5, 1.0, 3.0]), 1.5)  # t_a = ln(4.75) = 1.56
+    b = wn.boundaries(STICK_FIG2, np.array([0.5, 1.0, 3.0]), 1.5)  # t_a = ln(4.75) = 1.56
     assert np.isnan(b["w"][:2]).all() and np.isnan(b["u"][:2]).all()
     assert np.isfinite(b["w"][2]) and np.isnan(b["w_cr"]).all()
-    assert wn.boundaries(STICK, STICK.stick_time(1.5), 1.5)["w"] == pytest.approx(0.0, abs=1e-12)
+    assert wn.boundaries(STICK_FIG2, STICK_FIG2.stick_time(1.5), 1.5)["w"] == pytest.approx(0.0, abs=1e-12)
     s = wn.boundaries(SLIP, np.array([1.0, 2.0]), 1.0)  # v0 on the attractor side
     assert all(np.isnan(s[k]).all() for k in s)
     s = wn.boundaries(SLIP, np.array([1.0, 2.0]), -1.0)
@@ -244,7 +244,7 @@ def test_boundaries_apply_only_where_they_should():
 
 
 def test_action_is_continuous_in_time_at_t_a():
-    for model, v0 in [(STICK, 1.5), (STICK, -1.5), (STICK.replace(a=-0.3), 0.9)]:
+    for model, v0 in [(STICK_FIG2, 1.5), (STICK_FIG2, -1.5), (STICK_FIG2.replace(a=-0.3), 0.9)]:
         t_a = model.stick_time(v0)
         for v in (-0.6, -0.05, 0.05, 0.6):
             ok, info = jump_is_continuous(lambda t: wn.action(model, v, t, v0), t_a, 1.0)
@@ -256,18 +256,18 @@ def test_action_is_continuous_in_time_at_t_a():
 def test_edge_parameters_are_the_limit(name, value):
     """a = +-Delta, a = 0, Delta = 0: the action is the limit of nearby parameters."""
     v = np.linspace(-2.0, 2.0, 81)
-    exact = STICK.replace(**{name: value})
+    exact = STICK_FIG2.replace(**{name: value})
     for d in (1e-7, -1e-7):
         if name == "delta" and d < 0:
             continue
-        near = STICK.replace(**{name: value + d})
+        near = STICK_FIG2.replace(**{name: value + d})
         for v0 in (1.0, -1.0, 0.0):
             for t in (0.5, 2.5):
                 assert np.allclose(wn.action(exact, v, t, v0), wn.action(near, v, t, v0),
                                    atol=1e-5)
 
 
-@pytest.mark.parametrize("model", [STICK, SLIP, STICK.replace(a=0.7), STICK.replace(delta=0.0)])
+@pytest.mark.parametrize("model", [STICK_FIG2, SLIP, STICK_FIG2.replace(a=0.7), STICK_FIG2.replace(delta=0.0)])
 def test_v0_zero_and_v_zero_are_the_limit(model):
     v = np.linspace(-2.0, 2.0, 81)
     for t in (0.5, 2.5):
@@ -282,21 +282,21 @@ def test_v0_zero_and_v_zero_are_the_limit(model):
 
 
 def test_long_times_do_not_overflow():
-    for model, v0 in [(STICK, 1.0), (SLIP, -1.0), (SLIP, 1.0)]:
+    for model, v0 in [(STICK_FIG2, 1.0), (SLIP, -1.0), (SLIP, 1.0)]:
         v = np.linspace(-3, 3, 31)
         A = wn.action(model, v, 800.0, v0)
         assert np.all(np.isfinite(A))
         assert np.allclose(A, model.potential(v) - model.potential(model.attractor), atol=1e-9)
         b = wn.boundaries(model, 800.0, v0)
-        key = "w" if model is STICK else "w_cr"
-        if model is STICK or v0 < 0:
+        key = "w" if model is STICK_FIG2 else "w_cr"
+        if model is STICK_FIG2 or v0 < 0:
             assert abs(b[key]) > 1e100  # the boundaries run off to infinity like e^{t/tau}
     w_cr = wn.boundaries(SLIP, np.array([10.0, 20.0, 40.0]), -1.0)["w_cr"]
     assert np.all(np.diff(np.log(-w_cr)) > 0.9 * 10.0)  # ~ e^{t/tau}: no saturation by rounding
 
 
 # ----------------------------------------------------------------------------- propagator
-@pytest.mark.parametrize("model,v0", [(STICK, 2.0), (STICK, -2.0), (SLIP, -1.0), (SLIP, 1.0),
+@pytest.mark.parametrize("model,v0", [(STICK_FIG2, 2.0), (STICK_FIG2, -2.0), (SLIP, -1.0), (SLIP, 1.0),
                                       (SLIP.replace(a=-1.2), 1.0)])
 def test_propagator_tends_to_stationary_law(model, v0):
     v = np.linspace(-4.0, 4.0, 1601)  # h = 0.005; 0 on the grid
@@ -316,7 +316,7 @@ def test_propagator_tends_to_stationary_law(model, v0):
 def test_propagator_piecewise_form_sol2():
     """eq. sol2 (a < Delta, v0 > 0, t > t_a): exp(-gamma*Lambda_-(..., t_x)) below u, exp(-gamma U)
     between u and w, exp(-gamma*Lambda_+) above w -- up to one normalisation."""
-    m, v0, t = STICK, 2.0, 2.5
+    m, v0, t = STICK_FIG2, 2.0, 2.5
     v = np.linspace(-3.0, 6.0, 901)
     f = wn.propagator(m, v, t, v0)
     b = wn.boundaries(m, t, v0)
@@ -337,23 +337,23 @@ def test_propagator_piecewise_form_sol2():
 # ----------------------------------------------------------------------------- bad input
 def test_bad_input_raises_value_error_naming_parameter():
     with pytest.raises(ValueError, match="t must be > t0"):
-        wn.action(STICK, 0.1, 1.0, 0.5, t0=1.0)
+        wn.action(STICK_FIG2, 0.1, 1.0, 0.5, t0=1.0)
     with pytest.raises(ValueError, match="t must be > t0"):
-        wn.optimal_path(STICK, 0.1, 0.5, 0.5, t0=1.0)
+        wn.optimal_path(STICK_FIG2, 0.1, 0.5, 0.5, t0=1.0)
     with pytest.raises(ValueError, match="v0 must be finite"):
-        wn.action(STICK, 0.1, 1.0, float("nan"))
+        wn.action(STICK_FIG2, 0.1, 1.0, float("nan"))
     with pytest.raises(ValueError, match="v0 must be finite"):
-        wn.propagator(STICK, np.linspace(-1, 1, 5), 1.0, float("inf"))
+        wn.propagator(STICK_FIG2, np.linspace(-1, 1, 5), 1.0, float("inf"))
     with pytest.raises(ValueError, match="n must be an integer >= 2"):
-        wn.optimal_path(STICK, 0.1, 1.0, 0.5, n=1)
+        wn.optimal_path(STICK_FIG2, 0.1, 1.0, 0.5, n=1)
     with pytest.raises(ValueError, match="v must be finite"):
-        wn.action(STICK, np.array([0.0, np.nan]), 1.0, 0.5)
+        wn.action(STICK_FIG2, np.array([0.0, np.nan]), 1.0, 0.5)
     with pytest.raises(ValueError, match="v must be a 1-D strictly increasing grid"):
-        wn.propagator(STICK, np.array([0.0, -1.0]), 1.0, 0.5)
+        wn.propagator(STICK_FIG2, np.array([0.0, -1.0]), 1.0, 0.5)
     with pytest.raises(ValueError, match="t must be > t0"):
-        wn.boundaries(STICK, np.array([1.0, -1.0]), 0.5)
+        wn.boundaries(STICK_FIG2, np.array([1.0, -1.0]), 0.5)
     with pytest.raises(ValueError, match="sign must be"):
-        wn.Lambda(0, 0.1, 1.0, 0.5, 0.0, STICK)
+        wn.Lambda(0, 0.1, 1.0, 0.5, 0.0, STICK_FIG2)
 
 
 def test_propagator_piecewise_form_sol3_and_stationary_switching_times():

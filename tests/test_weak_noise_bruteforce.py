@@ -204,21 +204,21 @@ def test_bruteforce_reproduces_ornstein_uhlenbeck_action(v0, v, t):
 
 # ------------------------------------------------ brute force against weak_noise.action
 
-STICK = dict(tau_m=1.0, delta=0.7, a=0.3, gamma=10.0)
+STICK_FIG2 = dict(tau_m=1.0, delta=0.7, a=0.3, gamma=10.0)
 SLIP = dict(tau_m=1.0, delta=0.7, a=1.2, gamma=10.0)
 
 # (model parameters, v0, v, t, kind expected from the paper's classification)
 CASES = [
-    (STICK, 1.0, 1.5, 0.5, "direct"),
-    (STICK, 1.0, -0.5, 0.3, "direct-crossing"),
-    (STICK, 1.0, 0.3, 3.0, "indirect"),
-    (STICK, 1.0, -0.3, 3.0, "indirect-crossing"),
-    (STICK, -1.0, -0.4, 3.0, "indirect"),
-    (STICK, -1.0, 0.6, 0.4, "direct-crossing"),
+    (STICK_FIG2, 1.0, 1.5, 0.5, "direct"),
+    (STICK_FIG2, 1.0, -0.5, 0.3, "direct-crossing"),
+    (STICK_FIG2, 1.0, 0.3, 3.0, "indirect"),
+    (STICK_FIG2, 1.0, -0.3, 3.0, "indirect-crossing"),
+    (STICK_FIG2, -1.0, -0.4, 3.0, "indirect"),
+    (STICK_FIG2, -1.0, 0.6, 0.4, "direct-crossing"),
     (SLIP, -0.5, -1.0, 0.5, "direct"),
     (SLIP, 1.0, -0.5, 1.0, "direct-crossing"),
     (SLIP, -0.5, -0.5, 5.0, "twice-crossing"),
-    ({**STICK, "a": -0.3}, -1.0, 0.3, 3.0, "indirect-crossing"),
+    ({**STICK_FIG2, "a": -0.3}, -1.0, 0.3, 3.0, "indirect-crossing"),
     ({**SLIP, "a": -1.2}, 0.5, 0.5, 5.0, "twice-crossing"),
     ({**SLIP, "a": -1.2}, 0.4, 1.0, 0.6, "direct"),
 ]

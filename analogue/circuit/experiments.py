@@ -62,7 +62,7 @@ import numpy as np
 from .. import model as _model_module
 from ..model import Model
 from ..report.plan import ReportSettings, report_settings_from_dict
-from . import validation as val
+from . import validation
 from .mapping import FIXED_TRTOL, CircuitMapping, CircuitSpec, map_model
 from .netlist import Deck, build_deck
 
@@ -230,7 +230,7 @@ def _int(value, what: str, lo: int, hi: int) -> int:
 def _floats(value, what: str, allow_empty: bool = True) -> tuple:
     if not isinstance(value, list) or (not allow_empty and not value):
         raise ValueError(f"{what} must be a {'non-empty ' if not allow_empty else ''}list of numbers")
-    return tuple(val.finite(x, f"{what}[{i}]") for i, x in enumerate(value))
+    return tuple(validation.finite(x, f"{what}[{i}]") for i, x in enumerate(value))
 
 
 def _nested_class(cls, key: str):
@@ -335,7 +335,7 @@ def _check_plan(exp: Experiment, where: str) -> None:
         raise ValueError(f"{where}: {exc}") from None
     for kind, m in plan.items():
         try:
-            val.check_mapping_values(m, kind)
+            validation.check_mapping_values(m, kind)
         except ValueError as exc:
             raise ValueError(f"{where}: {exc}") from None
     longest = max(exp.t_end, st_full.stationary_t_end)
@@ -360,7 +360,7 @@ def experiment_from_dict(data: dict, where: str = "experiment", source: Path | N
                          f"{', '.join(sorted(_TOP_KEYS))})")
     if "name" not in data:
         raise ValueError(f"{where}: missing required key name")
-    name = val.check_name(data["name"], f"{where}: name")
+    name = validation.check_name(data["name"], f"{where}: name")
     description = data.get("description", "")
     if not isinstance(description, str):
         raise ValueError(f"{where}: description must be a string")
@@ -371,18 +371,18 @@ def experiment_from_dict(data: dict, where: str = "experiment", source: Path | N
 
     cdata = _table(data, "circuit", circuit_keys(), where)
     spec = _build(CircuitSpec, "circuit", cdata, where)
-    val.check_spec_ranges(spec, f"{where}: circuit")
+    validation.check_spec_ranges(spec, f"{where}: circuit")
 
     edata = _table(data, "experiment", _EXPERIMENT_KEYS, where)
     _require(edata, _EXPERIMENT_REQUIRED, "experiment", where)
     v0 = _floats(edata["v0"], f"{where}: experiment.v0", allow_empty=False)
     replicas = _int(edata.get("replicas", 100), f"{where}: experiment.replicas", 1, 100_000)
-    t_end = val.positive(edata["t_end"], f"{where}: experiment.t_end")
-    sample_dt = val.positive(edata["sample_dt"], f"{where}: experiment.sample_dt")
+    t_end = validation.positive(edata["t_end"], f"{where}: experiment.t_end")
+    sample_dt = validation.positive(edata["sample_dt"], f"{where}: experiment.sample_dt")
     if sample_dt > t_end:
         raise ValueError(f"{where}: experiment.sample_dt must be <= t_end={t_end}, got {sample_dt}")
     seed = _int(edata.get("seed", 1), f"{where}: experiment.seed", 0, 2**31 - 1)
-    burn_in = val.nonnegative(edata.get("burn_in", 0.0), f"{where}: experiment.burn_in")
+    burn_in = validation.nonnegative(edata.get("burn_in", 0.0), f"{where}: experiment.burn_in")
     if burn_in >= t_end:
         raise ValueError(f"{where}: experiment.burn_in must be < t_end={t_end}, got {burn_in}")
     times = _floats(edata.get("histogram_times", []), f"{where}: experiment.histogram_times")
@@ -411,7 +411,7 @@ def experiment_from_dict(data: dict, where: str = "experiment", source: Path | N
 def _names_in(directory: Path) -> list[str]:
     if not directory.is_dir():
         return []
-    return sorted(p.stem for p in directory.glob("*.toml") if val.NAME_PATTERN.fullmatch(p.stem))
+    return sorted(p.stem for p in directory.glob("*.toml") if validation.NAME_PATTERN.fullmatch(p.stem))
 
 
 def _standard_dir() -> Path:
@@ -426,7 +426,7 @@ def experiment_names() -> list[str]:
 
 def standard_circuit(name: str) -> Path:
     """The TOML file of the standard experiment ``name`` (package data or the checkout)."""
-    name = val.check_name(name, "experiment name")
+    name = validation.check_name(name, "experiment name")
     path = _standard_dir() / f"{name}.toml"
     if not path.is_file():
         raise ValueError(f"experiment name must be one of {experiment_names()}, got {name!r}")
@@ -435,7 +435,7 @@ def standard_circuit(name: str) -> Path:
 
 def resolve_experiment(name: str) -> Path:
     """``./circuits/<name>.toml`` if it exists, else the standard experiment ``name``."""
-    name = val.check_name(name, "experiment name")
+    name = validation.check_name(name, "experiment name")
     local = Path.cwd() / "circuits" / f"{name}.toml"
     if local.is_file():
         return local
@@ -485,7 +485,7 @@ def load_experiment(path_or_name) -> Experiment:
     if isinstance(path_or_name, Path):
         path = path_or_name
     elif isinstance(path_or_name, str):
-        if val.NAME_PATTERN.fullmatch(path_or_name):
+        if validation.NAME_PATTERN.fullmatch(path_or_name):
             path, by_name = resolve_experiment(path_or_name), True
         else:
             path = Path(path_or_name)

@@ -82,7 +82,7 @@ import numpy as np
 from scipy import optimize, special
 
 from ..model import Model
-from . import validation as val
+from . import validation
 from .parts import IDEAL_IS, DiodePart, get_part, ideal_diode, thermal_voltage, PARTS
 from . import nonlinear as nl
 
@@ -203,26 +203,26 @@ class CircuitSpec:
         if self.method is not None and self.method not in METHODS:
             raise ValueError(f"method must be one of {METHODS} or None (chosen by measurement), "
                              f"got {self.method!r}")
-        s = val.positive(self.smoothing, "smoothing")
+        s = validation.positive(self.smoothing, "smoothing")
         if not s < 1:
             raise ValueError(f"smoothing must be in (0, 1) (fraction of sqrt(tau_m/gamma)), got {s!r}")
         object.__setattr__(self, "smoothing", s)
         for name in ("time_scale", "capacitance", "abstol", "bias_tolerance"):
-            object.__setattr__(self, name, val.positive(getattr(self, name), name))
+            object.__setattr__(self, name, validation.positive(getattr(self, name), name))
         if self.reltol is not None:
-            object.__setattr__(self, "reltol", val.positive(self.reltol, "reltol"))
+            object.__setattr__(self, "reltol", validation.positive(self.reltol, "reltol"))
             if not self.reltol < 0.1:
                 raise ValueError(f"reltol must be in (0, 0.1) or None (chosen by measurement), "
                                  f"got {self.reltol!r}")
         if self.trtol is not None:
-            t = val.positive(self.trtol, "trtol")
+            t = validation.positive(self.trtol, "trtol")
             if not 1.0 <= t <= 100.0:
                 raise ValueError(f"trtol must be in [1, 100] or None (chosen by measurement), "
                                  f"got {self.trtol!r}")
             object.__setattr__(self, "trtol", t)
         for name in ("volts_per_velocity", "noise_dt", "max_step", "vntol"):
             if getattr(self, name) is not None:
-                object.__setattr__(self, name, val.positive(getattr(self, name), name))
+                object.__setattr__(self, name, validation.positive(getattr(self, name), name))
         if not isinstance(self.allow_bias, bool):
             raise ValueError(f"allow_bias must be True or False, got {self.allow_bias!r}")
         if self.cubic_element not in CUBIC_KINDS:
@@ -232,12 +232,12 @@ class CircuitSpec:
         b = self.cubic_branches
         if isinstance(b, bool) or not isinstance(b, int) or not 1 <= b <= 16:
             raise ValueError(f"cubic_branches must be an integer in [1, 16], got {b!r}")
-        object.__setattr__(self, "inductor_q", val.positive(self.inductor_q, "inductor_q"))
+        object.__setattr__(self, "inductor_q", validation.positive(self.inductor_q, "inductor_q"))
         if self.inductor_resistance is not None:
             object.__setattr__(self, "inductor_resistance",
-                               val.nonnegative(self.inductor_resistance, "inductor_resistance"))
+                               validation.nonnegative(self.inductor_resistance, "inductor_resistance"))
         if self.shot_width is not None:
-            object.__setattr__(self, "shot_width", val.positive(self.shot_width, "shot_width"))
+            object.__setattr__(self, "shot_width", validation.positive(self.shot_width, "shot_width"))
 
     def replace(self, **changes) -> "CircuitSpec":
         return replace(self, **changes)
@@ -877,7 +877,7 @@ def stationary_range(model: Model, level: float = SWING_LEVEL) -> tuple[float, f
     peak: ``gamma (U(v) - U_min) <= level``.  U is convex with ``U'' >= 1/tau_m``, so the ends
     lie within ``sqrt(2 tau_m level/gamma)`` of the minimum, which brackets the root search.
     Returns ``(lo, hi)``."""
-    level = val.positive(level, "level")
+    level = validation.positive(level, "level")
     v_min = model.potential_minimum()
     u_min = float(model.potential(v_min))
     # (1 + 1e-3): where U is exactly quadratic the bound is attained, and rounding must not

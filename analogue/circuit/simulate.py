@@ -465,7 +465,7 @@ def run_decks(decks: Sequence[Deck], times: ArrayLike, v0: ArrayLike, *,
     _check_executor(executor)
     if executor is not None and scheduler is not None:
         raise ValueError("pass either scheduler= (a Dask address) or executor=, not both")
-    st = open_store(store)
+    run_store = open_store(store)
     version = _ng.ngspice_version()  # also: a missing ngspice fails here, with the hint
     tasks, keys, offsets = [], [], [0]
     group = uuid.uuid4().hex
@@ -491,14 +491,15 @@ def run_decks(decks: Sequence[Deck], times: ArrayLike, v0: ArrayLike, *,
 
     results: list = [None] * len(tasks)
     from_store = 0
-    if st is not None:
+    if run_store is not None:
         try:
-            st.clean_tmp()
+            run_store.clean_tmp()
         except OSError:
             pass
         for b, key in enumerate(keys):
             task = tasks[b]
-            hit = st.get(key, check=lambda a, m, task=task: _entry_problem(task, version, a, m))
+            hit = run_store.get(
+                key, check=lambda a, m, task=task: _entry_problem(task, version, a, m))
             if hit is not None:
                 arrays, meta = hit
                 results[b] = {**{k: arrays[k] for k in ("v", "x", "noise", "x_spring")
@@ -534,23 +535,23 @@ def run_decks(decks: Sequence[Deck], times: ArrayLike, v0: ArrayLike, *,
                     out = fut.result()
                     results[task.index] = out
                     worker_version = out["info"].get("ngspice_version")
-                    if st is not None and worker_version != version:
+                    if run_store is not None and worker_version != version:
                         # The key names this machine's ngspice; a worker with another version
                         # would file its numbers under the wrong key.
                         log.warning("deck %d ran on ngspice %s, not %s: not stored", task.index,
                                     worker_version, version)
-                    elif st is not None and store_ok:
+                    elif run_store is not None and store_ok:
                         # Written as each deck finishes: an interrupted call resumes from here.
                         arrays = {k: out[k] for k in ("v", "x", "noise", "x_spring") if k in out}
                         try:
-                            st.put(keys[task.index], {**arrays, "t": times},
+                            run_store.put(keys[task.index], {**arrays, "t": times},
                                    _batch_meta(task, version, out["info"]))
                         except OSError as exc:
                             # Read-only or full: the results are still good; say so once.
                             store_ok = False
                             store_log.warning(
                                 "analogue: run store %s is not writable (%s): results are "
-                                "returned but not stored", st.root,
+                                "returned but not stored", run_store.root,
                                 " ".join(f"{type(exc).__name__}: {exc}".split())[:200])
                     if bar is not None:
                         bar.update(1)
@@ -581,7 +582,8 @@ def run_decks(decks: Sequence[Deck], times: ArrayLike, v0: ArrayLike, *,
         noise = None
     if records is not None and results and all("x_spring" in r for r in results):
         records["x_spring"] = np.vstack([r["x_spring"] for r in results])
-    info = {"ngspice_version": version, "store": str(st.root) if st is not None else None,
+    info = {"ngspice_version": version,
+            "store": str(run_store.root) if run_store is not None else None,
             "store_keys": keys, "from_store": from_store, "ran": len(todo), "wall_time": wall,
             "deck_wall_times": [r["info"].get("wall_time") for r in results],
             "deck_raw_points": [r["info"].get("raw_points") for r in results],
@@ -633,11 +635,11 @@ def _check_sizes(*, mapping, replicas, per_deck, workers, t_end, sample_dt, dt_l
         raise ValueError(f"{what} needs at least {limits.format_bytes(est.memory)} of memory, "
                          f"more than the limit of {limits.format_bytes(mem)} ({why}); reduce "
                          f"replicas or t_end, or raise sample_dt")
-    st = open_store(store)
-    if st is not None:
-        cap, why = limits.store_limit(st.root)
+    run_store = open_store(store)
+    if run_store is not None:
+        cap, why = limits.store_limit(run_store.root)
         if est.stored > cap:
-            raise ValueError(f"the run store {st.root} would receive at least "
+            raise ValueError(f"the run store {run_store.root} would receive at least "
                              f"{limits.format_bytes(est.stored)} for {what}, more than the limit "
                              f"of {limits.format_bytes(cap)} ({why}); reduce the run, use a store "
                              f"on a larger disk, or pass store=False (results in memory only)")
