@@ -376,8 +376,13 @@ class Model:
         # integral_0^|v| e^{-u/v_s} tanh(u/eps) du: quadrature up to min(|v|, 40 eps), where
         # tanh = 1 to double precision, then the closed form of the exponential.
         cut = np.minimum(av, 40.0 * eps)
-        u = cut[..., None] * _GL_NODES
-        head = cut * np.sum(_GL_WEIGHTS * np.exp(-u / vs) * np.tanh(u / eps), axis=-1)
+        flat = cut.ravel()
+        head = np.empty_like(flat)
+        for i in range(0, flat.size, 4096):  # chunks: 4096 x 320 nodes (10 MB) at a time
+            u = flat[i:i + 4096, None] * _GL_NODES
+            head[i:i + 4096] = flat[i:i + 4096] * np.sum(_GL_WEIGHTS * np.exp(-u / vs)
+                                                        * np.tanh(u / eps), axis=-1)
+        head = head.reshape(cut.shape)
         tail = vs * (np.exp(-cut / vs) - np.exp(-av / vs))
         return base + (ds - d) * (head + tail)
 
@@ -441,6 +446,15 @@ class Model:
     def log_normaliser(self) -> float:
         """``ln Z`` with ``Z = integral exp(-gamma U(v)) dv`` (so ``p_s = exp(-gamma U)/Z``)."""
         self._require_gradient("log_normaliser")
+        # cached per instance (frozen: the parameters cannot change); the family's quadrature
+        # would otherwise run on every stationary_pdf call
+        cached = self.__dict__.get("_log_z_cache")
+        if cached is None:
+            cached = self._log_normaliser()
+            self.__dict__["_log_z_cache"] = cached
+        return cached
+
+    def _log_normaliser(self) -> float:
         g, tau = self.gamma, self.tau_m
         if self.epsilon == 0 and self.cubic == 0 and self.stribeck is None:
             # integral_0^inf exp(-v^2/(2 s^2) - b v) dv = s sqrt(2 pi) exp(b^2 s^2/2) Phi(-b s)
