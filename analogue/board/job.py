@@ -150,6 +150,9 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
                                        t_end=st.t_end, replicas=st.pair_replicas, seed=seed + 3,
                                        sample_dt=SAMPLE_DT)
     band = budget.jackknife_difference(fn, col, white)
+    log("board: noise-chain design study (DAC rate, Bessel corner)")
+    study = bandwidth_study(model, fn, seed=seed + 3, replicas=min(128, st.pair_replicas),
+                            t_end=min(20.0, st.t_end), v0=list(exp.v0))
     rows, _circ = budget.board_comparisons(exp.name, design, ens, fn=fn, threshold=thr, taus=taus,
                                           band=band, integ=integ)
 
@@ -226,7 +229,7 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
                        "vendor_opamp": list(vendor) if vendor else None},
         "board": {"spec": design.spec.as_dict(), "kappa": design.kappa,
                   "components": [list(r) for r in design.table()], "notes": list(design.notes)},
-        "trajectory_check": traj,
+        "trajectory_check": traj, "bandwidth_study": study,
         "monte_carlo": mc, "monte_carlo_rate_function": mc_rate, "calibration_errors": cal_err, "sensitivities": sens,
         "matching": matched, "ota": {"ota": ota_obs, "bridge": bridge_same, "settings": ota},
         "boards": boards,
@@ -266,6 +269,24 @@ def summarise_mc(boards: list, ref: dict, exact_req: dict, exact_nom: dict) -> d
                   "predicted": _stats(eff - exact_nom[k]),
                   "after": _stats(obs - ref[k] - (cal - exact_nom[k])),
                   "after_vs_theory": _stats(obs - cal)}
+    return out
+
+
+def bandwidth_study(model, fn, *, seed: int, replicas: int, t_end: float, v0) -> list:
+    """The noise chain's bias (SDE pair, coloured minus white, same increments) for DAC hold
+    times tau_m/100, /200, /400 and Bessel corners 0.25 and 0.5 of the DAC rate: what a faster
+    DAC buys (the stick peak relaxes in epsilon/Delta, a few DAC samples at tau_m/100)."""
+    out = []
+    for per in (100, 200, 400):
+        for fc in (0.25, 0.5):
+            d = design_board(model, BoardSpec(noise_dt=model.tau_m / per, bessel_fc=fc), v0=v0)
+            col, white = budget.bandwidth_pair(d, v0=sample_stationary(d.realised, replicas, seed),
+                                               t_end=t_end, replicas=replicas, seed=seed,
+                                               sample_dt=SAMPLE_DT)
+            diff = budget.jackknife_difference(fn, col, white)
+            out.append({"dac_rate_per_tau": per, "bessel_fc": fc,
+                        **{k: list(v) for k, v in diff.items()
+                           if k in ("mean v", "var v", "P(v>0)", "stick fraction")}})
     return out
 
 

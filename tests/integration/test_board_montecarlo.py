@@ -82,6 +82,7 @@ def test_board_job_writes_every_output(tmp_path):
     metrics = json.loads((out / "metrics.json").read_text())
     validate_metrics(metrics)
     assert len(metrics["boards"]) == 2
+    assert len(metrics["bandwidth_study"]) == 6 and metrics["trajectory_check"]["rms"] < 0.01
     assert "<svg" in (out / "schematic.svg").read_text()
     assert (out / "bom.csv").read_text().startswith("reference,part,value,tolerance,dielectric_or_rating,quantity")
     assert ".control" not in (out / "board.cir").read_text()
