@@ -119,14 +119,15 @@ def _noise_free_run(exp: Experiment, seed: int, kw: dict) -> Ensemble:
     return Ensemble(times, v, x, meta)
 
 
-def _choose(model, spec, replicas: int, t_end: float, kw: dict):
-    """(spec with its tolerances set, replicas per deck) for one run of the report."""
+def _choose(model, spec, replicas: int, t_end: float, kw: dict, check: int):
+    """(spec with its tolerances set, replicas per deck, why) for one run of the report whose
+    integration error is measured on about ``check`` of its paths."""
     from ..circuit.deck_size import choose_deck_size
     from ..circuit.tolerances import resolve_spec
     common = {k: kw[k] for k in ("store", "scheduler") if k in kw}
     workers = kw.get("workers") or os.cpu_count() or 1
     spec, tol = resolve_spec(model, spec, replicas=replicas, t_end=t_end, workers=workers,
-                             **common)
+                             check_replicas=min(check, replicas), **common)
     deck = choose_deck_size(model, spec, replicas=replicas, t_end=t_end, workers=workers,
                             **common)
     return spec, deck.replicas_per_deck, {"tolerances": tol.as_dict(),
@@ -166,8 +167,10 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
     # gets the tolerances its own size calls for (circuit.tolerances) and the deck size that
     # makes it fastest (circuit.deck_size); both are recorded in the ensembles' meta.
     n_stat = settings.stationary_replicas
-    trans_spec, trans_deck, trans_why = _choose(model, spec, replicas, exp.t_end, kw)
-    stat_spec, stat_deck, stat_why = _choose(model, spec, n_stat, settings.stationary_t_end, kw)
+    check = settings.check_replicas
+    trans_spec, trans_deck, trans_why = _choose(model, spec, replicas, exp.t_end, kw, check)
+    stat_spec, stat_deck, stat_why = _choose(model, spec, n_stat, settings.stationary_t_end, kw,
+                                             check)
 
     transition = {}
     for i, v0 in enumerate(exp.v0):

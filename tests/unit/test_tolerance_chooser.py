@@ -156,3 +156,18 @@ def test_spec_validates_trtol_and_accepts_unset():
             CircuitSpec(trtol=bad)
     with pytest.raises(ValueError, match="method"):
         CircuitSpec(method="euler")
+
+
+def test_a_measured_check_counts_its_own_noise():
+    # sd(d)/sigma = 0.02: fine for the run itself (0.02 <= 0.1), but a check of 25 of 100 paths
+    # books |mean d| + 2 SE with SE = sd/sqrt(25): 0.02 (1 + 2) sqrt(100/25) = 0.12 > 0.1
+    res = [_result(LOOSE, 0.0, 1.0, sd=0.02), _result(FINE, 0.0, 3.0, sd=0.005)]
+    best, met, _, ratio = tl.select(res, replicas=100, t_end=1.0, t_cal=1.0, fraction=0.1)
+    assert best.tolerances == LOOSE and ratio == pytest.approx(0.02)
+    best, met, _, ratio = tl.select(res, replicas=100, t_end=1.0, t_cal=1.0, fraction=0.1,
+                                    check_replicas=25)
+    assert best.tolerances == FINE and met and ratio == pytest.approx(0.005 * 3 * 2)
+    # a check as large as the run: factor 3
+    best, _, _, ratio = tl.select(res, replicas=100, t_end=1.0, t_cal=1.0, fraction=0.1,
+                                  check_replicas=100)
+    assert best.tolerances == LOOSE and ratio == pytest.approx(0.06)
