@@ -32,7 +32,7 @@ def test_coarse_tolerance_rejected_by_measurement(monkeypatch, tmp_path):
 
 
 def test_choices_recorded_in_meta(tmp_path):
-    kw = dict(v0=0.3, t_end=1.0, replicas=4, seed=3, store=tmp_path, progress=False)
+    kw = {"v0": 0.3, "t_end": 1.0, "replicas": 4, "seed": 3, "store": tmp_path, "progress": False}
     user = analogue.simulate(STICK, circuit=CircuitSpec(reltol=3e-4, trtol=10.0, method="trap"),
                              replicas_per_deck=2, **kw)
     t = user.meta["tolerances"]

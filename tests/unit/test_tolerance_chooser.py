@@ -11,7 +11,12 @@ import pytest
 
 from analogue import Model
 from analogue.circuit import tolerances as tl
-from analogue.circuit.mapping import FIXED_METHOD, FIXED_RELTOL, FIXED_TRTOL, CircuitSpec
+from analogue.circuit.mapping import (
+    FIXED_METHOD,
+    FIXED_RELTOL,
+    FIXED_TRTOL,
+    CircuitSpec,
+)
 from analogue.ensemble import Ensemble
 
 STICK = Model(1.0, 0.7, 0.2, 10.0)
