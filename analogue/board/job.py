@@ -114,8 +114,8 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
                          "noise-free equations in tests/integration/test_board_spring.py")
     seed = exp.seed if seed is None else seed
     out = Path(out)
+    design = design_board(model, BoardSpec(), v0=list(exp.v0))   # refuses before anything is written
     out.mkdir(parents=True, exist_ok=True)
-    design = design_board(model, BoardSpec(), v0=list(exp.v0))
     thr = 0.1 * model.velocity_scale   # the paper report's stick threshold
     taus = (1.0,)
     fn = budget.observables_fn(model, burn_in=st.burn_in, threshold=thr, taus=taus)

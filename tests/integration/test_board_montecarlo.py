@@ -92,6 +92,10 @@ def test_board_cli_refuses_unknown_experiment(tmp_path):
     res = CliRunner().invoke(main, ["board", "no_such_experiment", "--out", str(tmp_path)])
     assert res.exit_code == 2
     assert "experiment" in res.output
+    # a family member the board does not build: one line naming the parameter, nothing written
+    res = CliRunner().invoke(main, ["board", "cubic", "--out", str(tmp_path / "cubic")])
+    assert res.exit_code == 2 and "cubic" in res.output
+    assert not (tmp_path / "cubic").exists()
 
 
 def test_vendor_model_file_is_validated_and_used(tmp_path):
