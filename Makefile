@@ -4,13 +4,13 @@ PY     := $(VENV)/bin/python
 OUT    ?= report
 PAPER_FLAGS ?= --quick
 
-.PHONY: setup setup-test paper test netlists clean
+.PHONY: setup setup-test paper test test-fast lint netlists clean
 
 $(VENV)/.installed: pyproject.toml
 	scripts/install-system.sh
 	python3 -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
-	$(PY) -m pip install -q -e '.[test]'
+	$(PY) -m pip install -q -e '.[test,lint]'
 	touch $@
 
 setup: $(VENV)/.installed
@@ -23,6 +23,16 @@ paper: setup
 
 test: setup-test
 	$(PY) -m pytest -n 2 --dist loadgroup -q
+
+# The edit loop: everything not marked slow (no long ngspice or statistical runs).
+test-fast: setup-test
+	$(PY) -m pytest -n 2 --dist loadgroup -q -m "not slow"
+
+# ruff (pyflakes, pycodestyle, bugbear, pyupgrade) and mypy (strict on theory/ and
+# estimators/, basic elsewhere): configured in pyproject.toml.
+lint: setup
+	$(PY) -m ruff check analogue tests benchmarks scripts setup.py
+	$(PY) -m mypy
 
 netlists: setup
 	$(VENV)/bin/analogue netlist

@@ -17,6 +17,7 @@ from pathlib import Path
 import click
 
 from .model import Model
+from datetime import UTC
 
 EXIT_USAGE = 2
 EXIT_FAILURE = 1
@@ -106,7 +107,7 @@ class _Group(click.Group):
         except click.Abort as exc:
             cause = exc.__cause__
             if _debug() and cause is not None and not isinstance(cause, KeyboardInterrupt):
-                raise cause
+                raise cause from None  # --debug: the original traceback, not click's Abort
             if cause is not None and not isinstance(cause, KeyboardInterrupt):
                 click.echo(f"analogue: error: {error_line(cause)}", err=True)
                 sys.exit(exit_code(cause))
@@ -152,7 +153,8 @@ def _floats(text, name: str):
     try:
         vals = [float(s) for s in text.split(",") if s.strip()]
     except ValueError:
-        raise click.BadParameter(f"expected comma-separated numbers, got {text!r}", param_hint=name)
+        raise click.BadParameter(f"expected comma-separated numbers, got {text!r}",
+                                 param_hint=name) from None
     if not vals or not all(math.isfinite(v) for v in vals):
         raise click.BadParameter("expected finite numbers", param_hint=name)
     return vals
@@ -370,8 +372,8 @@ _store_option = click.option(
 def _when(t) -> str:
     if not t:
         return "-"
-    from datetime import datetime, timezone
-    return datetime.fromtimestamp(float(t), timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    from datetime import datetime
+    return datetime.fromtimestamp(float(t), UTC).strftime("%Y-%m-%d %H:%M UTC")
 
 
 @store.command("ls")

@@ -1,6 +1,5 @@
 """The command line: help on every subcommand, theory queries, netlist check, one-line errors."""
 import json
-import os
 import subprocess
 import sys
 from pathlib import Path

@@ -182,7 +182,7 @@ def test_mapping_interface():
     assert dict(s) == d and s["variance"] == s.variance and len(s) == 8
     with pytest.raises(KeyError):
         s["nope"]
-    with pytest.raises(Exception):
+    with pytest.raises(AttributeError):
         s.mean = 1.0  # frozen
 
 

@@ -118,7 +118,7 @@ def test_table_rows_have_units_and_meanings():
     rows = map_model(STICK, CircuitSpec(diode="1N4148")).table()
     names = [r[0] for r in rows]
     assert len(names) == len(set(names))
-    for name, value, unit, meaning in rows:
+    for _name, value, unit, meaning in rows:
         assert math.isfinite(value) and unit and meaning
     assert {"R", "C", "I_Delta", "I_F", "kappa", "theta", "N", "noise_stddev", "noise_TS"} <= set(names)
 

@@ -162,10 +162,14 @@ def integrate_model(model, v0, held, h, sub=20):
     for k in range(held.shape[1]):
         f = lambda u: model.drift(u) + held[:, k]
         for _ in range(sub):
-            k1 = f(v); k2 = f(v + dt / 2 * k1); k3 = f(v + dt / 2 * k2); k4 = f(v + dt * k3)
+            k1 = f(v)
+            k2 = f(v + dt / 2 * k1)
+            k3 = f(v + dt / 2 * k2)
+            k4 = f(v + dt * k3)
             x = x + dt / 6 * (v + 2 * (v + dt / 2 * k1) + 2 * (v + dt / 2 * k2) + (v + dt * k3))
             v = v + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        V.append(v.copy()); X.append(x.copy())
+        V.append(v.copy())
+        X.append(x.copy())
     return np.array(V).T, np.array(X).T
 
 
@@ -200,7 +204,8 @@ def test_noise_is_reproducible_gaussian_and_independent(tmp_path):
     m = map_model(STICK)
     replicas, t_end = 8, 2.0
     deck = build_deck(m, replicas=replicas, v0=np.zeros(replicas), t_end=t_end, seed=99, sample_dt=0.01)
-    (tmp_path / "a").mkdir(); (tmp_path / "b").mkdir(); (tmp_path / "c").mkdir()
+    for name in ("a", "b", "c"):
+        (tmp_path / name).mkdir()
     t1, v1, _, nz1 = run(deck, tmp_path / "a")
     t2, v2, _, nz2 = run(deck, tmp_path / "b")
     assert np.array_equal(t1, t2) and np.array_equal(v1, v2) and np.array_equal(nz1, nz2)

@@ -1,7 +1,6 @@
 """Reports: metrics schema, the self-contained page, and the quick paper run end to end
 (including the page loading in headless Chromium, with a screenshot kept as a test artefact)."""
 import json
-import math
 import os
 import re
 import shutil
@@ -9,7 +8,6 @@ import subprocess
 import sys
 from pathlib import Path
 
-import numpy as np
 import pytest
 from scipy import stats
 

@@ -185,7 +185,7 @@ def gradients(design: BoardDesign, observe, rel: float = 0.01) -> tuple[dict, di
     from ..circuit.mapping import stationary_std
     steps = rel * np.where(x0 != 0, np.abs(x0), stationary_std(real))
     grads = {k: np.zeros(len(PARAMS)) for k in base}
-    for j, name in enumerate(PARAMS):
+    for j in range(len(PARAMS)):
         vals = []
         for sgn in (1.0, -1.0):
             x = x0.copy()

@@ -239,7 +239,7 @@ class CircuitSpec:
         if self.shot_width is not None:
             object.__setattr__(self, "shot_width", validation.positive(self.shot_width, "shot_width"))
 
-    def replace(self, **changes) -> "CircuitSpec":
+    def replace(self, **changes) -> CircuitSpec:
         return replace(self, **changes)
 
     def as_dict(self) -> dict:
@@ -419,7 +419,7 @@ class CircuitMapping:
                      gamma=(ck**2 / (self.theta * self.noise_D) if self.noise_D > 0 else math.inf),
                      mass=self.model.mass, epsilon=self.eps_volts / self.kappa, **extra)
 
-    def without_noise(self) -> "CircuitMapping":
+    def without_noise(self) -> CircuitMapping:
         """The same circuit (components, parts) with every noise source off: the Gaussian
         source's amplitude zero (the deck then has no trrandom source) and no shot kicks; the
         noise-free motion of these very components (paper Fig. 1)."""

@@ -346,7 +346,7 @@ def bridge_dc_deck(mapping: CircuitMapping, v_max: float, points: int = 201) -> 
     step = 2.0 * v_max / (points - 1)
     lines = [str(circuit).rstrip("\n"),
              # tight tolerances: the test compares with the closed form to 1e-5 of I_Delta
-             f".options reltol=1e-9 abstol=1e-18 vntol=1e-12 temp=27 tnom=27",
+             ".options reltol=1e-9 abstol=1e-18 vntol=1e-12 temp=27 tnom=27",
              f".dc vs {_spice_value(-v_max)} {_spice_value(v_max + 0.5 * step)} {_spice_value(step)}", ".end"]
     return "\n".join(lines) + "\n"
 

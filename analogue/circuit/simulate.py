@@ -30,7 +30,7 @@ import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field, is_dataclass
 from numbers import Integral, Real
-from typing import TYPE_CHECKING, Any, Literal, Protocol, Union, overload, runtime_checkable
+from typing import TYPE_CHECKING, Any, Literal, Protocol, overload, runtime_checkable
 
 import numpy as np
 
@@ -108,6 +108,11 @@ def _bool(name, value, *, allow_none=False) -> bool | None:
         raise ArgumentTypeError(f"{name} must be True or False"
                                 + (" or None (auto)" if allow_none else "") + f", got {value!r}")
     return value
+
+
+def _flag(name: str, value: object) -> bool:
+    """True or False, nothing else (TypeError naming ``name``)."""
+    return bool(_bool(name, value))
 
 
 def _grid_intervals(t_end: float, sample_dt: float, dt_label: str = "") -> int:
@@ -278,7 +283,7 @@ def run_batch(task: BatchTask) -> dict:
                 if ln.strip() and "warning" in ln.lower()]
     info = {"wall_time": res.wall_time, "raw_points": int(res.plot.n_points),
             "ngspice_version": res.version, "warnings": warnings[:20]}
-    out = {"v": v, "x": x, "info": info}
+    out: dict[str, Any] = {"v": v, "x": x, "info": info}
     if task.xs_names:
         out["x_spring"] = _ng.resample(res.plot, task.xs_names, t_s,
                                        initial=np.full(len(task.xs_names), task.xs_initial))
@@ -645,6 +650,39 @@ def _check_sizes(*, mapping, replicas, per_deck, workers, t_end, sample_dt, dt_l
                              f"on a larger disk, or pass store=False (results in memory only)")
 
 
+@overload
+def simulate(model: Model, *, v0: float | ArrayLike | Literal["stationary"], t_end: float,
+             replicas: int, seed: int, sample_dt: float | None = None,
+             circuit: CircuitSpec | Mapping[str, Any] | None = None, workers: int | None = None,
+             replicas_per_deck: int | None = None,
+             store: str | PathLike[str] | bool | None = None, progress: bool | None = None,
+             label: str | None = None, timeout: float = DEFAULT_TIMEOUT,
+             scheduler: str | None = None, executor: cf.Executor | Any | None = None,
+             return_noise: Literal[False] = False, return_records: Literal[False] = False) -> Ensemble: ...
+
+
+@overload
+def simulate(model: Model, *, v0: float | ArrayLike | Literal["stationary"], t_end: float,
+             replicas: int, seed: int, sample_dt: float | None = None,
+             circuit: CircuitSpec | Mapping[str, Any] | None = None, workers: int | None = None,
+             replicas_per_deck: int | None = None,
+             store: str | PathLike[str] | bool | None = None, progress: bool | None = None,
+             label: str | None = None, timeout: float = DEFAULT_TIMEOUT,
+             scheduler: str | None = None, executor: cf.Executor | Any | None = None,
+             return_noise: Literal[True], return_records: Literal[False] = False) -> tuple[Ensemble, np.ndarray]: ...
+
+
+@overload
+def simulate(model: Model, *, v0: float | ArrayLike | Literal["stationary"], t_end: float,
+             replicas: int, seed: int, sample_dt: float | None = None,
+             circuit: CircuitSpec | Mapping[str, Any] | None = None, workers: int | None = None,
+             replicas_per_deck: int | None = None,
+             store: str | PathLike[str] | bool | None = None, progress: bool | None = None,
+             label: str | None = None, timeout: float = DEFAULT_TIMEOUT,
+             scheduler: str | None = None, executor: cf.Executor | Any | None = None,
+             return_noise: Literal[False] = False, return_records: Literal[True]) -> tuple[Ensemble, dict[str, Any]]: ...
+
+
 def simulate(model: Model, *, v0: float | ArrayLike | Literal["stationary"], t_end: float,
              replicas: int, seed: int, sample_dt: float | None = None,
              circuit: CircuitSpec | Mapping[str, Any] | None = None, workers: int | None = None,
@@ -653,7 +691,7 @@ def simulate(model: Model, *, v0: float | ArrayLike | Literal["stationary"], t_e
              label: str | None = None, timeout: float = DEFAULT_TIMEOUT,
              scheduler: str | None = None, executor: cf.Executor | Any | None = None,
              return_noise: bool = False, return_records: bool = False
-             ) -> Ensemble | tuple[Ensemble, Any]:
+             ) -> Ensemble | tuple[Ensemble, np.ndarray] | tuple[Ensemble, dict[str, Any]]:
     """Simulate ``replicas`` trajectories of the stick-slip model (eqs. bm, U_pot) in ngspice.
 
     Parameters
@@ -748,7 +786,7 @@ def simulate(model: Model, *, v0: float | ArrayLike | Literal["stationary"], t_e
     timeout = _real("timeout", timeout)
     progress = _bool("progress", progress, allow_none=True)
     if label is None:
-        where = v0 if isinstance(v0, str) else (f"{float(v0):g}" if np.ndim(v0) == 0
+        where = v0 if isinstance(v0, str) else (f"{float(np.asarray(v0)):g}" if np.ndim(v0) == 0
                                                 else "given")
         label = f"{model.regime}, gamma={model.gamma:g}, v0={where}, seed {seed}"
     elif not isinstance(label, str):
@@ -757,8 +795,8 @@ def simulate(model: Model, *, v0: float | ArrayLike | Literal["stationary"], t_e
     elif not label.isprintable() or len(label) > 100:
         raise ValueError(f"label must be a printable str of at most 100 characters, got "
                          f"{label!r}")
-    return_noise = _bool("return_noise", return_noise)
-    return_records = _bool("return_records", return_records)
+    return_noise = _flag("return_noise", return_noise)
+    return_records = _flag("return_records", return_records)
     if return_noise and return_records:
         raise ValueError("return_noise and return_records cannot both be True")
     if return_noise:

@@ -100,6 +100,6 @@ def stick_time(model, v0: float) -> float:
     if model.epsilon > 0:
         return math.inf
     t_end = 1e4 * model.tau_m
-    for ta, tb, (kind, obj) in _segments(model, v0, model.x0, t_end):
-        return tb if tb < t_end else math.inf
+    for _, tb, _ in _segments(model, v0, model.x0, t_end):
+        return tb if tb < t_end else math.inf  # the first segment's end: the first stop
     return math.inf

@@ -54,7 +54,7 @@ class Grid:
         return -self.i_min
 
     @classmethod
-    def span(cls, lo: float, hi: float, h: float) -> "Grid":
+    def span(cls, lo: float, hi: float, h: float) -> Grid:
         """Smallest grid of spacing h covering [lo, hi] (extended to contain 0 inside)."""
         return cls(h, min(int(math.floor(lo / h)), -1), max(int(math.ceil(hi / h)), 1))
 

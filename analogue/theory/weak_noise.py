@@ -88,7 +88,7 @@ class _Frame:
     flip: float
 
     @classmethod
-    def of(cls, model: Model) -> "_Frame":
+    def of(cls, model: Model) -> _Frame:
         if not isinstance(model, Model):
             raise ValueError(f"model must be an analogue.Model, got {type(model).__name__}")
         if model.cubic or model.stribeck is not None or model.spring or model.shot is not None:
@@ -284,8 +284,8 @@ def _solve(fr: _Frame, v, T, v0):
                 act, t1, t2 = _twice(fr, s0, v0, v, T)
                 best.offer(act + inf, _TWICE, s0, s1, t_1=t1, t_2=t2)
     if not np.all(np.isfinite(best.action)):
-        raise RuntimeError("no admissible optimal path found (please report: v0=%r, T=%r)"
-                           % (v0, T))
+        raise RuntimeError(f"no admissible optimal path found (please report: v0={v0!r}, "
+                           f"T={T!r})")
     return best
 
 

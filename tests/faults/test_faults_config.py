@@ -391,8 +391,9 @@ def test_wheel_ships_the_standard_circuits(tmp_path):
         z.extractall(site)
     for src in (ROOT / "circuits").glob("*.toml"):
         assert (site / "analogue" / "circuits" / src.name).read_bytes() == src.read_bytes()
-    code = ("import analogue.circuit.experiments as E; assert str(E.__file__).startswith(%r); "
-            "print(sorted(E.load_experiment(n).name for n in E.PAPER_EXPERIMENTS))" % str(site))
+    code = (f"import analogue.circuit.experiments as E; assert str(E.__file__).startswith("
+            f"{str(site)!r}); "
+            "print(sorted(E.load_experiment(n).name for n in E.PAPER_EXPERIMENTS))")
     run = tmp_path / "elsewhere"
     run.mkdir()
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300,

@@ -8,7 +8,7 @@ from scipy import integrate, special
 
 from analogue import Model, ShotNoise
 from analogue.theory import exact, family
-from analogue.theory.kolmogorov_feller import banded_jump_kernel, jump_kernel, premultiplier, shot_generator
+from analogue.theory.kolmogorov_feller import banded_jump_kernel, jump_kernel, premultiplier
 
 INF = math.inf
 
