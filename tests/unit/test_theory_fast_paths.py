@@ -154,3 +154,20 @@ def test_work_variance_all_windows_from_one_autocorrelation():
         ws.work_variance(m, taus, n=80)
     with pytest.raises(ValueError, match="taus"):
         ws.work_variance(m, [0.0])
+
+
+def test_sweep_past_the_stick_slide_jump_reaches_the_sliding_parabola():
+    """gamma = 100, a = 0.5 (the open-question grid): beyond the tangent point |v| = tau_m
+    (Delta + a) the ground state is the sliding state of the v < 0 branch, an OU process with
+    force a + Delta, whose rate function is exactly eq. Iw (up to the kink's exp(-gamma ...)
+    tail).  A Legendre root that started from a Richardson pair mixing the two states at the
+    jump once stayed on the time-sharing line there (0.01 and 0.05 too low)."""
+    m = _m(0.5, 100.0)
+    w = np.linspace(-1.2, 1.2, 21)
+    rate = ws.rate_function(m, w)
+    far = (w / m.force) <= -1.6
+    assert far.sum() == 4
+    np.testing.assert_allclose(rate[far], ws.paper_rate_function(m, w[far]), atol=1e-6)
+    # convex; on the time-sharing line every root sits on the jump of lambda', located to
+    # ~1e-3 in k, which leaves second differences of I down to -1.1e-6 (measured)
+    assert np.all(np.diff(rate, 2) > -5e-6)
