@@ -384,11 +384,12 @@ def scgf(model: Model, k, *, h: float | None = None, mesh: str = "auto"):
 
     ``mesh``: "uniform" (spacing h everywhere: 10^4 - 10^5 nodes at gamma >= 100), "graded"
     (spacing h only in the kink zone around v = 0, 20 nodes per width sqrt(tau_m/gamma) where
-    the ground state can sit, growing in between: ~1000 - 3000 nodes at any gamma, see
+    the ground state can sit, growing in between: ~2000 - 4600 nodes at any gamma, see
     :func:`_graded_nodes`) or "auto" (uniform while it has at most 6000 nodes, e.g. gamma =
     10; graded beyond).  Measured against the uniform grid (tau_m = Delta = 1, a = 0.5 and
-    1.5, |k| <= gamma): relative differences <= 4e-10 (gamma = 100, 1000, a = 0.5) and
-    <= 2e-6 (a = 1.5, large negative tilts), at 10-100x less cost for gamma = 100-1000.
+    1.5, k = -gamma .. gamma): relative differences <= 3e-9 at gamma = 100 and 1000, with
+    3-35x fewer nodes (the uniform grid fails for sliding states of stronger negative tilts,
+    see benchmarks/README.md).
     """
     return _scgf_and_derivative(model, k, h, mesh)[0]
 
