@@ -46,7 +46,7 @@ import math
 import numbers
 from collections.abc import Mapping
 from dataclasses import KW_ONLY, dataclass, field, replace
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from scipy import integrate, optimize, special
@@ -271,8 +271,8 @@ class Model:
     def as_dict(self) -> dict:
         """JSON-ready parameters; ``Model(**m.as_dict()) == m``.  The extension fields appear
         only when they differ from their defaults, so the paper's model keeps its keys."""
-        d = {"tau_m": self.tau_m, "delta": self.delta, "a": self.a, "gamma": self.gamma,
-             "mass": self.mass, "epsilon": self.epsilon}
+        d: dict[str, Any] = {"tau_m": self.tau_m, "delta": self.delta, "a": self.a,
+                             "gamma": self.gamma, "mass": self.mass, "epsilon": self.epsilon}
         if self.cubic != 0:
             d["cubic"] = self.cubic
         if self.stribeck is not None:

@@ -264,7 +264,7 @@ def design_board(model: Model, spec: BoardSpec | None = None, v0=()) -> BoardDes
 
     i_total = model.delta * ck / theta
     i0 = i_total - 2.0 * part.IS            # the bridge amplitude is I_0 + 2 IS
-    r_visc = 1.0 / (cap / (model.tau_m * theta) - 2.0 / part.rp)  # diode leakage rp/2 in parallel
+    r_visc = 1.0 / (cap / (model.tau_m * theta) - (2.0 / part.rp if part.rp else 0.0))  # diode leakage rp/2 in parallel
     i_force = abs(model.a) * ck / theta
     d_i = ck ** 2 / (theta * model.gamma)
     r_noise = spec.dac_rms * math.sqrt(noise_ts / (2.0 * d_i))
@@ -287,7 +287,7 @@ def design_board(model: Model, spec: BoardSpec | None = None, v0=()) -> BoardDes
     rounding = {k: (values[k] / ideal[k] - 1.0) if math.isfinite(ideal[k]) else 0.0 for k in ideal}
 
     # what the rounded board implements (ideal op-amps; offsets are tolerances, not design)
-    r_tot = 1.0 / (1.0 / values["R"] + 2.0 / part.rp)
+    r_tot = 1.0 / (1.0 / values["R"] + (2.0 / part.rp if part.rp else 0.0))
     i_amp = spec.v_set / values["R_S"] + 2.0 * part.IS
     a_real = (spec.v_force / values["R_F"]) * theta / ck if i_force > 0 else 0.0
     if model.a < 0:

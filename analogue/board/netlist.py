@@ -208,10 +208,11 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
     lines.append(f".options reltol={_n(reltol)} abstol=1e-12 vntol=1e-7 method=gear "
                  f"temp={_n(b.temperature)} tnom=27")
     spring = "R_K" in val_
-    vectors = {"v": [f"v(o{j})" for j in range(v0.size)],
-               "x": [f"v(ox{j})" for j in range(v0.size)] if spring else None}
+    v_names = [f"v(o{j})" for j in range(v0.size)]
+    x_names = [f"v(ox{j})" for j in range(v0.size)] if spring else None
+    vectors = {"v": v_names, "x": x_names}
     if not save_all:
-        lines.append(".save " + " ".join(vectors["v"] + (vectors["x"] or [])))
+        lines.append(".save " + " ".join(v_names + (x_names or [])))
     max_step = ts / 2.0
     lines.append(f".tran {_n(sample_dt * theta)} {_n(t_end * theta)} 0 {_n(max_step)}")
     lines.append(".end")

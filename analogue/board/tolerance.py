@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
@@ -152,7 +153,7 @@ def effective_model(design: BoardDesign, b: BoardInstance) -> Model:
     is_mean = part.IS * float(np.mean(b.diode_is))
     i_f = (b.v_force + amp["int"].vos) / v["R_F"] if math.isfinite(v["R_F"]) else 0.0
     i_f -= amp["int"].ib
-    r_tot = 1.0 / (1.0 / v["R"] + 2.0 / part.rp)
+    r_tot = 1.0 / (1.0 / v["R"] + (2.0 / part.rp if part.rp else 0.0))
     temp_k = b.temperature + 273.15
     eps_v = 2.0 * part.N * thermal_voltage(temp_k) + part.RS * 0.5 * (i_top + i_bot)
     d_i = (design.spec.dac_rms / v["R_N"]) ** 2 * design.noise_ts / 2.0
@@ -203,14 +204,11 @@ def sensitivities(design: BoardDesign, tol: Tolerances, *, boards: int, seed: in
     shift, over ``boards`` drawn boards, of every observable, propagated linearly through
     ``grads`` (:func:`gradients`) from the boards' effective models and read-out offsets."""
     x0 = _vector(design, design.realised, 0.0)
-    out = {}
+    out: dict[str, dict[str, Any]] = {}
     for cls in (*CLASSES, "all"):
         t = tol if cls == "all" else tol.only(cls)
-        dx = []
-        for i in range(boards):
-            b = draw_board(design, t, seed, i)
-            dx.append(_vector(design, effective_model(design, b), readout_offset(design, b)) - x0)
-        dx = np.array(dx)
+        dx = np.array([_vector(design, effective_model(design, b), readout_offset(design, b)) - x0
+                       for b in (draw_board(design, t, seed, i) for i in range(boards))])
         out[cls] = {k: {"std": float(np.std(dx @ g, ddof=1)), "mean_shift": float(np.mean(dx @ g))}
                     for k, g in grads.items()}
         out[cls]["_params_std"] = {p: float(np.std(dx[:, j], ddof=1)) for j, p in enumerate(PARAMS)}

@@ -29,7 +29,8 @@ def reference_paths(design: BoardDesign, *, seed: int, replicas, v0, t_end: floa
     replicas = [int(r) for r in replicas]
     v0 = np.broadcast_to(np.asarray(v0, dtype=float), (len(replicas),)).copy()
     n = int(np.ceil(t_end * design.theta / design.noise_ts)) + 2
-    etas, tt = [], None
+    etas: list[np.ndarray] = []
+    tt = np.zeros(1)
     for r in replicas:
         seq = noise_chain.dac_sequence(design, seed, r, n)
         tf, cur = noise_chain.chain_current(design.values, np.concatenate([[0.0], seq]),

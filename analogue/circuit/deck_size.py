@@ -74,7 +74,7 @@ class DeckSizeChoice:
         d = {"replicas_per_deck": self.replicas_per_deck, "source": self.source}
         if self.points_per_hold:
             d["points_per_hold"] = {str(k): v for k, v in self.points_per_hold.items()}
-            d["predicted_job_s"] = {str(k): v for k, v in self.predicted_s.items()}
+            d["predicted_job_s"] = {str(k): v for k, v in (self.predicted_s or {}).items()}
         return d
 
 

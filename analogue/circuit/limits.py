@@ -116,10 +116,10 @@ class Estimate:
 def estimate(*, replicas: int, n_times: float, n_hold: float, per_deck: int, workers: int,
              raw_points: float, n_decks: int) -> Estimate:
     """See the module docstring; all arguments are counts (floats allowed: no overflow)."""
-    replicas, per_deck = float(replicas), float(min(per_deck, replicas))
-    arrays = replicas * (2.0 * n_times + n_hold) * 8.0
-    raw = 2.0 * raw_points * (1.0 + 3.0 * per_deck) * 8.0
-    decks_text = float(n_decks) * 700.0 + replicas * 140.0
+    n_replicas, deck = float(replicas), float(min(per_deck, replicas))
+    arrays = n_replicas * (2.0 * n_times + n_hold) * 8.0
+    raw = 2.0 * raw_points * (1.0 + 3.0 * deck) * 8.0
+    decks_text = float(n_decks) * 700.0 + n_replicas * 140.0
     memory = 2.0 * arrays + float(min(workers, n_decks)) * raw + decks_text
     stored = arrays + float(n_decks) * (n_times * 8.0 + 2048.0) + decks_text
     return Estimate(arrays=arrays, memory=memory, stored=stored)

@@ -76,6 +76,7 @@ The model family (issue 9; force-current analogy, current per unit acceleration
 from __future__ import annotations
 
 import math
+from typing import Any
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -400,7 +401,7 @@ class CircuitMapping:
         """The model the component values implement (inverse of the mapping formulas)."""
         ck = self.capacitance * self.kappa
         delta = self.theta * self.i_delta_total / ck
-        extra = {}
+        extra: dict[str, Any] = {}
         if self.stribeck_volts > 0:
             extra["stribeck"] = (delta + self.theta * self.i_stribeck / ck,
                                  self.stribeck_volts / self.kappa)
@@ -478,6 +479,7 @@ class CircuitMapping:
                      ("H_x", self.x_spring_gain, "V/A", "readback: V(xs) = H_x I_L = position (1 V per unit)")]
         if self.shot_charge > 0:
             sh = self.model.shot
+            assert sh is not None  # shot_charge > 0 only for shot-noise models
             rows += [("shot_rate", sh.rate, "1/model time", "kick rate (numpy Poisson times, seeded)"),
                      ("shot_mean", sh.mean, "velocity", "mean jump (exponential sizes)"),
                      ("Q_kick", self.shot_charge, "C", "charge per unit velocity jump, C kappa"),
@@ -609,8 +611,10 @@ def _spring_leak(model: Model, tau_leak: float) -> dict:
     a_eff = model.a + (model.shot.rate * model.shot.mean
                        if model.shot is not None and not model.shot.two_sided else 0.0)
     creep = abs(a_eff) / (k * tau_leak + 1.0 / tau)
-    # frictionless velocity spread sqrt(tau_m/gamma) (Gaussian), else the mean jump
-    spread = model.velocity_scale if math.isfinite(model.gamma) else model.shot.mean
+    # frictionless velocity spread sqrt(tau_m/gamma) (Gaussian), else the mean jump (a model
+    # with gamma = inf is noisy only through its shot noise)
+    spread = (model.velocity_scale if math.isfinite(model.gamma) or model.shot is None
+              else model.shot.mean)
     return {"spring_leak_time": tau_leak,
             "spring_leak_var_v": float(abs(leaky[0, 0] / ideal[0, 0] - 1.0)),
             "spring_leak_var_x": float(abs(leaky[1, 1] / ideal[1, 1] - 1.0)),
@@ -655,7 +659,7 @@ def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
     # --- kappa (volts per unit velocity) and the tanh width
     if spec.volts_per_velocity is not None:
         kappa = spec.volts_per_velocity
-    elif real:
+    elif part is not None:
         # eps_V = 2 N V_T + RS (I0 + 2 IS) with I0 ~ Delta(0) C kappa/theta at the kink;
         # solve eps_V = kappa eps.
         rs_width = part.RS * delta0 * cap / theta
@@ -679,7 +683,7 @@ def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
     if element is None:
         i_delta, emission, eps_volts = 0.0, None, 0.0
     elif element == "diode-bridge":
-        if real:
+        if part is not None:
             i_delta = i_delta_total - 2.0 * part.IS
             if not i_peak - 2.0 * part.IS > 0:
                 what = "Delta" if model.stribeck is None else "max(Delta, delta_s)"
@@ -710,6 +714,7 @@ def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
     g_extra = 2.0 / part.rp if (part is not None and part.rp) else 0.0
     g_r = 1.0 / r_total - g_extra
     if not g_r > 0:
+        assert part is not None and part.rp  # g_r <= 0 only with the parts' conductance
         raise ValueError(f"tau_m={model.tau_m} needs R_total={r_total:.3g} ohm (tau_m theta/C), not below "
                          f"the {part.name} bridge's leakage resistance rp/2={part.rp / 2:.3g} ohm; raise "
                          f"capacitance or lower time_scale")
@@ -780,8 +785,10 @@ def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
         bias["cubic_force"] = network.max_error
         if gaussian and model.spring == 0:
             rest = model.replace(cubic=0.0)
-            bias["cubic_variance"] = abs(nl.cubic_budget(
-                network, kappa, i_unit, _sgn_law(rest).potential, model.gamma, (v_lo, v_hi)))
+            change = nl.cubic_budget(network, kappa, i_unit, _sgn_law(rest).potential,
+                                     model.gamma, (v_lo, v_hi))
+            if change is not None:  # None only for gamma = inf
+                bias["cubic_variance"] = abs(change)
 
     # --- spring: L from v to ground; the inductor current is the spring force current
     inductance = inductor_rs = inductor_ic = x_spring_gain = 0.0

@@ -41,8 +41,8 @@ from PySpice.Spice.Netlist import Circuit, SubCircuit
 
 from . import validation
 from .mapping import CircuitMapping
-from .nonlinear import branch_current
-from .parts import bridge_node_voltages
+from .nonlinear import DiodeNetwork, branch_current
+from .parts import DiodePart, bridge_node_voltages
 from .shot import deck_kicks, pulse_pwl
 
 __all__ = ["Deck", "build_deck", "replica_subcircuit", "bridge_subcircuit"]
@@ -78,6 +78,21 @@ class Deck:
     x_spring_initial: float = 0.0  # value of vectors["x_spring"] at t = 0 (x0)
 
 
+def _bridge_part(mapping: CircuitMapping) -> DiodePart:
+    """The bridge's diode (every diode-bridge mapping has one: an ideal or a vendor part)."""
+    if mapping.part is None:
+        raise ValueError("the mapping has no diode part (no diode-bridge Coulomb element)")
+    return mapping.part
+
+
+def _cubic_network(mapping: CircuitMapping) -> DiodeNetwork:
+    """The cubic breakpoint network (every diode-network cubic element has one)."""
+    if mapping.cubic_network is None:
+        raise ValueError("the mapping has no cubic diode network (cubic element is not "
+                         "'diode-network')")
+    return mapping.cubic_network
+
+
 def _spice_value(x, what="value") -> str:
     return validation.spice_number(x, what)
 
@@ -95,7 +110,7 @@ def bridge_subcircuit(mapping: CircuitMapping) -> SubCircuit:
         sub.BehavioralSource("delta", "p", "n", current_expression=_amplitude_expr(mapping, "t"))
     else:
         sub.I("delta", "p", "n", _spice_value(mapping.i_delta, "I_Delta"))
-    part = mapping.part
+    part = _bridge_part(mapping)
     if part.rp:
         # The vendor models' parallel resistor across each diode.
         sub.R("p1", "t", "p", _spice_value(part.rp, "rp"))
@@ -127,7 +142,7 @@ def _friction_expr(m: CircuitMapping, law: str, node: str = "v") -> str:
 def cubic_subcircuit(mapping: CircuitMapping) -> SubCircuit:
     """The breakpoint network (pin t): per branch j, ``t -- R -- D -- +E_j`` (conducts for
     V > E_j + drop) and its mirror ``t -- R -- D(reversed) -- -E_j``."""
-    net = mapping.cubic_network
+    net = _cubic_network(mapping)
     sub = SubCircuit("cubicnet", "t")
     for j, (r, e) in enumerate(zip(net.resistors, net.biases)):
         sub.R(f"{j}p", "t", f"a{j}", _spice_value(r, f"R_cubic{j}"))
@@ -253,7 +268,8 @@ def build_deck(mapping: CircuitMapping, *, replicas: int, v0, t_end: float, seed
     circuit = Circuit(title)
     bridge = mapping.coulomb_element == "diode-bridge"
     if bridge:
-        circuit.model(_MODEL_NAME, "D", **{k: _spice_value(v, k) for k, v in part.model})
+        circuit.model(_MODEL_NAME, "D", **{k: _spice_value(v, k)
+                                           for k, v in _bridge_part(mapping).model})
         circuit.subcircuit(bridge_subcircuit(mapping))
     net = mapping.cubic_network
     if net is not None:
@@ -265,7 +281,7 @@ def build_deck(mapping: CircuitMapping, *, replicas: int, v0, t_end: float, seed
         circuit.X(f"r{i}", "replica", *[f"{p}{i}" for p in pins])
 
     lines = [str(circuit).rstrip("\n")]
-    kicks = ()
+    kicks: tuple = ()
     if mapping.shot_charge > 0:
         # seeded kicks (analogue.circuit.shot): flat-topped pulses of area C kappa z, width w
         w = mapping.shot_width
@@ -282,11 +298,11 @@ def build_deck(mapping: CircuitMapping, *, replicas: int, v0, t_end: float, seed
         if mapping.stribeck_volts > 0:
             i0 = (mapping.i_delta + mapping.i_stribeck
                   * np.exp(-np.abs(volts) / mapping.stribeck_volts))
-            vpn = [bridge_node_voltages(part, i0[i], volts[i:i + 1]) for i in range(replicas)]
+            vpn = [bridge_node_voltages(_bridge_part(mapping), i0[i], volts[i:i + 1]) for i in range(replicas)]
             vp = np.array([a[0] for a, _ in vpn])
             vn = np.array([b[0] for _, b in vpn])
         else:
-            vp, vn = bridge_node_voltages(part, mapping.i_delta, volts)
+            vp, vn = bridge_node_voltages(_bridge_part(mapping), mapping.i_delta, volts)
         ic += [f"v(xr{i}.xcoulomb.p)={_spice_value(vp[i])} v(xr{i}.xcoulomb.n)={_spice_value(vn[i])}"
                for i in range(replicas)]
     if net is not None:
@@ -333,7 +349,7 @@ def bridge_dc_deck(mapping: CircuitMapping, v_max: float, points: int = 201) -> 
                          "without one); map a model with Delta > 0")
     circuit = Circuit("bridgedc")
     if element == "diode-bridge":
-        circuit.model(_MODEL_NAME, "D", **{k: _spice_value(v, k) for k, v in mapping.part.model})
+        circuit.model(_MODEL_NAME, "D", **{k: _spice_value(v, k) for k, v in _bridge_part(mapping).model})
         circuit.subcircuit(bridge_subcircuit(mapping))
         circuit.X("coulomb", "bridge", "t")
     elif element == "behavioural":
@@ -362,7 +378,8 @@ def cubic_dc_deck(mapping: CircuitMapping, v_max: float, points: int = 201) -> s
         raise ValueError("mapping has no cubic element to sweep (cubic = 0); map a model with cubic > 0")
     circuit = Circuit("cubicdc")
     if mapping.cubic_element == "diode-network":
-        circuit.model(_CUBIC_MODEL, "D", **{k: _spice_value(v, k) for k, v in mapping.cubic_network.part.model})
+        circuit.model(_CUBIC_MODEL, "D", **{k: _spice_value(v, k)
+                                              for k, v in _cubic_network(mapping).part.model})
         circuit.subcircuit(cubic_subcircuit(mapping))
         circuit.X("cubic", "cubicnet", "t")
     else:

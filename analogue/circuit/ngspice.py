@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import atexit
 import collections
+from typing import Any
 import functools
 import os
 import re
@@ -112,7 +113,7 @@ def find_ngspice() -> str:
 def _one_line(text: str, limit: int = MESSAGE_MAX) -> str:
     """Non-empty lines of ``text`` joined by " | " (whitespace collapsed, consecutive
     duplicates dropped); longer than ``limit``: its start and its end around " ... "."""
-    out = []
+    out: list[str] = []
     for ln in text.splitlines():
         ln = " ".join(ln.split())
         if ln and (not out or out[-1] != ln):
@@ -300,7 +301,7 @@ except (AttributeError, RuntimeError):  # pragma: no cover - other interpreters
 
 # ------------------------------------------------------------------------- signal handling
 _GUARD_LOCK = threading.RLock()
-_GUARD = {"depth": 0, "previous": {}, "raised": False}
+_GUARD: dict[str, Any] = {"depth": 0, "previous": {}, "raised": False}
 _GUARDED_SIGNALS = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP")
                          if hasattr(signal, n))
 
@@ -357,7 +358,7 @@ def _tmp_prefix() -> str:
     return f"{TMP_PREFIX}{host}.{os.getpid()}-"
 
 
-_SWEPT = set()
+_SWEPT: set[bool] = set()  # {True} once the stale temporary directories were swept
 
 
 def sweep_stale_tmp(min_age: float = 60.0) -> int:

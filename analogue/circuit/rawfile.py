@@ -74,8 +74,8 @@ def _count(fields: dict, key: str, label: str, lo: int, hi: int | None = None) -
 def _parse_header(buf: bytes, pos: int):
     """Parse one ASCII header starting at ``pos``; return (fields, names, data_start).
     Every count is checked before use and every step moves forward in ``buf``."""
-    fields = {}
-    names = []
+    fields: dict[str, str] = {}
+    names: list[str] = []
     limit = min(len(buf), pos + _HEADER_MAX)
     while True:
         end = buf.find(b"\n", pos, limit)

@@ -131,7 +131,7 @@ def _content_sha256(key: str, arrays: dict, meta_json: str) -> str:
     return h.hexdigest()
 
 
-def _one_line(text: str, limit: int = 300) -> str:
+def _one_line(text: object, limit: int = 300) -> str:
     text = " ".join(str(text).split())
     return text if len(text) <= limit else text[: limit - 3] + "..."
 

@@ -173,7 +173,7 @@ class CandidateResult:
     def worst(self, replicas: int, t_end: float, t_cal: float,
               check_replicas: int | None = None) -> tuple[str, float]:
         r = self.ratios(replicas, t_end, t_cal, check_replicas)
-        k = max(r, key=r.get)
+        k = max(r, key=lambda name: r[name])
         return k, r[k]
 
 
@@ -359,6 +359,7 @@ def choose_tolerances(model: Model, spec: CircuitSpec | None = None, *, replicas
                          f"{check_replicas!r}")
     unset = spec.unset_tolerances
     if not unset:
+        assert spec.reltol is not None and spec.trtol is not None and spec.method is not None
         return ToleranceChoice(Tolerances(spec.reltol, spec.trtol, spec.method), "user",
                                fraction)
     given = {k: getattr(spec, k) for k in ("reltol", "trtol", "method") if k not in unset}

@@ -78,7 +78,7 @@ def analyse(runs: ExperimentRuns, *, progress=None) -> ExperimentAnalysis:
         n = ens.replicas
         circ = {k: (v, _prob_floor(k, v, se, n)) for k, (v, se) in circ.items()}
         ex = exact_transition(model, v0, times, h=h)
-        dens = {}
+        dens: dict = {}
         ex_eff = exact_transition(model_eff, v0, times, h=h, densities=dens)
         held, white = held_noise_pair(model_eff, v0=v0, t_end=max(times), replicas=MC_REPLICAS,
                                       seed=1000 * exp.seed + 600 + i, noise_dt=noise_dt,
@@ -119,9 +119,9 @@ def analyse(runs: ExperimentRuns, *, progress=None) -> ExperimentAnalysis:
     thr = st.stick_threshold * model.velocity_scale
     taus = [tau for tau in exp.work_taus
             if tau <= st.stationary_t_end - st.stationary_burn_in - 1e-9]
-    fn = lambda e: stationary_values(e, burn_in=st.stationary_burn_in, threshold=thr,
-                                     force=model.force, taus=taus)
-    circ = jackknife(fn, ens)
+    stationary_fn = lambda e: stationary_values(e, burn_in=st.stationary_burn_in, threshold=thr,
+                                                force=model.force, taus=taus)
+    circ = jackknife(stationary_fn, ens)
     ex = exact_stationary(model, threshold=thr, taus=taus, h=h)
     ex_eff = exact_stationary(model_eff, threshold=thr, taus=taus, h=h)
     v0_mc = sample_stationary(model_eff, MC_STATIONARY_REPLICAS, 1000 * exp.seed + 701)
@@ -129,9 +129,9 @@ def analyse(runs: ExperimentRuns, *, progress=None) -> ExperimentAnalysis:
     held, white = held_noise_pair(model_eff, v0=v0_mc, t_end=st.stationary_t_end,
                                   replicas=v0_mc.size, seed=1000 * exp.seed + 700, noise_dt=noise_dt,
                                   sample_dt=exp.sample_dt)
-    band = jackknife_difference(fn, held, white)
+    band = jackknife_difference(stationary_fn, held, white)
     chk = runs.check_stationary
-    integ = jackknife_difference(fn, chk, subset(ens, np.arange(chk.replicas)))
+    integ = jackknife_difference(stationary_fn, chk, subset(ens, np.arange(chk.replicas)))
     for k, (val, se) in circ.items():
         b = Budget(smoothing=ex_eff[k] - ex[k], bandwidth=_bias(band, k),
                    integration=_bias(integ, k))

@@ -32,7 +32,7 @@ class Budget:
 
     def dominant(self) -> str:
         items = {k: abs(v) for k, v in asdict(self).items()}
-        return max(items, key=items.get)
+        return max(items, key=lambda name: items[name])
 
 
 @dataclass(frozen=True)
@@ -75,7 +75,7 @@ def compare(experiment: str, observable: str, circuit: float, stderr: float, the
                       theory_kind, float(z), bool(ok), budget, note)
 
 
-_REQUIRED = {"experiment": str, "observable": str, "circuit": (int, float),
+_REQUIRED: dict[str, type | tuple[type, ...]] = {"experiment": str, "observable": str, "circuit": (int, float),
              "circuit_stderr": (int, float), "theory": (int, float), "theory_kind": str,
              "z": (int, float, type(None)), "within_budget": bool}
 

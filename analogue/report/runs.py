@@ -21,6 +21,7 @@ from __future__ import annotations
 import os
 import time
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -104,10 +105,10 @@ def _noise_free_run(exp: Experiment, seed: int, kw: dict) -> Ensemble:
     deck = exp.noise_free_deck(seed=seed)
     times = time_grid(deck.t_end, exp.sample_dt)
     v0 = np.asarray(exp.v0, dtype=float)
-    run_kw = {k: kw[k] for k in ("store", "workers", "scheduler", "progress", "timeout") if k in kw}
+    run_kw: dict[str, Any] = {k: kw[k] for k in ("store", "workers", "scheduler", "progress", "timeout") if k in kw}
     v, x, _, info = run_decks([deck], times, v0, **run_kw)
     mapping = exp.noise_free_mapping()
-    meta = {"source": "circuit", "noise": "off", "model": exp.model.as_dict(),
+    meta: dict[str, Any] = {"source": "circuit", "noise": "off", "model": exp.model.as_dict(),
             "model_effective": mapping.model_effective.as_dict(), "seed": seed,
             "deck_sha256": [deck.sha256], "t_end": deck.t_end, "sample_dt": exp.sample_dt,
             # nothing random to calibrate against: the spec's tolerances or the fixed ones
