@@ -49,6 +49,7 @@ from dataclasses import KW_ONLY, dataclass, field, replace
 from typing import Any, NamedTuple
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy import integrate, optimize, special
 
 from .checks import finite as _finite
@@ -111,7 +112,7 @@ class ShotNoise:
     mean: float
     two_sided: bool = False
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         object.__setattr__(self, "rate", _bounded("shot.rate", self.rate, lower="positive"))
         object.__setattr__(self, "mean", _bounded("shot.mean", self.mean, lower="positive"))
         if not isinstance(self.two_sided, (bool, np.bool_)):
@@ -133,7 +134,7 @@ class ShotNoise:
         return {"rate": self.rate, "mean": self.mean, "two_sided": self.two_sided}
 
 
-def _logcosh(x):
+def _logcosh(x: ArrayLike) -> np.ndarray:
     """ln cosh(x) without overflow."""
     ax = np.abs(x)
     return ax + np.log1p(np.exp(-2.0 * ax)) - math.log(2.0)
@@ -187,7 +188,7 @@ class Model:
     x0: float = 0.0
     shot: ShotNoise | None = field(default=None)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         s = object.__setattr__
         s(self, "tau_m", _bounded("tau_m", self.tau_m, lower="positive"))
         s(self, "delta", _bounded("delta", self.delta, lower="nonnegative"))
@@ -326,7 +327,7 @@ class Model:
         sgn = math.copysign(1.0, self.a)
         # outward speed g(u) = sgn * drift(sgn u): > 0 at u = 0 (|a| > Delta(0)) and <= 0 at
         # u = |a| tau_m (there the drift is -Delta(v) - cubic v^3 <= 0); take the first zero.
-        def g(u):
+        def g(u: float) -> float:
             return sgn * float(self.drift(sgn * u))
         grid = np.linspace(0.0, abs(self.a) * self.tau_m, 2049)
         vals = sgn * self.drift(sgn * grid[1:])
@@ -336,7 +337,7 @@ class Model:
         return sgn * optimize.brentq(g, grid[idx - 1], grid[idx], xtol=1e-15, rtol=1e-15)
 
     # ---------------------------------------------------------- friction law
-    def friction_magnitude(self, v):
+    def friction_magnitude(self, v: ArrayLike) -> np.ndarray:
         """``Delta(v)``: Delta, or the Stribeck curve ``Delta + (delta_s - Delta) e^{-|v|/v_s}``."""
         v = np.asarray(v, dtype=float)
         if self.stribeck is None:
@@ -344,7 +345,7 @@ class Model:
         ds, vs = self.stribeck
         return self.delta + (ds - self.delta) * np.exp(-np.abs(v) / vs)
 
-    def coulomb(self, v):
+    def coulomb(self, v: ArrayLike) -> np.ndarray:
         """Dry-friction acceleration ``Delta(v) sgn(v)`` (or ``Delta(v) tanh(v/epsilon)``)."""
         v = np.asarray(v, dtype=float)
         shape = np.tanh(v / self.epsilon) if self.epsilon > 0 else np.sign(v)
@@ -352,7 +353,7 @@ class Model:
 
     friction = coulomb
 
-    def drift(self, v, x=0.0):
+    def drift(self, v: ArrayLike, x: ArrayLike = 0.0) -> np.ndarray:
         """The force law ``-v/tau_m - cubic v^3 - Delta(v) sgn(v) - spring x + a`` (eq. det_eq
         for the paper's model, where it is ``-U'(v)``)."""
         v = np.asarray(v, dtype=float)
@@ -363,7 +364,7 @@ class Model:
             out = out - self.spring * np.asarray(x, dtype=float)
         return out
 
-    def _dry_potential(self, v):
+    def _dry_potential(self, v: ArrayLike) -> np.ndarray:
         """``integral_0^v Delta(u) sgn(u) du`` (or with tanh)."""
         av = np.abs(np.asarray(v, dtype=float))
         d, eps = self.delta, self.epsilon
@@ -386,7 +387,7 @@ class Model:
         tail = vs * (np.exp(-cut / vs) - np.exp(-av / vs))
         return base + (ds - d) * (head + tail)
 
-    def potential(self, v):
+    def potential(self, v: ArrayLike) -> np.ndarray:
         """Effective potential U(v) (eq. U_pot) of the velocity equation; with epsilon > 0 the
         term Delta|v| becomes ``Delta epsilon ln cosh(v/epsilon)``.  For the family:
         ``+ cubic v^4/4 + (delta_s - Delta) v_s (1 - e^{-|v|/v_s})`` (the spring force is not
@@ -435,7 +436,7 @@ class Model:
         u = [float(self.potential(c)) for c in cands]
         return cands[int(np.argmin(u))]
 
-    def _require_gradient(self, what: str):
+    def _require_gradient(self, what: str) -> None:
         if self.shot is not None or self.spring > 0:
             raise ValueError(f"{what} = exp(-gamma U)/Z holds only for one-dimensional members "
                              f"with Gaussian noise (spring=0, shot=None); use "
@@ -459,7 +460,7 @@ class Model:
         if self.epsilon == 0 and self.cubic == 0 and self.stribeck is None:
             # integral_0^inf exp(-v^2/(2 s^2) - b v) dv = s sqrt(2 pi) exp(b^2 s^2/2) Phi(-b s)
             s = math.sqrt(tau / g)
-            def half(b):
+            def half(b: float) -> float:
                 return (math.log(s * math.sqrt(2 * math.pi)) + 0.5 * (b * s) ** 2
                         + float(special.log_ndtr(-b * s)))
             return float(np.logaddexp(half(g * (self.delta - self.a)), half(g * (self.delta + self.a))))
@@ -479,7 +480,7 @@ class Model:
                                 lo, hi, points=pts or None, limit=400, epsabs=0, epsrel=1e-12)
         return math.log(val) - g * u_star
 
-    def stationary_pdf(self, v):
+    def stationary_pdf(self, v: ArrayLike) -> np.ndarray:
         """Normalised stationary density ``p_s = exp(-gamma U)/Z`` (eq. p_stat); exact at every
         gamma for the 1-D additive-Gaussian-noise members."""
         log_z = self.log_normaliser()  # refuses non-gradient members and gamma = inf first
@@ -502,7 +503,7 @@ class Model:
             return math.inf
         return self.tau_m * math.log1p(abs(v0) / b)
 
-    def deterministic(self, v0: float, t):
+    def deterministic(self, v0: float, t: ArrayLike) -> np.ndarray:
         """Noise-free solution of eq. (det_eq) from ``v(0) = v0`` at times ``t >= 0``.
 
         On each half line the motion is the basic solution
@@ -525,7 +526,7 @@ class Model:
             return -self.replace(a=-self.a)._deterministic_upper(-v0, t)
         return self._deterministic_upper(v0, t)
 
-    def _deterministic_upper(self, v0: float, t):
+    def _deterministic_upper(self, v0: float, t: np.ndarray) -> np.ndarray:
         """sgn law, v0 >= 0, and a >= 0 whenever v0 == 0."""
         tau, d, a = self.tau_m, self.delta, self.a
         bp = (d - a) * tau
@@ -543,12 +544,12 @@ class Model:
             after = bm * (1.0 - np.exp(-(t - t1) / tau))
         return np.where(t < t1, upper, after)
 
-    def _deterministic_smooth(self, v0, t):
+    def _deterministic_smooth(self, v0: float, t: np.ndarray) -> np.ndarray:
         t_end = float(t.max()) if t.size else 0.0
         if t_end == 0:
             return np.full_like(t, v0)
         # Stiff near v = 0 when epsilon is small: use an implicit method with the exact Jacobian.
-        def jac(s, v):
+        def jac(s: float, v: np.ndarray) -> list[list[float]]:
             sech2 = 1.0 - np.tanh(v[0] / self.epsilon) ** 2  # no overflow, unlike 1/cosh^2
             return [[-1.0 / self.tau_m - self.delta / self.epsilon * sech2]]
         sol = integrate.solve_ivp(lambda s, v: self.drift(v), (0.0, t_end), [v0], method="Radau",

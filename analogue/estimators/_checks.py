@@ -2,25 +2,28 @@
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
-from ..checks import finite, nonnegative, positive  # noqa: F401  (re-exported)
+from ..checks import finite as finite  # re-exported for the estimators
+from ..checks import nonnegative as nonnegative
+from ..checks import positive as positive
 from ..ensemble import Ensemble
 
 
-def ensemble(obj) -> Ensemble:
+def ensemble(obj: object) -> Ensemble:
     if not isinstance(obj, Ensemble):
         raise ValueError(f"ensemble must be an analogue.Ensemble, got {type(obj).__name__}")
     return obj
 
 
-def confidence(value) -> float:
+def confidence(value: float) -> float:
     c = finite("confidence", value)
     if not 0 < c < 1:
         raise ValueError(f"confidence must be in (0, 1), got {c!r}")
     return c
 
 
-def positive_int(name: str, value, minimum: int = 1) -> int:
+def positive_int(name: str, value: object, minimum: int = 1) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
         raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
     if value < minimum:
@@ -39,7 +42,7 @@ def uniform_dt(ens: Ensemble) -> float:
     return dt
 
 
-def burn_in_index(ens: Ensemble, burn_in, min_samples: int = 2) -> int:
+def burn_in_index(ens: Ensemble, burn_in: float, min_samples: int = 2) -> int:
     """Index of the first sample with ``t >= t[0] + burn_in`` (burn_in is a duration)."""
     b = nonnegative("burn_in", burn_in)
     duration = float(ens.t[-1] - ens.t[0])
@@ -50,7 +53,7 @@ def burn_in_index(ens: Ensemble, burn_in, min_samples: int = 2) -> int:
     return i0
 
 
-def time_index(ens: Ensemble, name: str, time) -> int:
+def time_index(ens: Ensemble, name: str, time: float) -> int:
     """Grid index nearest ``time``; the time must lie on the record (within half a step)."""
     tt = finite(name, time)
     half = 0.5 * (ens.dt if ens.t.size > 1 else 0.0)
@@ -60,7 +63,8 @@ def time_index(ens: Ensemble, name: str, time) -> int:
     return int(np.argmin(np.abs(ens.t - tt)))
 
 
-def edges(bins, value_range, data) -> np.ndarray:
+def edges(bins: int | ArrayLike, value_range: tuple[float, float] | None,
+          data: ArrayLike) -> np.ndarray:
     """Bin edges from an int (with ``value_range`` or the data's finite extent) or from an
     explicit increasing array of edges."""
     if np.ndim(bins) == 1:

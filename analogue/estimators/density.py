@@ -6,7 +6,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
+from ..ensemble import Ensemble
 from . import _checks
 from .intervals import clopper_pearson_interval, student_interval, wilson_interval
 
@@ -54,7 +56,9 @@ class DensityEstimate:
         return np.diff(self.edges)
 
 
-def transition_density(ensemble, t, bins=50, range=None, confidence=0.95, method="wilson"):
+def transition_density(ensemble: Ensemble, t: float, bins: int | ArrayLike = 50,
+                       range: tuple[float, float] | None = None, confidence: float = 0.95,
+                       method: str = "wilson") -> DensityEstimate:
     """Histogram of the transition density ``f(v, t | v0)`` (paper, eqs. sol1-sol3) from the
     velocities of all replicas at the grid time nearest ``t``.
 
@@ -83,8 +87,9 @@ def transition_density(ensemble, t, bins=50, range=None, confidence=0.95, method
         method=method, time=float(ens.t[i]))
 
 
-def stationary_density(ensemble, burn_in=0.0, bins=50, range=None, confidence=0.95,
-                       batches_per_replica=1):
+def stationary_density(ensemble: Ensemble, burn_in: float = 0.0, bins: int | ArrayLike = 50,
+                       range: tuple[float, float] | None = None, confidence: float = 0.95,
+                       batches_per_replica: int = 1) -> DensityEstimate:
     """Histogram of the stationary density ``p_s(v)`` (paper, eq. p_stat) pooling every sample
     after ``burn_in`` (a duration from the first time) across all replicas.
 
@@ -125,7 +130,7 @@ def stationary_density(ensemble, burn_in=0.0, bins=50, range=None, confidence=0.
         method="batch-means")
 
 
-def _effective_n(p, se) -> float:
+def _effective_n(p: np.ndarray, se: np.ndarray) -> float:
     ok = (p > 0) & (p < 1) & (se > 0)
     if not np.any(ok):
         return float("nan")

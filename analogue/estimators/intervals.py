@@ -2,12 +2,14 @@
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy import stats
 
 __all__ = ["wilson_interval", "clopper_pearson_interval", "student_interval"]
 
 
-def wilson_interval(k, n, confidence: float = 0.95):
+def wilson_interval(k: ArrayLike, n: ArrayLike, confidence: float = 0.95
+                    ) -> tuple[np.ndarray, np.ndarray]:
     """Wilson score interval for a binomial proportion with ``k`` successes in ``n`` trials.
 
     Its coverage stays close to nominal down to a few counts (unlike the Wald interval,
@@ -23,7 +25,8 @@ def wilson_interval(k, n, confidence: float = 0.95):
     return np.clip(centre - half, 0.0, 1.0), np.clip(centre + half, 0.0, 1.0)
 
 
-def clopper_pearson_interval(k, n, confidence: float = 0.95):
+def clopper_pearson_interval(k: ArrayLike, n: ArrayLike, confidence: float = 0.95
+                             ) -> tuple[np.ndarray, np.ndarray]:
     """Exact (conservative) Clopper-Pearson interval from beta quantiles."""
     k = np.asarray(k, dtype=float)
     n = np.asarray(n, dtype=float)
@@ -34,7 +37,8 @@ def clopper_pearson_interval(k, n, confidence: float = 0.95):
     return lo, hi
 
 
-def student_interval(mean, stderr, units: int, confidence: float = 0.95):
+def student_interval(mean: ArrayLike, stderr: ArrayLike, units: int, confidence: float = 0.95
+                     ) -> tuple[np.ndarray, np.ndarray]:
     """``mean +- t_{units-1} * stderr``: band for a mean over ``units`` independent units
     (replicas or batches) whose spread gave ``stderr``."""
     q = stats.t.ppf(0.5 + 0.5 * confidence, units - 1)

@@ -11,8 +11,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
+from collections.abc import Iterable
+from typing import Any, cast
 
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ..ensemble import Ensemble
 from . import _checks
 
 __all__ = ["Prehistory", "prehistory", "stationary_prehistory"]
@@ -42,7 +47,7 @@ class Prehistory:
     median: np.ndarray
     lower: np.ndarray
     upper: np.ndarray
-    quantiles: tuple
+    quantiles: tuple[float, float]
     hist: np.ndarray
     hist_t_edges: np.ndarray
     hist_v_edges: np.ndarray
@@ -57,9 +62,9 @@ class Prehistory:
         return self.t - self.t_target
 
 
-def _quantile_pair(quantiles) -> tuple:
+def _quantile_pair(quantiles: ArrayLike) -> tuple[float, float]:
     try:
-        q = tuple(float(x) for x in quantiles)
+        q = tuple(float(x) for x in cast("Iterable[float]", quantiles))  # else TypeError
     except (TypeError, ValueError):
         raise ValueError(f"quantiles must be a pair (low, high) in [0, 1], got {quantiles!r}") from None
     if len(q) != 2 or not 0 <= q[0] < q[1] <= 1:
@@ -68,7 +73,9 @@ def _quantile_pair(quantiles) -> tuple:
     return q
 
 
-def _summarise(paths, t, dt, q, v_bins, v_range, time_bins):
+def _summarise(paths: np.ndarray, t: np.ndarray, dt: float, q: tuple[float, float],
+               v_bins: int | ArrayLike, v_range: tuple[float, float] | None,
+               time_bins: int | ArrayLike | None) -> dict[str, Any]:
     """Pointwise mean, median, quantile band and per-time density histogram of paths."""
     mean = paths.mean(axis=0)
     median, lower, upper = np.quantile(paths, [0.5, q[0], q[1]], axis=0)
@@ -86,8 +93,10 @@ def _summarise(paths, t, dt, q, v_bins, v_range, time_bins):
                 hist_t_edges=t_edges, hist_v_edges=v_edges)
 
 
-def prehistory(ensemble, v_target, t_target, window, quantiles=(0.1, 0.9), lookback=None,
-               v_bins=40, v_range=None, time_bins=None) -> Prehistory:
+def prehistory(ensemble: Ensemble, v_target: float, t_target: float, window: float,
+               quantiles: ArrayLike = (0.1, 0.9), lookback: float | None = None,
+               v_bins: int | ArrayLike = 40, v_range: tuple[float, float] | None = None,
+               time_bins: int | ArrayLike | None = None) -> Prehistory:
     """Select the replicas with ``|v(t_target) - v_target| < window`` (``t_target`` snapped to
     the nearest grid time) and summarise their paths on ``[t_target - lookback, t_target]``
     (default: from the start).  Replicas are independent, so ``mean_se`` is the plain
@@ -123,9 +132,12 @@ def prehistory(ensemble, v_target, t_target, window, quantiles=(0.1, 0.9), lookb
                       **_summarise(paths, t, dt, q, v_bins, v_range, time_bins))
 
 
-def stationary_prehistory(ensemble, v_target, window, lookback, burn_in=0.0, entries_only=True,
-                          quantiles=(0.1, 0.9), v_bins=40, v_range=None, time_bins=None,
-                          cluster_time=None) -> Prehistory:
+def stationary_prehistory(ensemble: Ensemble, v_target: float, window: float, lookback: float,
+                          burn_in: float = 0.0, entries_only: bool = True,
+                          quantiles: ArrayLike = (0.1, 0.9), v_bins: int | ArrayLike = 40,
+                          v_range: tuple[float, float] | None = None,
+                          time_bins: int | ArrayLike | None = None,
+                          cluster_time: float | None = None) -> Prehistory:
     """Prehistory of stationary fluctuations: every path segment of length ``lookback`` that
     ends inside ``|v - v_target| < window`` at any time after ``burn_in + lookback``.
 

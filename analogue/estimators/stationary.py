@@ -15,7 +15,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
+from ..ensemble import Ensemble
 from . import _checks
 
 __all__ = ["AutocorrelationTime", "Estimate", "StationaryObservables",
@@ -69,7 +71,7 @@ class StationaryObservables:
 _FFT_BLOCK = 1 << 22  # complex values per FFT batch (~64 MB)
 
 
-def integrated_autocorrelation_time(series, c=5.0) -> AutocorrelationTime:
+def integrated_autocorrelation_time(series: ArrayLike, c: float = 5.0) -> AutocorrelationTime:
     """Integrated autocorrelation time (in samples) of a stationary series, 1-D ``(n,)`` or
     several independent replicas ``(replicas, n)`` pooled (see module docstring)."""
     c = _checks.positive("c", c)
@@ -99,7 +101,7 @@ def integrated_autocorrelation_time(series, c=5.0) -> AutocorrelationTime:
     return AutocorrelationTime(float(max(tau_m[-1], 1e-12)), n - 1, False)
 
 
-def mean_estimate(samples, c=5.0) -> Estimate:
+def mean_estimate(samples: ArrayLike, c: float = 5.0) -> Estimate:
     """Mean of ``samples`` (replicas, n) with the ``tau_int`` error (and the replica-spread
     error as a cross-check)."""
     y = np.atleast_2d(np.asarray(samples, dtype=float))
@@ -116,7 +118,7 @@ def mean_estimate(samples, c=5.0) -> Estimate:
                     n_samples=n_total, n_effective=n_total / tau, stderr_replicas=se_rep)
 
 
-def stationary_observables(ensemble, burn_in=0.0) -> StationaryObservables:
+def stationary_observables(ensemble: Ensemble, burn_in: float = 0.0) -> StationaryObservables:
     """Stationary mean and variance of v and P(v > 0), pooled over replicas and all times
     after ``burn_in`` (a duration from the first time); compare with moments of p_s
     (paper, eq. p_stat).

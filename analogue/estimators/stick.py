@@ -12,9 +12,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import integrate, special
 
+from ..ensemble import Ensemble
+from ..model import Model
 from . import _checks
 from .stationary import Estimate, mean_estimate
-from ..model import Model
 
 __all__ = ["StickStatistics", "stick_statistics", "stick_fraction_theory"]
 
@@ -41,7 +42,7 @@ class StickStatistics:
     dt: float
 
 
-def stick_statistics(ensemble, threshold, burn_in=0.0) -> StickStatistics:
+def stick_statistics(ensemble: Ensemble, threshold: float, burn_in: float = 0.0) -> StickStatistics:
     """Stick fraction and episode durations after ``burn_in`` (a duration from t[0])."""
     ens = _checks.ensemble(ensemble)
     th = _checks.positive("threshold", threshold)
@@ -86,7 +87,7 @@ def _log_phi_diff(u1: float, u2: float) -> float:
     return float(a + np.log1p(-np.exp(b - a)))
 
 
-def stick_fraction_theory(model, threshold) -> float:
+def stick_fraction_theory(model: Model, threshold: float) -> float:
     """Exact stationary ``P(|v| < threshold) = integral_{-th}^{th} p_s(v) dv`` (eq. p_stat).
 
     For the sgn law each half line is a Gaussian piece: on v > 0,
@@ -108,7 +109,7 @@ def stick_fraction_theory(model, threshold) -> float:
     g, tau = model.gamma, model.tau_m
     if model.epsilon == 0:
         s = math.sqrt(tau / g)
-        def half(b):
+        def half(b: float) -> float:
             return (math.log(s * math.sqrt(2 * math.pi)) + 0.5 * g * b * b * tau
                     + _log_phi_diff(b * tau / s, (th + b * tau) / s))
         log_mass = np.logaddexp(half(model.delta - model.a), half(model.delta + model.a))

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..ensemble import Ensemble
 from . import _checks
 
 __all__ = ["TransportEstimate", "transport"]
@@ -23,14 +24,15 @@ class TransportEstimate:
     drift_se: float
     diffusion: float
     diffusion_se: float
-    fit_window: tuple
+    fit_window: tuple[float, float]
     t: np.ndarray
     mean_x: np.ndarray
     var_x: np.ndarray
     n_replicas: int
 
 
-def transport(ensemble, burn_in=0.0, fit_from=None) -> TransportEstimate:
+def transport(ensemble: Ensemble, burn_in: float = 0.0, fit_from: float | None = None
+              ) -> TransportEstimate:
     """Drift ``<v> = d<x>/dt`` and diffusion ``D_x`` from ``Var x(t) ~ 2 D_x t + const``.
 
     After the burn-in the positions are re-zeroed; ``<x(t)>`` and ``Var x(t)`` over the

@@ -13,7 +13,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
+from ..ensemble import Ensemble
 from . import _checks
 from .intervals import student_interval
 from .density import _effective_n
@@ -23,7 +25,7 @@ __all__ = ["WorkDistribution", "FluctuationRatio", "RateFunctionEstimate", "Line
            "empirical_rate_function"]
 
 
-def _lag(ens, tau) -> tuple[int, float]:
+def _lag(ens: Ensemble, tau: float) -> tuple[int, float]:
     tau = _checks.positive("tau", tau)
     dt = _checks.uniform_dt(ens)
     k = int(round(tau / dt))
@@ -33,7 +35,8 @@ def _lag(ens, tau) -> tuple[int, float]:
     return k, dt
 
 
-def work_rate_samples(ensemble, tau, force, burn_in=0.0, overlap=True, stride=None):
+def work_rate_samples(ensemble: Ensemble, tau: float, force: float, burn_in: float = 0.0,
+                      overlap: bool = True, stride: int | None = None) -> np.ndarray:
     """Work rates ``w = F (x(s + tau) - x(s)) / tau`` (paper, eqs. work, work_power) for
     windows starting at ``s >= t[0] + burn_in``.
 
@@ -56,7 +59,7 @@ def work_rate_samples(ensemble, tau, force, burn_in=0.0, overlap=True, stride=No
     if starts.size == 0:
         raise ValueError(f"tau={tau!r} must be shorter than the record after burn_in "
                          f"({float(ens.t[-1] - ens.t[i0])!r})")
-    return force * (ens.x[:, starts + k] - ens.x[:, starts]) / (k * dt)
+    return np.asarray(force * (ens.x[:, starts + k] - ens.x[:, starts]) / (k * dt))
 
 
 @dataclass(frozen=True, eq=False)
@@ -98,11 +101,13 @@ class WorkDistribution:
     @property
     def contributing(self) -> np.ndarray:
         """Number of replicas with at least one window in each bin."""
-        return np.count_nonzero(self.replica_fractions > 0, axis=0)
+        return np.asarray(np.count_nonzero(self.replica_fractions > 0, axis=0))
 
 
-def work_distribution(ensemble, tau, force, bins=41, burn_in=0.0, overlap=True, range=None,
-                      stride=None, confidence=0.95) -> WorkDistribution:
+def work_distribution(ensemble: Ensemble, tau: float, force: float, bins: int | ArrayLike = 41,
+                      burn_in: float = 0.0, overlap: bool = True,
+                      range: tuple[float, float] | None = None, stride: int | None = None,
+                      confidence: float = 0.95) -> WorkDistribution:
     """Distribution ``P_tau(w)`` of the work rate (paper, eqs. eqpi1, largeDev).
 
     Without ``range`` the bins are symmetric about 0, ``(-max|w|, max|w|)``, so that
@@ -186,7 +191,7 @@ class FluctuationRatio:
         return LineFit(float(beta[0]), float(se[0]), float(beta[1]), float(se[1]))
 
 
-def _tau_gamma(dist, tau, gamma) -> tuple[float, float]:
+def _tau_gamma(dist: object, tau: float, gamma: float) -> tuple[float, float]:
     if not isinstance(dist, WorkDistribution):
         raise ValueError(f"dist must be a WorkDistribution, got {type(dist).__name__}")
     g = _checks.positive("gamma", gamma)
@@ -198,7 +203,8 @@ def _tau_gamma(dist, tau, gamma) -> tuple[float, float]:
     return t, g
 
 
-def fluctuation_ratio(dist, tau, gamma, min_replicas=10) -> FluctuationRatio:
+def fluctuation_ratio(dist: WorkDistribution, tau: float, gamma: float,
+                      min_replicas: int = 10) -> FluctuationRatio:
     """``ln[P_tau(w)/P_tau(-w)] / (tau gamma)`` (paper, eqs. ftexp, dryft) from a
     :func:`work_distribution` whose bins are symmetric about 0.
 
@@ -245,7 +251,8 @@ class RateFunctionEstimate:
     gamma: float
 
 
-def empirical_rate_function(dist, tau, gamma, min_replicas=10) -> RateFunctionEstimate:
+def empirical_rate_function(dist: WorkDistribution, tau: float, gamma: float,
+                            min_replicas: int = 10) -> RateFunctionEstimate:
     """``I_tau(w) = -ln P_tau(w) / (tau gamma)`` minus its minimum, on bins reached by at
     least ``min_replicas`` replicas.  Errors propagate ``ln P`` and the shift replica by replica
     (so the error at the minimum bin is 0 and the others include its uncertainty).  ``tau``
