@@ -34,6 +34,8 @@ import os
 import tempfile
 import zipfile
 from pathlib import Path
+from typing import Any
+from collections.abc import Callable
 
 import numpy as np
 
@@ -74,7 +76,7 @@ def code_version() -> str:
     return h.hexdigest()
 
 
-def _encode(obj) -> bytes:
+def _encode(obj: Any) -> bytes:
     """Unambiguous bytes for a key part (bit-exact for floats and arrays)."""
     if isinstance(obj, Model):
         return b"Model" + _encode(obj.as_dict())
@@ -103,7 +105,8 @@ def _frame(b: bytes) -> bytes:
     return len(b).to_bytes(8, "little") + b
 
 
-def theory_key(name: str, args=(), kwargs=None) -> str:
+def theory_key(name: str, args: tuple[Any, ...] | list[Any] = (),
+               kwargs: dict[str, Any] | None = None) -> str:
     """sha256 (hex) of function name, arguments and :func:`code_version`."""
     h = hashlib.sha256()
     for part in (b"analogue-theory", code_version().encode(), name.encode(),
@@ -112,7 +115,7 @@ def theory_key(name: str, args=(), kwargs=None) -> str:
     return h.hexdigest()
 
 
-def _checksum(arrays: dict) -> str:
+def _checksum(arrays: dict[str, Any]) -> str:
     h = hashlib.sha256()
     for k in sorted(arrays):
         h.update(_frame(k.encode()))
@@ -120,11 +123,11 @@ def _checksum(arrays: dict) -> str:
     return h.hexdigest()
 
 
-def _is_key(key) -> bool:
+def _is_key(key: object) -> bool:
     return isinstance(key, str) and len(key) == 64 and all(c in "0123456789abcdef" for c in key)
 
 
-def _describe(obj):
+def _describe(obj: Any) -> Any:
     """JSON-friendly provenance of an argument (arrays summarised, not stored)."""
     if isinstance(obj, Model):
         return obj.as_dict()
@@ -145,7 +148,7 @@ def _describe(obj):
 class TheoryCache:
     """A directory of ``<key[:2]>/<key>.npz`` entries (result arrays + JSON meta)."""
 
-    def __init__(self, root):
+    def __init__(self, root: str | os.PathLike[str]) -> None:
         self.root = Path(root).expanduser()
         self.hits = 0
         self.misses = 0
@@ -158,7 +161,7 @@ class TheoryCache:
             raise ValueError(f"key must be a 64-character lower-case hex sha256, got {key!r}")
         return self.root / key[:2] / f"{key}.npz"
 
-    def get(self, key: str):
+    def get(self, key: str) -> tuple[dict[str, np.ndarray], dict[str, Any]] | None:
         """``(arrays, meta)`` under ``key``, or None if absent or bad (unreadable, checksum or
         key mismatch): a bad entry is treated as missing and overwritten by the next put."""
         p = self.path(key)
@@ -176,7 +179,7 @@ class TheoryCache:
             return None
         return arrays, meta
 
-    def put(self, key: str, arrays: dict, meta: dict) -> Path:
+    def put(self, key: str, arrays: dict[str, Any], meta: dict[str, Any]) -> Path:
         """Write atomically: readers see no file or the complete one."""
         p = self.path(key)
         if "__meta__" in arrays:
@@ -201,7 +204,7 @@ class TheoryCache:
         return p
 
 
-def open_cache(cache=None):
+def open_cache(cache: Any = None) -> TheoryCache | None:
     """Resolve ``cache=``: None -> the default location (or None if
     ``$ANALOGUE_THEORY_CACHE`` disables it), False -> None, a path -> that directory, a
     TheoryCache -> itself."""
@@ -220,14 +223,14 @@ def open_cache(cache=None):
                     f"False (disabled), got {type(cache).__name__}")
 
 
-def _normalise(obj):
+def _normalise(obj: Any) -> Any:
     """Array-likes as float arrays (so [1, 2] and np.array([1., 2.]) share an entry)."""
     if isinstance(obj, (list, tuple)) and all(isinstance(v, (int, float, np.number)) for v in obj):
         return np.asarray(obj, dtype=float)
     return obj
 
 
-def _import(path: str):
+def _import(path: str) -> Any:
     import importlib
     module, _, qualname = path.partition(":")
     obj = importlib.import_module(module)
@@ -236,12 +239,12 @@ def _import(path: str):
     return obj
 
 
-def _scalar(a: np.ndarray):
+def _scalar(a: np.ndarray) -> Any:
     """0-d arrays back to Python scalars (a NamedTuple of floats stays one)."""
     return a.item() if a.ndim == 0 else a
 
 
-def cached_call(fn, *args, cache=None, **kwargs):
+def cached_call(fn: Callable[..., Any], *args: Any, cache: Any = None, **kwargs: Any) -> Any:
     """``fn(*args, **kwargs)`` through the cache.  ``fn`` must be pure and return an ndarray
     (or a float, a tuple of ndarrays, or a NamedTuple or dataclass of floats/arrays such as
     ``StationaryMoments``); the result comes back with the same type and values.
@@ -298,11 +301,11 @@ def cached_call(fn, *args, cache=None, **kwargs):
     return out
 
 
-def cached(fn):
+def cached(fn: Callable[..., Any]) -> Callable[..., Any]:
     """Decorator: the same function with an extra keyword ``cache=`` (see :func:`cached_call`).
     The wrapped function stays available as ``.uncached``."""
     @functools.wraps(fn)
-    def wrapper(*args, cache=None, **kwargs):
+    def wrapper(*args: Any, cache: Any = None, **kwargs: Any) -> Any:
         return cached_call(fn, *args, cache=cache, **kwargs)
-    wrapper.uncached = fn
+    wrapper.uncached = fn  # type: ignore[attr-defined]
     return wrapper

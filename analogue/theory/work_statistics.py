@@ -56,6 +56,7 @@ from contextlib import contextmanager
 from contextvars import ContextVar
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy import integrate, linalg, optimize
 
 from ..checks import finite_array as _finite_array
@@ -239,7 +240,7 @@ def _graded_nodes(model: Model, k: float, h: float) -> np.ndarray:
     N -= N[np.searchsorted(x, 0.0)]
     j = np.arange(math.floor(N[0]), math.ceil(N[-1]) + 1, dtype=float)
     j = j[(j >= N[0]) & (j <= N[-1])]
-    nodes = np.interp(j, N, x)
+    nodes = np.asarray(np.interp(j, N, x), dtype=float)
     nodes[j == 0] = 0.0
     if nodes.size > _MAX_NODES:
         raise ValueError(f"the tilt needs {nodes.size} mesh nodes (> {_MAX_NODES}); "
@@ -255,7 +256,8 @@ def _refined(nodes: np.ndarray) -> np.ndarray:
     return out
 
 
-def _mesh_operator(model: Model, v: np.ndarray, k: float, transform_half_width: float):
+def _mesh_operator(model: Model, v: np.ndarray, k: float,
+                   transform_half_width: float) -> tuple[np.ndarray, np.ndarray]:
     """``(diag, off)`` of the tilted generator on the nodes ``v`` (any spacing): linear finite
     elements with lumped mass ``m_i = (s_{i-1} + s_i)/2`` (``s`` the spacings; the ends
     continue their last spacing, as :func:`tilted_operator`), symmetrised by ``M^{-1/2}``:
@@ -301,7 +303,7 @@ def _mesh_kind(model: Model, h: float, mesh: str) -> str:
 
 
 # ------------------------------------------------------------------ principal eigenpair
-def _top_eigenpair(d, e):
+def _top_eigenpair(d: np.ndarray, e: np.ndarray) -> tuple[float, np.ndarray]:
     n = d.size
     lam, vec = linalg.eigh_tridiagonal(d, e, select="i", select_range=(n - 1, n - 1))
     return float(lam[0]), vec[:, 0]
@@ -314,7 +316,7 @@ def _principal(model: Model, k: float, grid: Grid):
     return lam, model.force * float(np.dot(phi * phi, grid.v))
 
 
-def _principal_nodes(model: Model, k: float, v: np.ndarray, h: float):
+def _principal_nodes(model: Model, k: float, v: np.ndarray, h: float) -> tuple[float, float]:
     d, e = _mesh_operator(model, v, k, _kink_half_width(model, h))
     lam, phi = _top_eigenpair(d, e)
     return lam, model.force * float(np.dot(phi * phi, v))
@@ -329,7 +331,8 @@ def _scgf_pair(model: Model, k: float, h: float, check: bool = True, mesh: str =
     return lam, der
 
 
-def _grid_pairs(model: Model, k: float, h: float, mesh: str):
+def _grid_pairs(model: Model, k: float, h: float,
+                mesh: str) -> tuple[float, float, float, float]:
     """(l1, d1, l2, d2): principal eigenvalue and derivative on the grid of spacing h and on
     its refinement."""
     if mesh == "graded":
@@ -344,7 +347,8 @@ def _grid_pairs(model: Model, k: float, h: float, mesh: str):
     return l1, d1, l2, d2
 
 
-def _scgf_pair_raw(model: Model, k: float, h: float, mesh: str):
+def _scgf_pair_raw(model: Model, k: float, h: float,
+                   mesh: str) -> tuple[float, float, float, float]:
     """(lambda, lambda', l1, l2), Richardson-extrapolated from the two grids.
 
     Where the stuck and the sliding state cross (large gamma: lambda' jumps there), the two
@@ -364,7 +368,8 @@ def _scgf_pair_raw(model: Model, k: float, h: float, mesh: str):
     return (4.0 * l2 - l1) / 3.0, (4.0 * d2 - d1) / 3.0, l1, l2
 
 
-def _check_converged(model, k, h, lam, l1, l2):
+def _check_converged(model: Model, k: float, h: float, lam: float, l1: float,
+                     l2: float) -> None:
     # natural eigenvalue scale: the Schroedinger potential gamma U'^2/4 near the attractor
     scale = max(1.0, abs(lam), 1e-2 * model.gamma * (model.delta + abs(model.a)) ** 2)
     if abs(l2 - l1) > 0.05 * scale:
@@ -443,7 +448,7 @@ def _legendre_root(model: Model, w: float, h: float, mean: float, mesh: str = "u
     item per eigen-pair (for benchmarks)."""
     if w == mean:
         return 0.0, 0.0
-    memo: dict = {}
+    memo: dict[float, tuple[float, float, float, float]] = {}
 
     def pair(k):
         if k not in memo:
@@ -480,7 +485,8 @@ def _legendre_root(model: Model, w: float, h: float, mean: float, mesh: str = "u
     return (k, lam, der) if near is not None else (k, lam)
 
 
-def _legendre_sweep(model: Model, w: np.ndarray, h: float, mesh: str, counter=None):
+def _legendre_sweep(model: Model, w: np.ndarray, h: float, mesh: str,
+                    counter: list[float] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(k, lambda(k)) at the Legendre points of every w (flat array), solved in two sorted
     sweeps outwards from the mean, each root continued from the previous one."""
     mean = float(_scgf_pair(model, 0.0, h, mesh=mesh)[1])
@@ -533,7 +539,8 @@ def rate_function(model: Model, w, *, h: float | None = None, mesh: str = "auto"
     return out.reshape(w.shape)
 
 
-def rate_function_curve(model: Model, w, *, h: float | None = None, mesh: str = "auto"):
+def rate_function_curve(model: Model, w: ArrayLike, *, h: float | None = None,
+                        mesh: str = "auto") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(w, I(w), I(-w) - I(w))`` on a grid symmetric about 0, every point computed once.
 
     ``w`` must be symmetric (``w[::-1] == -w`` to 1e-9 of max |w|; it is symmetrised
@@ -547,26 +554,27 @@ def rate_function_curve(model: Model, w, *, h: float | None = None, mesh: str = 
     arrays (so it can pass through :mod:`analogue.theory.cache`)."""
     model = _check_model(model)
     _force(model)
-    w = _finite_array("w", w)
-    if w.ndim != 1 or w.size < 1:
-        raise ValueError(f"w must be a non-empty 1-D grid, got shape {w.shape}")
-    span = float(np.max(np.abs(w)))
-    if np.max(np.abs(w + w[::-1])) > 1e-9 * max(span, 1e-300):
+    wa = _finite_array("w", w)
+    if wa.ndim != 1 or wa.size < 1:
+        raise ValueError(f"w must be a non-empty 1-D grid, got shape {wa.shape}")
+    span = float(np.max(np.abs(wa)))
+    if np.max(np.abs(wa + wa[::-1])) > 1e-9 * max(span, 1e-300):
         raise ValueError("w must be symmetric about 0 (w[::-1] == -w), e.g. "
                          "np.linspace(-wmax, wmax, n)")
-    w = 0.5 * (w - w[::-1])
+    ws_ = 0.5 * (wa - wa[::-1])
     if model.delta == 0:
-        half = w >= 0
-        rate = np.empty(w.size)
-        rate[half] = rate_function(model, w[half], h=h, mesh=mesh)
+        half = ws_ >= 0
+        rate = np.empty(ws_.size)
+        rate[half] = rate_function(model, ws_[half], h=h, mesh=mesh)
         neg = ~half
-        rate[neg] = rate[::-1][neg] - w[neg] / (model.mass * model.tau_m)
+        rate[neg] = rate[::-1][neg] - ws_[neg] / (model.mass * model.tau_m)
     else:
-        rate = rate_function(model, w, h=h, mesh=mesh)
-    return w, rate, rate[::-1] - rate
+        rate = np.asarray(rate_function(model, ws_, h=h, mesh=mesh), dtype=float)
+    return ws_, rate, rate[::-1] - rate
 
 
-def work_variance(model: Model, taus, *, n: int = 801, h: float | None = None) -> np.ndarray:
+def work_variance(model: Model, taus: ArrayLike, *, n: int = 801,
+                  h: float | None = None) -> np.ndarray:
     """``Var(w)`` of the work rate ``w = W_tau/tau`` in the stationary state for every window
     in ``taus``: ``(F/tau)^2 2 int_0^tau (tau - s) C(s) ds`` with C the exact stationary
     velocity autocorrelation (:func:`analogue.theory.stationary.autocorrelation`; the
@@ -576,20 +584,20 @@ def work_variance(model: Model, taus, *, n: int = 801, h: float | None = None) -
     cost one decomposition instead of four.  Vectorised over taus."""
     from .stationary import autocorrelation
     model = _check_model(model)
-    taus = _finite_array("taus", taus)
-    if np.any(taus <= 0):
+    ta = _finite_array("taus", taus)
+    if np.any(ta <= 0):
         raise ValueError(f"taus must be > 0, got {taus!r}")
     n = int(n)
     if n < 3 or n % 2 == 0:
         raise ValueError(f"n must be an odd integer >= 3 (Simpson's rule), got {n}")
-    flat = taus.ravel()
+    flat = ta.ravel()
     lags = np.concatenate([np.linspace(0.0, t, n) for t in flat])
     c = np.asarray(autocorrelation(model, lags, h=h), dtype=float).reshape(flat.size, n)
     out = np.empty(flat.size)
     for i, t in enumerate(flat):
         s = lags[i * n:(i + 1) * n]
         out[i] = (model.force / t) ** 2 * 2.0 * integrate.simpson((t - s) * c[i], x=s)
-    return out.reshape(taus.shape)
+    return out.reshape(ta.shape)
 
 
 # --------------------------------------------------------------- weak-noise objects
@@ -734,7 +742,8 @@ _RICHARDSON_GAP = 0.01   # ... and so is one whose ln p differs by more between 
 _Y_MAX_SHARED = 150.0
 
 
-def _work_pdf_shared(model, w, tau, h, modes, mean):
+def _work_pdf_shared(model: Model, w: np.ndarray, tau: float, h: float, modes: int,
+                     mean: float) -> np.ndarray:
     """:func:`work_pdf` with one contour per group of nearby W (see its docstring)."""
     out = np.full(w.size, np.nan)
     k0s, _ = _legendre_sweep(model, w, h, "uniform")
@@ -796,7 +805,8 @@ def _work_pdf_shared(model, w, tau, h, modes, mean):
     return out
 
 
-def _contour_values(red, kc, tau, K, curv):
+def _contour_values(red: _Reduced, kc: float, tau: float, K: float,
+                    curv: float) -> tuple[float, np.ndarray, tuple[float, float] | None] | None:
     """``(dy, f, tail)``: ``f_j = G(k_c + i y_j)/G(k_c)`` on ``y_j = j dy`` (dy =
     _DY_SHARED/sqrt(K'')) until it decays below _TOL (``tail`` None), or up to _Y_MAX_SHARED widths
     (``tail = (last, rate)`` for the per-W tail test of :func:`_integrate_contour`); None when
@@ -822,11 +832,14 @@ def _contour_values(red, kc, tau, K, curv):
             return dy, np.concatenate(chunks), (last, rate)
 
 
-def _integrate_contour(values, W):
+def _integrate_contour(values: tuple[float, np.ndarray, tuple[float, float] | None] | None,
+                       W: float) -> float | None:
     """``int_0^inf Re[f(y) e^{-iyW}] dy`` by the trapezoid rule, or None if not positive or if
     an undecayed tail may exceed 1e-4 of it (the tests of :func:`_contour_integral`), or if the
     result is below 1e-6 of the integrand's scale (cancellation: W too far from the contour's
     saddle)."""
+    if values is None:
+        return None
     dy, f, tail = values
     g = f * np.exp(-1j * dy * np.arange(f.size) * W)
     integral = dy * (0.5 * g[0].real + g[1:].real.sum())
@@ -842,7 +855,7 @@ def _integrate_contour(values, W):
     # Gaussian, members accepted down to 1e-6/sd came out wrong by factors up to 1e9
     if integral < _MIN_SHARED * dy / _DY_SHARED:
         return None
-    return integral
+    return float(integral)
 
 
 class _Reduced:
