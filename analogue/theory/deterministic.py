@@ -9,6 +9,8 @@ object sticks for good (without noise) if the net static force obeys
 """
 from __future__ import annotations
 
+from typing import Any
+
 import math
 
 import numpy as np
@@ -52,7 +54,7 @@ def _segments(model, v0: float, x0: float, t_end: float):
             if s == 0:
                 yield t0, t_end, ("rest", x)
                 return
-        ev = None
+        ev: Any = None  # solve_ivp's event: a function carrying terminal/direction attributes
         if not smooth:
             def ev(_t, y, s=s):
                 return y[0]

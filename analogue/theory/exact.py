@@ -182,7 +182,7 @@ def _interpolate(model: Model, grid: Grid, dens: np.ndarray, v: np.ndarray, scal
     # ln f(v) = interpolated ln(f e^{gamma U}) - gamma U(v); the U terms stay O(gamma |U'| h).
     shift = (1.0 - theta) * gu_nodes[i] + theta * gu_nodes[i + 1] - gu_v
     log_out = (1.0 - theta) * log_dens[:, i] + theta * log_dens[:, i + 1] + shift
-    out = np.zeros((dens.shape[0], flat.size))
+    out: np.ndarray = np.zeros((dens.shape[0], flat.size))
     out[:, inside] = np.exp(log_out)
     out = out.reshape((dens.shape[0],) + v.shape)
     return out[0] if scalar else out

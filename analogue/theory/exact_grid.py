@@ -18,6 +18,7 @@ than the Delta = 0 process, since ``U'' >= 1/tau_m``).
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 
 from scipy import optimize
 
@@ -33,7 +34,7 @@ def stationary_range(model: Model, tail: float = 40.0) -> tuple[float, float]:
     u_min = float(model.potential(c))
     reach = math.sqrt(2.0 * tail * model.tau_m / model.gamma) * 1.000001
 
-    def excess(v):
+    def excess(v: float) -> float:
         return model.gamma * (float(model.potential(v)) - u_min) - tail
 
     # U - U_min >= (v - c)^2/(2 tau_m): the Gaussian reach brackets the root on each side.
@@ -42,7 +43,7 @@ def stationary_range(model: Model, tail: float = 40.0) -> tuple[float, float]:
     return lo, hi
 
 
-def resolved_grid(model: Model, extra=(), h: float | None = None, t_min: float | None = None,
+def resolved_grid(model: Model, extra: Iterable[float] = (), h: float | None = None, t_min: float | None = None,
                   tail: float = 40.0, points_per_width: float = 40.0,
                   max_nodes: int = 400_000) -> Grid:
     """Grid covering the stationary law and the starts ``extra`` (see module docstring).

@@ -243,6 +243,8 @@ def _evolve(g: ShotGrid, p0: np.ndarray, times: np.ndarray, tau: float, source=N
 def unkicked(model: Model, t, v0: float):
     """Pure shot noise: the mass ``e^{-rate t}`` not yet kicked sits on the noise-free path
     ``v_det(t)`` (an atom that moves; at 0 once the path sticks).  Returns ``(v_det, mass)``."""
+    if model.shot is None:
+        raise ValueError("unkicked needs a shot-noise model (shot is None)")
     t = np.atleast_1d(np.asarray(t, dtype=float))
     return np.asarray(model.deterministic(float(v0), t)), np.exp(-model.shot.rate * t)
 

@@ -19,6 +19,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy import sparse
 
 from ..model import Model
@@ -34,7 +35,7 @@ class Grid:
     i_min: int
     i_max: int
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if not (math.isfinite(self.h) and self.h > 0):
             raise ValueError(f"grid spacing h must be finite and > 0, got {self.h!r}")
         if not self.i_min < 0 < self.i_max:
@@ -59,7 +60,7 @@ class Grid:
         return cls(h, min(int(math.floor(lo / h)), -1), max(int(math.ceil(hi / h)), 1))
 
 
-def bernoulli(x):
+def bernoulli(x: ArrayLike) -> np.ndarray:
     """``B(x) = x/(e^x - 1)``, accurate near 0 and for large |x|."""
     x = np.asarray(x, dtype=float)
     out = np.empty_like(x)
@@ -71,7 +72,7 @@ def bernoulli(x):
     return out
 
 
-def _rates(model: Model, grid: Grid):
+def _rates(model: Model, grid: Grid) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Forward rates k(i->i+1) and backward rates k(i+1->i) on the n-1 links."""
     u = model.gamma * model.potential(grid.v)
     du = np.diff(u)
@@ -88,7 +89,7 @@ def generator(model: Model, grid: Grid) -> sparse.csr_matrix:
     return sparse.diags([down, diag, up], [1, 0, -1], format="csr")
 
 
-def symmetric_generator(model: Model, grid: Grid):
+def symmetric_generator(model: Model, grid: Grid) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(diag, offdiag, log_pi)`` of the symmetric tridiagonal ``Pi^{-1/2} L Pi^{1/2}``.
 
     ``log_pi`` is ``-gamma U`` at the nodes (unnormalised); eigenvalues are those of L.

@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import sparse
 
-from ..model import Model
+from ..model import Model, ShotNoise
 from .fokker_planck import Grid
 from .fokker_planck import generator as sg_generator
 
@@ -81,7 +81,7 @@ class ShotGrid:
     atom: bool
     nodal: bool  # True: nodes of a Scharfetter-Gummel grid (gamma finite); False: cells (+ S)
     base: sparse.csc_matrix
-    shot: object = None           # analogue.ShotNoise or None
+    shot: ShotNoise | None = None  # the kicks, if any
     col_s: np.ndarray | None = None  # landing distribution of a kick from S (cells)
 
     @property
@@ -89,22 +89,29 @@ class ShotGrid:
         return self.v.size - (1 if self.atom else 0)
 
     @property
+    def _shot(self) -> ShotNoise:
+        if self.shot is None:
+            raise ValueError("this generator has no shot noise")
+        return self.shot
+
+    @property
     def L(self) -> sparse.csc_matrix:
         """The explicit generator (dense band of width ~45 mean/h for the jumps)."""
         if self.shot is None:
             return self.base
         n = self.n_cells
-        K = jump_kernel(self.shot.mean, self.h, n, self.shot.two_sided)
+        K = jump_kernel(self._shot.mean, self.h, n, self._shot.two_sided)
         if self.atom:
+            assert self.col_s is not None  # an atom comes with its landing column
             K = sparse.bmat([[K, sparse.csc_matrix(self.col_s[:, None])],
                              [sparse.csc_matrix((1, n)), sparse.csc_matrix((1, 1))]])
-        return (self.base + self.shot.rate * (K - sparse.identity(self.v.size))).tocsc()
+        return (self.base + self._shot.rate * (K - sparse.identity(self.v.size))).tocsc()
 
     @property
     def premultiplier(self) -> sparse.csc_matrix | None:
         if self.shot is None:
             return None
-        return premultiplier(self.shot.mean, self.h, self.n_cells, self.shot.two_sided,
+        return premultiplier(self._shot.mean, self.h, self.n_cells, self._shot.two_sided,
                              int(self.atom))
 
     def banded_L(self) -> sparse.csc_matrix:
@@ -114,13 +121,13 @@ class ShotGrid:
         if N is None:
             return self.base
         n = self.n_cells
-        NK = banded_jump_kernel(self.shot.mean, self.h, n, self.shot.two_sided)
+        NK = banded_jump_kernel(self._shot.mean, self.h, n, self._shot.two_sided)
         if self.atom:
-            Ncol = premultiplier(self.shot.mean, self.h, n, self.shot.two_sided) @ self.col_s
+            Ncol = premultiplier(self._shot.mean, self.h, n, self._shot.two_sided) @ self.col_s
             Ncol[np.abs(Ncol) < 1e-16] = 0.0
             NK = sparse.bmat([[NK, sparse.csc_matrix(Ncol[:, None])],
                               [sparse.csc_matrix((1, n)), sparse.csc_matrix((1, 1))]])
-        return sparse.csc_matrix(N @ self.base + self.shot.rate * (NK - N))
+        return sparse.csc_matrix(N @ self.base + self._shot.rate * (NK - N))
 
     @property
     def n(self) -> int:
@@ -135,7 +142,7 @@ class ShotGrid:
     def landing(self, u: float) -> np.ndarray:
         """Probabilities over the states of the landing point ``u + z`` of one kick from the
         point ``u`` (exact cell integrals of the exponential law; beyond the grid: end cell)."""
-        shot = self.shot
+        shot = self._shot
         n = self.n_cells
         centres = self.v[:n]
         lo_e, hi_e = centres - 0.5 * self.h, centres + 0.5 * self.h

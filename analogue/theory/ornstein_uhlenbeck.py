@@ -30,6 +30,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..model import Model
 
@@ -47,11 +48,11 @@ def _check(model: Model) -> Model:
     return model
 
 
-def _tau(tau) -> np.ndarray:
-    tau = np.asarray(tau, dtype=float)
-    if not np.all(np.isfinite(tau)) or np.any(tau <= 0):
+def _tau(tau: ArrayLike) -> np.ndarray:
+    out = np.asarray(tau, dtype=float)
+    if not np.all(np.isfinite(out)) or np.any(out <= 0):
         raise ValueError("tau must be finite and > 0")
-    return tau
+    return out
 
 
 def _force(model: Model) -> float:
@@ -70,13 +71,13 @@ def stationary_variance(model: Model) -> float:
     return _check(model).tau_m / model.gamma
 
 
-def autocovariance(model: Model, t):
+def autocovariance(model: Model, t: ArrayLike) -> np.ndarray:
     """Stationary autocovariance ``<dv(0) dv(t)> = s^2 exp(-|t|/tau_m)``."""
-    t = np.asarray(t, dtype=float)
-    return stationary_variance(model) * np.exp(-np.abs(t) / model.tau_m)
+    lag = np.asarray(t, dtype=float)
+    return np.asarray(stationary_variance(model) * np.exp(-np.abs(lag) / model.tau_m))
 
 
-def propagator(model: Model, v, t, v0):
+def propagator(model: Model, v: ArrayLike, t: ArrayLike, v0: float) -> np.ndarray:
     """Transition density ``f(v, t | v0, 0)``: Gaussian, mean ``mu + (v0 - mu) e^{-t/tau_m}``,
     variance ``s^2 (1 - e^{-2t/tau_m})``.  Requires t > 0."""
     t = _tau(t)
@@ -88,12 +89,12 @@ def propagator(model: Model, v, t, v0):
     return np.exp(-(v - mean) ** 2 / (2.0 * var)) / np.sqrt(2.0 * math.pi * var)
 
 
-def work_mean(model: Model, tau):
+def work_mean(model: Model, tau: ArrayLike) -> np.ndarray:
     """Stationary ``<W_tau> = F a tau_m tau`` (eq. work)."""
     return model.force * stationary_mean(model) * _tau(tau)
 
 
-def work_variance(model: Model, tau):
+def work_variance(model: Model, tau: ArrayLike) -> np.ndarray:
     """Stationary ``Var W_tau = 2 F^2 s^2 tau_m [tau - tau_m (1 - e^{-tau/tau_m})]``."""
     _check(model)
     tau = _tau(tau)
@@ -104,24 +105,25 @@ def work_variance(model: Model, tau):
     return 2.0 * model.force**2 * stationary_variance(model) * tm * tm * bracket
 
 
-def work_pdf(model: Model, w, tau):
+def work_pdf(model: Model, w: ArrayLike, tau: ArrayLike) -> np.ndarray:
     """Exact density of the work rate ``w = W_tau/tau`` at finite tau (Gaussian)."""
     _force(model)
     tau = _tau(tau)
     mean = model.force * stationary_mean(model)
     var = work_variance(model, tau) / tau**2
     w = np.asarray(w, dtype=float)
-    return np.exp(-(w - mean) ** 2 / (2.0 * var)) / np.sqrt(2.0 * math.pi * var)
+    return np.asarray(np.exp(-(w - mean) ** 2 / (2.0 * var)) / np.sqrt(2.0 * math.pi * var))
 
 
-def scgf(model: Model, k):
+def scgf(model: Model, k: ArrayLike) -> np.ndarray:
     """``lambda(k) = k F a tau_m + k^2 F^2 tau_m^2 / gamma``."""
     k = np.asarray(k, dtype=float)
     F = model.force
-    return k * F * stationary_mean(model) + k * k * F * F * stationary_variance(model) * model.tau_m
+    return np.asarray(k * F * stationary_mean(model)
+                      + k * k * F * F * stationary_variance(model) * model.tau_m)
 
 
-def rate_function(model: Model, w):
+def rate_function(model: Model, w: ArrayLike) -> np.ndarray:
     """``I(w) = (w - F a tau_m)^2 / (4 F^2 tau_m^2)`` in the scaling ``P ~ exp(-tau gamma I)``
     (eq. Iw with Delta = 0; exact for every gamma)."""
     F = _force(model)

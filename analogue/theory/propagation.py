@@ -22,6 +22,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.linalg import eigh_tridiagonal
 from scipy.special import logsumexp
 from scipy.sparse.linalg import expm_multiply
@@ -84,7 +85,7 @@ def propagate_eigen(model: Model, grid: Grid, p0: np.ndarray, times: np.ndarray)
     c = q.T @ y
     out = (np.exp(np.outer(times, lam)) * c) @ q.T
     out *= root
-    return out
+    return np.asarray(out)
 
 
 def propagate_expm(model: Model, grid: Grid, p0: np.ndarray, times: np.ndarray) -> np.ndarray:
@@ -131,7 +132,8 @@ def propagate_hybrid(model: Model, grid: Grid, p0: np.ndarray, times: np.ndarray
     return out
 
 
-def propagate(model: Model, grid: Grid, p0: np.ndarray, times, method: str = "auto") -> np.ndarray:
+def propagate(model: Model, grid: Grid, p0: np.ndarray, times: ArrayLike,
+              method: str = "auto") -> np.ndarray:
     """Node probabilities at each of ``times`` (>= 0) from ``p0``; rows sum to 1.
 
     ``method``: "eigen", "expm", or "auto" (eigen if the start is benign, else
@@ -152,4 +154,4 @@ def propagate(model: Model, grid: Grid, p0: np.ndarray, times, method: str = "au
         out = propagate_hybrid(model, grid, p0, times)
     else:
         raise ValueError(f"method must be 'auto', 'eigen', 'expm' or 'hybrid', got {method!r}")
-    return np.clip(out, 0.0, None)
+    return np.asarray(np.clip(out, 0.0, None))

@@ -196,7 +196,7 @@ def _halves_quad(model: Model) -> _Halves:
             pts.update((r + k * small, r - k * small))
         if eps > 0:
             pts.update((eps, -eps, 10 * eps, -10 * eps))
-        pts = sorted(p for p in pts if lo < p < hi)
+        breaks = sorted(p for p in pts if lo < p < hi)
         ur = float(model.potential(r))
 
         def integrand(v, r=r, ur=ur):
@@ -205,7 +205,7 @@ def _halves_quad(model: Model) -> _Halves:
             fr = math.tanh(v / eps) if eps > 0 else math.copysign(1.0, v) if v != 0 else 0.0
             return np.array([w, w * d, w * d * d, w * fr])
 
-        val, _ = integrate.quad_vec(integrand, lo, hi, points=pts or None, epsabs=0.0,
+        val, _ = integrate.quad_vec(integrand, lo, hi, points=breaks or None, epsabs=0.0,
                                     epsrel=1e-12, limit=2000)
         z, m1, m2, fs = val
         m1, m2 = m1 / z, m2 / z

@@ -29,6 +29,7 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from scipy import optimize
@@ -348,20 +349,20 @@ def work_optimal_path(model: Model, w, tau, v0, v, n: int = 400) -> WorkOptimalP
     n = int(n)
     target = w * tau / model.force
     rng = np.random.default_rng(12345)  # deterministic multi-start
-    best = (math.inf, None, None, None)
+    best: tuple[float, Any, Any, _Segments | None] = (math.inf, None, None, None)
     for pattern in _patterns(v0, v, allow_stick=True):
         seg = _Segments(model, pattern, v0, v)
         A, T, beta = _best_durations(seg, tau, target, rng)
         if A < best[0] - 1e-12 * max(1.0, abs(A)):
             best = (A, T, beta, seg)
-    A, T, beta, seg = best
-    if seg is None:
+    A, T, beta, best_seg = best
+    if best_seg is None:
         raise RuntimeError("no admissible work-optimal path found")  # pragma: no cover
     s = np.linspace(0.0, tau, n + 1)
-    path = seg.evaluate(T, beta, s)
+    path = best_seg.evaluate(T, beta, s)
     path[0], path[-1] = v0, v
-    J0, J1 = seg._work_terms(T)
+    J0, J1 = best_seg._work_terms(T)
     work = model.force * float((J0 + beta * J1).sum())
     nodes = tuple(float(x) for x in np.cumsum(T)[:-1])
     return WorkOptimalPath(s=s, v=path, beta=beta, v_w=w / model.force, action=A, work=work,
-                           kind=seg.pattern, t_nodes=nodes)
+                           kind=best_seg.pattern, t_nodes=nodes)
