@@ -60,27 +60,45 @@ def check_one_dimensional(model: Model) -> None:
 
 
 # ----------------------------------------------------------------------- stationary law
+def _factor(M: sparse.spmatrix, extra_dense=()):
+    """Sparse LU of a nearly banded matrix whose few dense rows (folds of the jump kernel at the
+    grid ends, a normalisation row) would fill any ordering in: those states are moved to the
+    end by a symmetric permutation (diagonal stays diagonal), then LU in the natural order with
+    diagonal pivots (the matrices here are M-matrix-like, diagonally dominant by columns), so
+    the fill is confined to the last rows.  Returns ``solve(b)``."""
+    M = sparse.csr_matrix(M)
+    n = M.shape[0]
+    dense = set(np.flatnonzero(np.diff(M.indptr) > 24).tolist()) | set(extra_dense)
+    if not dense:
+        lu = splu(M.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0)
+        return lu.solve
+    last = np.array(sorted(dense), dtype=int)
+    perm = np.r_[np.setdiff1d(np.arange(n), last), last]
+    P = M[perm][:, perm].tocsc()
+    lu = splu(P, permc_spec="NATURAL", diag_pivot_thresh=0.0)
+
+    def solve(b):
+        out = np.empty_like(b, dtype=float)
+        out[perm] = lu.solve(np.asarray(b, dtype=float)[perm])
+        return out
+    return solve
+
+
 def _bordered_solve(g: ShotGrid, rhs: np.ndarray) -> np.ndarray:
     """Solve ``L x = rhs[:n]`` with ``sum x = rhs[n]`` (rhs[:n] sums to 0).  L has the left null
-    vector 1, so in the banded form ``N L`` (N invertible, ``N^{-T} 1 > 0``) row 0 is
-    redundant and is replaced by the normalisation."""
+    vector 1, so in the banded form ``N L`` (N invertible, ``N^{-T} 1 > 0``) any one row is
+    redundant: the last is replaced by the normalisation (see :func:`_factor`)."""
     n = g.n
     A = g.banded_L().tolil()
-    A[0, :] = np.ones(n)
+    A[n - 1, :] = np.ones(n)
     top = rhs[:n] if g.premultiplier is None else g.premultiplier @ rhs[:n]
     top = np.array(top, dtype=float)
-    top[0] = rhs[n]
-    A = A.tocsc()
-    # Symmetric ordering with diagonal pivots keeps the fill of the (nearly banded) matrix small
-    # (5500 states: 0.05 s against 0.65 s for the default); checked by the residual, with the
-    # pivoting solver as the fallback.
-    try:
-        x = splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0).solve(top)
-        if np.all(np.isfinite(x)) and np.abs(A @ x - top).max() <= 1e-10 * max(1.0, np.abs(top).max()):
-            return x
-    except RuntimeError:
-        pass
-    return spsolve(A, top)
+    top[n - 1] = rhs[n]
+    A = A.tocsr()
+    x = _factor(A, extra_dense=(n - 1,))(top)
+    if np.all(np.isfinite(x)) and np.abs(A @ x - top).max() <= 1e-9 * max(1.0, np.abs(top).max()):
+        return x
+    return spsolve(A.tocsc(), top)  # pivoting fallback
 
 
 def _solve_stationary(g: ShotGrid) -> np.ndarray:
@@ -214,10 +232,10 @@ def _evolve(g: ShotGrid, p0: np.ndarray, times: np.ndarray, tau: float, source=N
         key = (kind, round(step / dt, 12))
         if key not in cache:
             M = (N - step * A) if kind == "be" else (N - 0.5 * step * A)
-            # N - c A is an M-matrix-like, diagonally dominant matrix: diagonal pivots are
-            # stable, and the symmetric ordering keeps the LU nearly banded (12 ms -> ~0.1 ms
-            # per solve at 1500 states)
-            cache[key] = splu(M.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0)
+            # N - c A is M-matrix-like and diagonally dominant: diagonal pivots are stable,
+            # and the ordering of _factor keeps the LU nearly banded (12 ms -> ~0.1 ms per
+            # solve at 1500 states)
+            cache[key] = _factor(M)
         return cache[key]
 
     order = np.argsort(times, kind="stable")
@@ -230,11 +248,11 @@ def _evolve(g: ShotGrid, p0: np.ndarray, times: np.ndarray, tau: float, source=N
             if not started:
                 half = 0.5 * step
                 for j in range(2):
-                    p = lu("be", half).solve(N @ (p + half * src(t_now + (j + 1) * half)))
+                    p = lu("be", half)(N @ (p + half * src(t_now + (j + 1) * half)))
                 started = True
             else:
                 rhs = N @ (p + 0.5 * step * (src(t_now) + src(t_now + step))) + 0.5 * step * (A @ p)
-                p = lu("cn", step).solve(rhs)
+                p = lu("cn", step)(rhs)
             t_now += step
         out[k] = p
     return out
@@ -259,9 +277,13 @@ def _propagate(model, v0, times, h):
         out = _evolve(g, g.initial(float(v0)), times, model.tau_m)
         return g, np.clip(out, 0.0, None)
     lam = model.shot.rate
+    # the noise-free path once on a fine time grid (one ODE solve for the smooth law), then
+    # interpolated: the source is evaluated at every half step
+    tg = np.linspace(0.0, float(times.max()), 20001)
+    vg = np.asarray(model.deterministic(float(v0), tg))
 
     def source(t):
-        vd = float(model.deterministic(float(v0), t))
+        vd = float(np.interp(t, tg, vg))
         land = g.landing(vd)
         return lam * math.exp(-lam * t) * land
     out = _evolve(g, np.zeros(g.n), times, model.tau_m, source)
@@ -382,11 +404,11 @@ def _principal(g: ShotGrid, k: float, F: float, guess: float, scale: float) -> f
     margin = scale
     for _ in range(8):
         sigma = guess + margin
-        lu = splu((sigma * N - NLk).tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0)
+        solve = _factor(sigma * N - NLk)
         x = np.ones(n) / n
         lam = sigma
         for _ in range(500):
-            y = lu.solve(N @ x)
+            y = solve(N @ x)
             ratio = y.sum() / x.sum()
             lam_new = sigma - 1.0 / ratio
             x = y / y.sum()

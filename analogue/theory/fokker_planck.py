@@ -68,7 +68,8 @@ def bernoulli(x: ArrayLike) -> np.ndarray:
     xs = x[small]
     out[small] = 1.0 - xs / 2.0 + xs * xs / 12.0
     xl = x[~small]
-    out[~small] = xl / np.expm1(xl)
+    with np.errstate(over="ignore"):  # x -> +inf: B -> 0 (far tails of exp(-gamma U))
+        out[~small] = xl / np.expm1(xl)
     return out
 
 

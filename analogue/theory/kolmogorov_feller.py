@@ -217,6 +217,12 @@ def banded_jump_kernel(mean: float, h: float, n: int, two_sided: bool) -> sparse
     i = np.arange(n)
     f_u = c * np.exp(-(n - i) * r) / (1.0 - q)
     f_d = c * np.exp(-(i + 1) * r) / (1.0 - q)
+    # The fold rows are dense but decay like q^distance: entries below 1e-17 of the kernel's
+    # scale are dropped (a mass error < 1e-17 per column), which keeps the LU banded
+    # (36k states: 2.4 s -> 0.05 s per factorisation).
+    tiny = 1e-17 * c
+    f_u = np.where(f_u > tiny, f_u, 0.0)
+    f_d = np.where(f_d > tiny, f_d, 0.0)
     N = premultiplier(mean, h, n, two_sided)
     S = sparse.diags([np.ones(n - 1)], [-1], shape=(n, n))
     if not two_sided:
@@ -225,6 +231,7 @@ def banded_jump_kernel(mean: float, h: float, n: int, two_sided: bool) -> sparse
     d1 = sparse.diags([np.r_[np.ones(n - 1), 0.0]], [0])
     d0 = sparse.diags([np.r_[0.0, np.ones(n - 1)]], [0])
     row0 = np.where(i >= 1, c * np.exp(-i * r), 0.0) * q * q
+    row0 = np.where(row0 > tiny, row0, 0.0)
     up = c * q * (S - q * d1) + sparse.csc_matrix(
         (np.r_[f_u, -q * f_u], (np.r_[np.full(n, n - 1), np.full(n, n - 2)], np.r_[i, i])),
         shape=(n, n))
@@ -236,23 +243,42 @@ def banded_jump_kernel(mean: float, h: float, n: int, two_sided: bool) -> sparse
     return sparse.csc_matrix(p0 * N + 0.5 * (up + down))
 
 
+def _gaussian_range(model: Model, tail: float = 50.0) -> tuple[float, float]:
+    """Where ``gamma (U - U_min) < tail`` (scanned on a grid over the bound of
+    :meth:`Model._support_bound`, so double wells are covered), widened by 2 % of the span."""
+    r = model._support_bound(tail)
+    grid = np.linspace(-r, r, 20001)
+    u = model.gamma * model.potential(grid)
+    inside = np.flatnonzero(u - u.min() < tail)
+    lo, hi = grid[max(inside[0] - 1, 0)], grid[min(inside[-1] + 1, grid.size - 1)]
+    pad = 0.02 * (hi - lo)
+    return lo - pad, hi + pad
+
+
 def _grid_range(model: Model, v0s=()) -> tuple[float, float]:
     shot = model.shot
     tau = model.tau_m
-    lam, mu = (shot.rate, shot.mean) if shot is not None else (0.0, 0.0)
-    # Stationary excursions: the drift-free reach tau (|a| + lambda mu) plus 45 jump means and
-    # 10 standard deviations of the linear-friction (Gamma-like) law, plus the Gaussian reach.
-    reach = tau * (abs(model.a) + lam * mu) + 45.0 * mu + 10.0 * math.sqrt(lam * tau) * mu
-    if math.isfinite(model.gamma):
-        reach += model._support_bound(45.0)
-    lo = -reach
-    if shot is not None and not shot.two_sided and not math.isfinite(model.gamma):
-        # one-sided kicks, no diffusion: on v < 0 the drift is >= -v/tau_m + a > 0 below
-        # tau_m a, so nothing below min(0, tau_m a) is ever visited (from such starts).
-        lo = min(0.0, tau * model.a)
-    hi = reach
+    if shot is None:
+        lo, hi = _gaussian_range(model)
+    else:
+        lam, mu = shot.rate, shot.mean
+        # Stationary excursions: the drift-free reach tau (|a| + lambda mu) plus 45 jump means
+        # and 10 standard deviations of the linear-friction (Gamma-like) law, plus the
+        # Gaussian reach.
+        reach = tau * (abs(model.a) + lam * mu) + 45.0 * mu + 10.0 * math.sqrt(lam * tau) * mu
+        if math.isfinite(model.gamma):
+            reach += model._support_bound(45.0)
+        lo, hi = -reach, reach
+        if not shot.two_sided and not math.isfinite(model.gamma):
+            # one-sided kicks, no diffusion: on v < 0 the drift is >= -v/tau_m + a > 0 below
+            # tau_m a, so nothing below min(0, tau_m a) is ever visited (from such starts).
+            lo = min(0.0, tau * model.a)
     for v0 in v0s:
         lo, hi = min(lo, float(v0) - 1e-12), max(hi, float(v0) + 1e-12)
+    if math.isfinite(model.gamma):  # a start outside: room for its Gaussian spreading
+        spread = 10.0 * model.velocity_scale
+        lo = min(lo, min((float(v) - spread for v in v0s), default=lo))
+        hi = max(hi, max((float(v) + spread for v in v0s), default=hi))
     return lo, hi
 
 
@@ -273,7 +299,7 @@ def default_spacing(model: Model) -> float:
     return min(scales)
 
 
-def shot_generator(model: Model, h: float | None = None, v0s=(), max_states: int = 20_000) -> ShotGrid:
+def shot_generator(model: Model, h: float | None = None, v0s=(), max_states: int = 400_000) -> ShotGrid:
     """Generator of the Kolmogorov-Feller equation of ``model`` (module docstring)."""
     if h is None:
         h = default_spacing(model)
