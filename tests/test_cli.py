@@ -5,7 +5,6 @@ import sys
 from pathlib import Path
 
 import pytest
-from click.testing import CliRunner
 
 from analogue import Model
 from analogue.cli import main
@@ -13,11 +12,6 @@ from analogue.theory import exact, weak_noise
 
 ROOT = Path(__file__).resolve().parents[1]
 COMMANDS = ["netlist", "run", "report", "paper", "theory", "figures"]
-
-
-@pytest.fixture
-def cli():
-    return CliRunner()
 
 
 @pytest.mark.parametrize("cmd", COMMANDS)

@@ -4,13 +4,13 @@ import subprocess
 import numpy as np
 import pytest
 
-from analogue import Model
 from analogue.circuit import CircuitSpec, map_model
 from analogue.circuit.netlist import bridge_dc_deck
 from analogue.circuit.parts import bridge_current, bridge_node_voltages, thermal_voltage
 from analogue.circuit.rawfile import read_raw
+from conftest import STICK_A02
 
-STICK = Model(tau_m=1.0, delta=0.7, a=0.2, gamma=10.0)
+pytestmark = pytest.mark.requires_ngspice
 
 
 def sweep(mapping, v_max, tmp_path, points=201):
@@ -25,19 +25,19 @@ def sweep(mapping, v_max, tmp_path, points=201):
 
 def test_ideal_bridge_is_tanh(tmp_path):
     """Ideal diodes (RS = 0, CJO = 0): I = I_Delta tanh(V/(2 N V_T)), to 1e-5 of I_Delta."""
-    m = map_model(STICK)
+    m = map_model(STICK_A02)
     v, i, _ = sweep(m, 6 * m.eps_volts, tmp_path)
     assert v.size == 201 and v[0] == pytest.approx(-6 * m.eps_volts)
     law = m.i_delta_total * np.tanh(v / (2 * m.emission * thermal_voltage()))
     assert np.max(np.abs(i - law)) < 1e-5 * m.i_delta_total
     # the emission coefficient realises the requested smoothing width in volts
-    assert 2 * m.emission * thermal_voltage() == pytest.approx(m.spec.smoothing * STICK.velocity_scale * m.kappa)
+    assert 2 * m.emission * thermal_voltage() == pytest.approx(m.spec.smoothing * STICK_A02.velocity_scale * m.kappa)
 
 
 @pytest.mark.parametrize("emission", [0.05, 1.0, 3.0])
 def test_ideal_bridge_other_widths(tmp_path, emission):
-    spec = CircuitSpec(volts_per_velocity=emission * 2 * thermal_voltage() / (0.02 * STICK.velocity_scale))
-    m = map_model(STICK, spec)
+    spec = CircuitSpec(volts_per_velocity=emission * 2 * thermal_voltage() / (0.02 * STICK_A02.velocity_scale))
+    m = map_model(STICK_A02, spec)
     assert m.emission == pytest.approx(emission)
     v, i, _ = sweep(m, 5 * m.eps_volts, tmp_path, points=101)
     law = m.i_delta_total * np.tanh(v / m.eps_volts)
@@ -49,7 +49,7 @@ def test_real_bridge_follows_series_resistance_law(tmp_path, diode):
     """Vendor models: the sweep follows V = 2 N V_T atanh(I/(I0 + 2 IS)) + RS I up to the
     vendor's parallel resistors (four of rp: at most 2|V|/rp extra current), and its slope at 0
     is the mapping's smoothing width."""
-    m = map_model(STICK, CircuitSpec(diode=diode))
+    m = map_model(STICK_A02, CircuitSpec(diode=diode))
     v_max = 6 * m.eps_volts
     v, i, plot = sweep(m, v_max, tmp_path)
     law = bridge_current(m.part, m.i_delta, v)
@@ -71,9 +71,9 @@ def test_real_bridge_follows_series_resistance_law(tmp_path, diode):
 
 
 def test_behavioural_sources(tmp_path):
-    m = map_model(STICK, CircuitSpec(coulomb="behavioural"))
+    m = map_model(STICK_A02, CircuitSpec(coulomb="behavioural"))
     v, i, _ = sweep(m, 5 * m.eps_volts, tmp_path, points=101)
     assert np.max(np.abs(i - m.i_delta * np.tanh(v / m.eps_volts))) < 1e-9 * m.i_delta
-    m = map_model(STICK, CircuitSpec(coulomb="behavioural-sgn"))
+    m = map_model(STICK_A02, CircuitSpec(coulomb="behavioural-sgn"))
     v, i, _ = sweep(m, 1.0, tmp_path, points=101)
     np.testing.assert_allclose(i, m.i_delta * np.sign(v), rtol=1e-9, atol=1e-15)

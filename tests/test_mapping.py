@@ -8,9 +8,8 @@ from scipy import integrate
 from analogue import Model
 from analogue.circuit import CircuitSpec, map_model
 from analogue.circuit.parts import PARTS, thermal_voltage, bridge_current, ideal_diode
+from conftest import SLIP_A12, STICK_A02
 
-STICK = Model(tau_m=1.0, delta=0.7, a=0.2, gamma=10.0)
-SLIP = Model(tau_m=1.0, delta=0.7, a=1.2, gamma=10.0)
 WORK = Model(tau_m=1.0, delta=1.0, a=0.5, gamma=10.0, mass=2.0)
 
 SPECS = [CircuitSpec(), CircuitSpec(diode="1N4148"), CircuitSpec(diode="BAT54"),
@@ -18,7 +17,7 @@ SPECS = [CircuitSpec(), CircuitSpec(diode="1N4148"), CircuitSpec(diode="BAT54"),
          CircuitSpec(time_scale=2e-4, capacitance=1e-9, volts_per_velocity=3.0, noise_dt=0.002)]
 
 
-@pytest.mark.parametrize("model", [STICK, SLIP, WORK])
+@pytest.mark.parametrize("model", [STICK_A02, SLIP_A12, WORK])
 @pytest.mark.parametrize("spec", SPECS)
 def test_round_trip_recovers_effective_model(model, spec):
     m = map_model(model, spec)
@@ -33,9 +32,9 @@ def test_round_trip_recovers_effective_model(model, spec):
 
 def test_smoothing_meets_request():
     for spec in SPECS[:4]:
-        m = map_model(STICK, spec)
+        m = map_model(STICK_A02, spec)
         assert m.smoothing_fraction == pytest.approx(spec.smoothing, rel=1e-9)
-    assert map_model(STICK, CircuitSpec(coulomb="behavioural-sgn")).epsilon == 0.0
+    assert map_model(STICK_A02, CircuitSpec(coulomb="behavioural-sgn")).epsilon == 0.0
 
 
 @pytest.mark.parametrize("spec", [CircuitSpec(), CircuitSpec(diode="BAT54"),
@@ -43,7 +42,7 @@ def test_smoothing_meets_request():
 def test_circuit_ode_in_si_units_reproduces_model_motion(spec):
     """Integrate C dV/dt_c = -V/R_tot - I_Delta tanh(V/eps_V) + I_F in seconds and volts and
     compare, via V = kappa v and t_c = theta t, with the model's own deterministic motion."""
-    model = STICK
+    model = STICK_A02
     m = map_model(model, spec)
     v0 = 1.5
     t_model = np.linspace(0.0, 3.0, 31)
@@ -65,7 +64,7 @@ def test_circuit_ode_in_si_units_reproduces_model_motion(spec):
 def test_position_scale_integrates_velocity():
     """V(x) = (g kappa theta / C_x) * integral v dt: a constant velocity u for model time T
     charges C_x with g kappa u for theta T seconds."""
-    m = map_model(SLIP)
+    m = map_model(SLIP_A12)
     u, T = 0.37, 2.5
     vx = m.g_x * m.kappa * u * (m.theta * T) / m.cap_x
     assert vx * m.to_model_x == pytest.approx(u * T, rel=1e-12)
@@ -74,12 +73,12 @@ def test_position_scale_integrates_velocity():
 def test_held_noise_intensity_by_monte_carlo():
     """A held Gaussian sequence of std s and hold TS has D = s^2 TS/2: integrals over k aligned
     holds have variance 2 D k TS, and over a random phase 2 D k TS (k - 1/3)/k."""
-    m = map_model(STICK)
+    m = map_model(STICK_A02)
     rng = np.random.default_rng(2024)
     n, k, sub = 20000, 5, 6  # sub: points per hold for the random phase
     held = rng.normal(0.0, m.noise_stddev, size=(n, k + 1))  # model-unit noise, hold noise_dt
     h = m.noise_dt
-    D = 1.0 / STICK.gamma  # the model-unit intensity that the node nz must carry
+    D = 1.0 / STICK_A02.gamma  # the model-unit intensity that the node nz must carry
     aligned = held[:, :k].sum(axis=1) * h
     var = aligned.var(ddof=1)
     se = var * math.sqrt(2.0 / (n - 1))
@@ -115,7 +114,7 @@ def test_bridge_law_closed_form_and_inverse():
 
 
 def test_table_rows_have_units_and_meanings():
-    rows = map_model(STICK, CircuitSpec(diode="1N4148")).table()
+    rows = map_model(STICK_A02, CircuitSpec(diode="1N4148")).table()
     names = [r[0] for r in rows]
     assert len(names) == len(set(names))
     for _name, value, unit, meaning in rows:
@@ -134,7 +133,7 @@ def test_bias_from_smoothing_is_refused_unless_allowed():
     assert map_model(model, fine_noise.replace(smoothing=0.01)).bias["smoothing"] <= 0.05
 
 
-@pytest.mark.parametrize("model", [STICK, SLIP, WORK, Model(1.0, 0.7, 0.2, 300.0), Model(1.0, 0.7, -1.5, 50.0)])
+@pytest.mark.parametrize("model", [STICK_A02, SLIP_A12, WORK, Model(1.0, 0.7, 0.2, 300.0), Model(1.0, 0.7, -1.5, 50.0)])
 def test_bias_measures_against_brute_force_grids(model):
     """stationary_std (closed form) and central_bin_bias (shifted integrals near 0) against
     plain grid integration of the normalised stationary densities (eq. p_stat)."""
@@ -154,22 +153,22 @@ def test_bias_measures_against_brute_force_grids(model):
 
 def test_bias_from_noise_hold_is_refused_unless_allowed():
     with pytest.raises(ValueError, match="noise_dt"):
-        map_model(STICK, CircuitSpec(noise_dt=0.2))
+        map_model(STICK_A02, CircuitSpec(noise_dt=0.2))
     # weak noise in the stick regime: the peak at v = 0 relaxes in ~ gamma std^2 << tau_m
     with pytest.raises(ValueError, match="noise_dt.*t_rel"):
         map_model(Model(1.0, 0.7, 0.2, 100.0), CircuitSpec(smoothing=0.01))
-    assert map_model(STICK, CircuitSpec(noise_dt=0.2, allow_bias=True)).noise_correlation == pytest.approx(0.2)
+    assert map_model(STICK_A02, CircuitSpec(noise_dt=0.2, allow_bias=True)).noise_correlation == pytest.approx(0.2)
 
 
 def test_real_part_limits():
     with pytest.raises(ValueError, match="I_Delta.*maximum forward current"):
-        map_model(STICK, CircuitSpec(diode="1N4148", capacitance=2e-5, volts_per_velocity=20.0))
+        map_model(STICK_A02, CircuitSpec(diode="1N4148", capacitance=2e-5, volts_per_velocity=20.0))
     with pytest.raises(ValueError, match="volts_per_velocity.*reverse-voltage"):
-        map_model(SLIP, CircuitSpec(diode="BAT54", smoothing=0.01))
+        map_model(SLIP_A12, CircuitSpec(diode="BAT54", smoothing=0.01))
     with pytest.raises(ValueError, match="smoothing"):
-        map_model(STICK, CircuitSpec(diode="1N4148", volts_per_velocity=2.0))
+        map_model(STICK_A02, CircuitSpec(diode="1N4148", volts_per_velocity=2.0))
     # an ideal diode has no such limits
-    assert map_model(SLIP, CircuitSpec(smoothing=0.01)).part.ideal
+    assert map_model(SLIP_A12, CircuitSpec(smoothing=0.01)).part.ideal
 
 
 @pytest.mark.parametrize("kwargs, name", [
@@ -186,14 +185,14 @@ def test_voltage_tolerance_stays_below_friction_width():
     for gamma in (10.0, 1e4):
         m = map_model(Model(1.0, 0.7, 0.2, gamma), CircuitSpec(smoothing=0.002, noise_dt=1e-4, allow_bias=True))
         assert m.vntol <= 1e-3 * m.eps_volts
-    assert map_model(STICK, CircuitSpec(vntol=1e-9)).vntol == 1e-9
+    assert map_model(STICK_A02, CircuitSpec(vntol=1e-9)).vntol == 1e-9
 
 
 def test_map_model_type_checks():
     with pytest.raises(ValueError, match="model"):
         map_model({"tau_m": 1})
     with pytest.raises(ValueError, match="spec"):
-        map_model(STICK, {"diode": "ideal"})
+        map_model(STICK_A02, {"diode": "ideal"})
 
 
 def test_noise_bias_estimate_matches_exact_held_noise_ou():
@@ -260,7 +259,7 @@ def test_zero_delta_maps_to_rc_circuit_without_coulomb_element(model, spec):
     # kappa is the user's or 1 V (the diode's choice of kappa does not apply without a diode)
     assert m.kappa == (spec.volts_per_velocity or 1.0)
     # a Delta > 0 model with the same spec does have its element
-    assert {r[0]: r[1] for r in map_model(STICK, spec).table()}["coulomb_elements"] == 1.0
+    assert {r[0]: r[1] for r in map_model(STICK_A02, spec).table()}["coulomb_elements"] == 1.0
 
 
 def test_zero_delta_rc_circuit_relaxes_like_ou():
@@ -304,7 +303,7 @@ def test_tiny_delta_keeps_ideal_bridge_source_positive():
     vp, vn = bridge_node_voltages(m.part, m.i_delta, np.array([-3.0, 0.0, 1e-3, 3.0]))
     assert np.all(np.isfinite(vp)) and np.all(np.isfinite(vn))
     # above ~1e-8 A the ideal diode keeps the standard IS = 1e-14 A
-    assert map_model(STICK).part.IS == 1e-14
+    assert map_model(STICK_A02).part.IS == 1e-14
 
 
 def test_bridge_law_refuses_source_below_minus_two_is():
@@ -327,7 +326,7 @@ def test_stationary_range_by_grid():
     bound sqrt(64 tau_m/gamma) around the minimum, and far inside it in the stick regime at
     weak noise (U rises linearly there)."""
     from analogue.circuit.mapping import stationary_range
-    for model in (STICK, SLIP, OU, Model(1.0, 0.7, -0.2, 1e3), Model(1.0, 0.7, 0.2, 1e3, epsilon=1e-4)):
+    for model in (STICK_A02, SLIP_A12, OU, Model(1.0, 0.7, -0.2, 1e3), Model(1.0, 0.7, 0.2, 1e3, epsilon=1e-4)):
         lo, hi = stationary_range(model)
         c = model.potential_minimum()
         w = 8.0 * model.velocity_scale
@@ -338,7 +337,7 @@ def test_stationary_range_by_grid():
         assert c - w * (1 + 1e-9) <= lo < c < hi <= c + w * (1 + 1e-9)
     lo, hi = stationary_range(Model(1.0, 0.7, 0.2, 1e3))
     assert hi - lo < 0.4 * 16 * math.sqrt(1e-3)
-    m = map_model(SLIP)
+    m = map_model(SLIP_A12)
     assert m.voltage_swing == pytest.approx(m.kappa * max(abs(b) for b in stationary_range(m.model_effective)))
 
 

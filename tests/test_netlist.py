@@ -14,15 +14,16 @@ from analogue.circuit import CircuitSpec, Deck, build_deck, map_model
 from analogue.circuit.experiments import (CIRCUITS_DIR, experiment_from_dict, experiment_names,
                                           load_experiment, regenerate_netlists)
 from analogue.circuit.rawfile import read_raw
+from conftest import STICK_A02
 
-STICK = Model(tau_m=1.0, delta=0.7, a=0.2, gamma=10.0)
+pytestmark = pytest.mark.requires_ngspice
 
 
 def deck_for(spec=None, replicas=3, seed=7, **kw):
     args = dict(replicas=replicas, v0=np.linspace(-1.0, 1.0, replicas), t_end=1.0, seed=seed,
                 sample_dt=0.01)
     args.update(kw)
-    return build_deck(map_model(STICK, spec), **args)
+    return build_deck(map_model(STICK_A02, spec), **args)
 
 
 def run(deck: Deck, tmp_path: Path):
@@ -183,7 +184,7 @@ def test_circuit_follows_model_pathwise_with_recorded_noise(tmp_path, spec, tol)
     circuit's v and x: this checks R, C, I_F, I_Delta, the bridge, kappa, theta, the noise gain
     and the integrator together.  Tolerances: solver error, measured to fall from 3.6e-4 to
     1.8e-5 as reltol goes 1e-4 -> 1e-6 (ideal diodes, kappa = 1 V)."""
-    m = map_model(STICK, spec)
+    m = map_model(STICK_A02, spec)
     v0 = np.array([2.0, -2.0, 0.5, -0.3, 0.0, 1.0])
     t_end = 2.0
     deck = build_deck(m, replicas=6, v0=v0, t_end=t_end, seed=5, sample_dt=0.01)
@@ -201,7 +202,7 @@ def test_circuit_follows_model_pathwise_with_recorded_noise(tmp_path, spec, tol)
 
 
 def test_noise_is_reproducible_gaussian_and_independent(tmp_path):
-    m = map_model(STICK)
+    m = map_model(STICK_A02)
     replicas, t_end = 8, 2.0
     deck = build_deck(m, replicas=replicas, v0=np.zeros(replicas), t_end=t_end, seed=99, sample_dt=0.01)
     for name in ("a", "b", "c"):
@@ -271,7 +272,7 @@ def test_edge_decks_are_finite_and_signed(model, spec):
 
 def test_v0_rating_refusal_states_the_limit():
     spec = CircuitSpec(diode="BAT54")
-    m = map_model(STICK, spec)
+    m = map_model(STICK_A02, spec)
     with pytest.raises(ValueError, match=r"v0.*reverse-voltage.*keep \|v0\| below") as exc:
         deck_for(spec, v0=np.array([0.0, 1.0, 5.0]))
     limit = float(re.search(r"below ([0-9.e+-]+)", str(exc.value)).group(1))

@@ -3,7 +3,6 @@
 import json
 import os
 import re
-import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -14,6 +13,7 @@ from scipy import stats
 from analogue.report.html import Figure, Section, Table, write_page
 from analogue.report.metrics import Budget, compare, validate_metrics
 from analogue.report.plan import ReportSettings, RunOptions
+from conftest import chromium
 
 ROOT = Path(__file__).resolve().parents[1]
 ARTIFACTS = ROOT / "test-artifacts"
@@ -138,15 +138,14 @@ def test_quick_paper_comparisons_are_within_budget_or_flagged(paper_report):
 
 
 def _chromium():
-    for name in ("chromium", "chromium-browser", "google-chrome"):
-        path = shutil.which(name)
-        if path:
-            return path
-    raise AssertionError("headless Chromium is needed for this test: install Debian's "
-                         "'chromium' (make setup-test does)")
+    path = chromium()
+    assert path is not None  # requires_chromium skips the test otherwise
+    return path
 
 
 @pytest.mark.slow
+@pytest.mark.requires_chromium
+@pytest.mark.requires_ngspice
 @pytest.mark.xdist_group("paper")
 def test_report_loads_in_headless_chromium(paper_report, tmp_path):
     out, _ = paper_report

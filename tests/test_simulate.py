@@ -19,9 +19,9 @@ import analogue
 from analogue import Model
 from analogue.circuit import ngspice as ng
 from analogue.circuit.simulate import deck_seeds, initial_velocities, time_grid
+from conftest import SLIP_A12, STICK_A02
 
-STICK = Model(tau_m=1.0, delta=0.7, a=0.2, gamma=10.0)
-SLIP = Model(tau_m=1.0, delta=0.7, a=1.2, gamma=10.0)
+pytestmark = pytest.mark.requires_ngspice
 
 
 def documented_bias(e, name="noise") -> float:
@@ -83,9 +83,9 @@ def replica_estimates(v: np.ndarray) -> dict:
 # ------------------------------------------------------------------------ reproducibility
 def test_same_seed_identical_different_seed_differs():
     kw = dict(v0=0.3, t_end=2.0, replicas=6, replicas_per_deck=4)
-    a = run(STICK, seed=3, **kw)
-    b = run(STICK, seed=3, workers=1, **kw)  # other scheduling, same numbers
-    c = run(STICK, seed=4, **kw)
+    a = run(STICK_A02, seed=3, **kw)
+    b = run(STICK_A02, seed=3, workers=1, **kw)  # other scheduling, same numbers
+    c = run(STICK_A02, seed=4, **kw)
     np.testing.assert_array_equal(a.v, b.v)
     np.testing.assert_array_equal(a.x, b.x)
     assert not np.allclose(a.v[:, 1:], c.v[:, 1:])
@@ -104,7 +104,7 @@ def test_same_seed_identical_different_seed_differs():
 
 def test_ensemble_meta_is_json_and_saves(tmp_path):
     import json
-    e = run(STICK, v0=0.1, t_end=0.5, replicas=2, seed=1)
+    e = run(STICK_A02, v0=0.1, t_end=0.5, replicas=2, seed=1)
     json.dumps(e.meta)
     e.save(tmp_path / "e.npz")
     back = analogue.Ensemble.load(tmp_path / "e.npz")
@@ -114,7 +114,7 @@ def test_ensemble_meta_is_json_and_saves(tmp_path):
 
 
 def test_positions_integrate_velocities():
-    e = run(SLIP, v0=-0.5, t_end=3.0, replicas=3, seed=8, sample_dt=0.005)
+    e = run(SLIP_A12, v0=-0.5, t_end=3.0, replicas=3, seed=8, sample_dt=0.005)
     x_trap = np.concatenate([np.zeros((3, 1)),
                              np.cumsum(0.5 * (e.v[:, 1:] + e.v[:, :-1]) * e.dt, axis=1)], axis=1)
     # trapezoid on the output grid vs the circuit's integrator node: differences come from the
@@ -125,7 +125,7 @@ def test_positions_integrate_velocities():
 
 def test_stationary_initial_values_follow_p_s():
     """The v0="stationary" draw (before any circuit) has the exact stationary mean/variance."""
-    m = STICK.replace(epsilon=0.006)
+    m = STICK_A02.replace(epsilon=0.006)
     v0 = initial_velocities(m, "stationary", 20000, seed=1)
     check_iid_sample(v0, exact_moments(m))
     np.testing.assert_array_equal(v0, initial_velocities(m, "stationary", 20000, seed=1))
@@ -135,7 +135,7 @@ def test_stationary_initial_values_follow_p_s():
 def test_stationary_sampler_slip(epsilon):
     """The exact sampler behind v0="stationary" in the slip regime (kinked and smooth law)."""
     from analogue.circuit.simulate import _sample_stationary
-    m = SLIP.replace(epsilon=epsilon)
+    m = SLIP_A12.replace(epsilon=epsilon)
     v0 = _sample_stationary(m, 20000, np.random.default_rng(4))
     check_iid_sample(v0, exact_moments(m))
 
@@ -146,11 +146,11 @@ def test_recorded_noise_drove_the_circuit():
     dv = -U'(v) dt + sqrt(2 h/gamma) z_k (per hold h, held constant, 20 Euler substeps) driven by
     them retraces the circuit's paths; shifting the noise by one hold does not."""
     R, T = 4, 5.0
-    e = run(STICK, v0=0.5, t_end=T, replicas=R, seed=2)
+    e = run(STICK_A02, v0=0.5, t_end=T, replicas=R, seed=2)
     z = e.noise
     assert z is not None
     with pytest.warns(DeprecationWarning, match="ensemble.noise"):
-        e_old, z_old = run(STICK, v0=0.5, t_end=T, replicas=R, seed=2, return_noise=True)
+        e_old, z_old = run(STICK_A02, v0=0.5, t_end=T, replicas=R, seed=2, return_noise=True)
     np.testing.assert_array_equal(z_old, z)  # the deprecated form still gives the same numbers
     np.testing.assert_array_equal(e_old.v, e.v)
     h = e.meta["noise_dt"]
@@ -164,20 +164,20 @@ def test_recorded_noise_drove_the_circuit():
     def integrate_held(zz):
         v, path = np.full(R, 0.5), [np.full(R, 0.5)]
         for k in range(zz.shape[1]):
-            xi = math.sqrt(2 / (STICK.gamma * h)) * zz[:, k]
+            xi = math.sqrt(2 / (STICK_A02.gamma * h)) * zz[:, k]
             for _ in range(20):
                 v = v + (eff.drift(v) + xi) * h / 20
             path.append(v)
         return np.array(path).T
 
     err = np.max(np.abs(integrate_held(z) - e.v[:, ::every]))
-    assert err < 0.01 * STICK.velocity_scale  # Euler O(h/20) and the solver's reltol
+    assert err < 0.01 * STICK_A02.velocity_scale  # Euler O(h/20) and the solver's reltol
     shifted = np.max(np.abs(integrate_held(np.roll(z, 1, axis=1)) - e.v[:, ::every]))
     assert shifted > 10 * err
 
 
 # --------------------------------------------------------------------------- noise-free
-@pytest.mark.parametrize("model,v0", [(STICK, 1.0), (SLIP, -1.0)])
+@pytest.mark.parametrize("model,v0", [(STICK_A02, 1.0), (SLIP_A12, -1.0)])
 def test_noise_free_circuit_follows_deterministic_motion(model, v0):
     """gamma = 1e8 makes the noise negligible (deviation <= sqrt(2 t/gamma) ~ 2.4e-4); the
     circuit then follows the noise-free ODE of the model it implements, and the sgn-law
@@ -279,12 +279,12 @@ def test_delivered_noise_intensity_delta_zero():
 # ------------------------------------------------------------- stationary statistics
 @pytest.fixture(scope="module")
 def slip_run():
-    return run(SLIP, v0="stationary", t_end=80.0, replicas=16, seed=7, replicas_per_deck=4)
+    return run(SLIP_A12, v0="stationary", t_end=80.0, replicas=16, seed=7, replicas_per_deck=4)
 
 
 @pytest.fixture(scope="module")
 def stick_run():
-    return run(STICK, v0="stationary", t_end=40.0, replicas=24, seed=9, replicas_per_deck=12)
+    return run(STICK_A02, v0="stationary", t_end=40.0, replicas=24, seed=9, replicas_per_deck=12)
 
 
 def _check_moments(e, model):
@@ -305,14 +305,14 @@ def _check_moments(e, model):
 @pytest.mark.slow
 @pytest.mark.xdist_group("circuit-slip-run")  # share the module fixture under -n 2
 def test_stationary_moments_slip(slip_run):
-    ex, ex0, est = _check_moments(slip_run, SLIP)
+    ex, ex0, est = _check_moments(slip_run, SLIP_A12)
     assert est["mean"][1] < 0.02 * ex["mean"]  # the test has power
     assert abs(ex["mean"] - ex0["mean"]) < 0.01 * ex0["mean"]
 
 
 @pytest.mark.slow
 def test_stationary_moments_stick(stick_run):
-    ex, ex0, est = _check_moments(stick_run, STICK)
+    ex, ex0, est = _check_moments(stick_run, STICK_A02)
     assert est["var"][1] < 0.06 * ex["var"]
     assert abs(ex["p_pos"] - ex0["p_pos"]) < 0.01
 
@@ -329,7 +329,7 @@ def test_replicas_are_independent(slip_run):
     corr = u @ u.T / N
     f = np.fft.rfft(u, n=2 * N, axis=1)
     acf = np.fft.irfft(np.abs(f) ** 2, axis=1)[:, :N].mean(0) / np.arange(N, 0, -1)
-    L = int(10 * SLIP.tau_m / slip_run.dt)
+    L = int(10 * SLIP_A12.tau_m / slip_run.dt)
     se = math.sqrt((1 + 2 * np.sum(acf[1:L] ** 2)) / N)
     off = corr[np.triu_indices(R, k=1)]
     assert se < 0.15  # about 100 effective samples: a correlation above 0.6 could not hide
@@ -346,12 +346,12 @@ def test_replicas_are_independent(slip_run):
 def test_dask_local_cluster_matches_local():
     distributed = pytest.importorskip("distributed")
     kw = dict(v0=0.5, t_end=1.0, replicas=5, seed=12, replicas_per_deck=2)
-    local = run(STICK, **kw)
+    local = run(STICK_A02, **kw)
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, host="127.0.0.1",
                                   dashboard_address=None) as cluster, \
             distributed.Client(cluster) as client:
-        remote = run(STICK, scheduler=client, **kw)
-        by_address = run(STICK, scheduler=cluster.scheduler_address, **kw)
+        remote = run(STICK_A02, scheduler=client, **kw)
+        by_address = run(STICK_A02, scheduler=cluster.scheduler_address, **kw)
     for other in (remote, by_address):
         np.testing.assert_array_equal(local.v, other.v)
         np.testing.assert_array_equal(local.x, other.x)
@@ -363,9 +363,9 @@ def test_injected_executor_matches_local():
     the default pool, and is left open."""
     import concurrent.futures as cf
     kw = dict(v0=0.5, t_end=0.5, replicas=3, seed=12, replicas_per_deck=2)
-    local = run(STICK, **kw)
+    local = run(STICK_A02, **kw)
     with cf.ThreadPoolExecutor(2) as pool:
-        injected = run(STICK, executor=pool, **kw)
+        injected = run(STICK_A02, executor=pool, **kw)
         assert pool.submit(int, 7).result() == 7
     np.testing.assert_array_equal(local.v, injected.v)
     np.testing.assert_array_equal(local.x, injected.x)
@@ -390,14 +390,14 @@ BASE = dict(v0=0.0, t_end=1.0, replicas=2, seed=0)
 def test_bad_input_names_parameter(change, name):
     kw = {**BASE, **change}
     with pytest.raises(ValueError, match=name):
-        analogue.simulate(STICK, store=False, progress=False, **kw) if "store" not in change \
-            and "progress" not in change else analogue.simulate(STICK, **kw)
+        analogue.simulate(STICK_A02, store=False, progress=False, **kw) if "store" not in change \
+            and "progress" not in change else analogue.simulate(STICK_A02, **kw)
 
 
 def test_unknown_keyword_is_a_type_error():
     # the signature is explicit (no **kwargs): Python names the unknown keyword itself
     with pytest.raises(TypeError, match="colour"):
-        analogue.simulate(STICK, store=False, progress=False, colour="red", **BASE)
+        analogue.simulate(STICK_A02, store=False, progress=False, colour="red", **BASE)
 
 
 def test_bad_model_and_grid():
@@ -411,4 +411,4 @@ def test_bad_model_and_grid():
 def test_missing_ngspice_through_simulate(monkeypatch, tmp_path):
     monkeypatch.setenv("PATH", str(tmp_path))
     with pytest.raises(ng.NgspiceNotFoundError, match="apt-get install ngspice"):
-        analogue.simulate(STICK, store=False, progress=False, **BASE)
+        analogue.simulate(STICK_A02, store=False, progress=False, **BASE)

@@ -5,12 +5,13 @@ import numpy as np
 import pytest
 
 import analogue
-from analogue import Model
 from analogue.circuit import ngspice as ng
 from analogue.circuit import store as store_mod
 from analogue.circuit.store import RunStore, batch_key, open_store
+from conftest import STICK_A02
 
-STICK = Model(tau_m=1.0, delta=0.7, a=0.2, gamma=10.0)
+pytestmark = pytest.mark.requires_ngspice
+
 KW = dict(v0=0.4, t_end=1.0, replicas=8, seed=5, replicas_per_deck=2, progress=False)
 
 
@@ -104,25 +105,25 @@ def test_store_location(monkeypatch, tmp_path):
 
 # ------------------------------------------------------------------ through simulate
 def test_second_call_runs_no_ngspice(tmp_path, counted):
-    first = analogue.simulate(STICK, store=tmp_path, **KW)
+    first = analogue.simulate(STICK_A02, store=tmp_path, **KW)
     assert counted["runs"] == 4 and first.meta["ran"] == 4 and first.meta["from_store"] == 0
     assert len(RunStore(tmp_path).keys()) == 4
-    second = analogue.simulate(STICK, store=tmp_path, **KW)
+    second = analogue.simulate(STICK_A02, store=tmp_path, **KW)
     assert counted["runs"] == 4  # nothing ran
     assert second.meta["from_store"] == 4 and second.meta["ran"] == 0
     np.testing.assert_array_equal(first.v, second.v)
     np.testing.assert_array_equal(first.x, second.x)
     assert second.meta["store_keys"] == first.meta["store_keys"]
     # another output grid is another result
-    analogue.simulate(STICK, store=tmp_path, sample_dt=0.02, **KW)
+    analogue.simulate(STICK_A02, store=tmp_path, sample_dt=0.02, **KW)
     assert counted["runs"] == 8
 
 
 def test_environment_variable_selects_store(tmp_path, monkeypatch, counted):
     monkeypatch.setenv("ANALOGUE_STORE", str(tmp_path / "runs"))
-    e = analogue.simulate(STICK, **{**KW, "replicas": 2})
+    e = analogue.simulate(STICK_A02, **{**KW, "replicas": 2})
     assert e.meta["store"] == str(tmp_path / "runs") and counted["runs"] == 1
-    analogue.simulate(STICK, **{**KW, "replicas": 2})
+    analogue.simulate(STICK_A02, **{**KW, "replicas": 2})
     assert counted["runs"] == 1
 
 
@@ -130,22 +131,22 @@ def test_interrupted_run_resumes(tmp_path, counted):
     seeds = analogue.circuit.simulate.deck_seeds(KW["seed"], 4)
     counted["fail_seed"] = seeds[2]
     with pytest.raises(ng.NgspiceError, match="simulated crash"):
-        analogue.simulate(STICK, store=tmp_path, workers=1, **KW)
+        analogue.simulate(STICK_A02, store=tmp_path, workers=1, **KW)
     done = len(RunStore(tmp_path).keys())
     assert 1 <= done <= 3  # decks finished before the crash were kept
     assert not ng._ACTIVE  # no ngspice process of the failed call is left running
     counted["fail_seed"] = None
     before = counted["runs"]
-    resumed = analogue.simulate(STICK, store=tmp_path, **KW)
+    resumed = analogue.simulate(STICK_A02, store=tmp_path, **KW)
     assert counted["runs"] - before == 4 - done
     assert resumed.meta["from_store"] == done
-    fresh = analogue.simulate(STICK, store=False, **KW)
+    fresh = analogue.simulate(STICK_A02, store=False, **KW)
     np.testing.assert_array_equal(resumed.v, fresh.v)
     np.testing.assert_array_equal(resumed.x, fresh.x)
 
 
 def test_stored_provenance(tmp_path):
-    e = analogue.simulate(STICK, store=tmp_path, **{**KW, "replicas": 2})
+    e = analogue.simulate(STICK_A02, store=tmp_path, **{**KW, "replicas": 2})
     (key,) = e.meta["store_keys"]
     arrays, meta = RunStore(tmp_path).get(key)
     np.testing.assert_array_equal(arrays["t"], e.t)

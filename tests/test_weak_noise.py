@@ -11,9 +11,7 @@ from scipy.integrate import trapezoid
 
 from analogue import Model
 from analogue.theory import weak_noise as wn
-
-STICK_FIG2 = Model(tau_m=1.0, delta=0.7, a=0.3, gamma=10.0)   # paper's Fig. 2 parameters
-SLIP = Model(tau_m=1.0, delta=0.7, a=1.2, gamma=10.0)    # paper's Fig. 4 parameters
+from conftest import SLIP_A12, STICK_FIG2
 
 
 def path_integral(model, p):
@@ -34,7 +32,7 @@ def jump_is_continuous(f, x, scale):
 
 
 # ----------------------------------------------------------------------------- identities
-@pytest.mark.parametrize("model", [STICK_FIG2, SLIP, STICK_FIG2.replace(a=-0.3), SLIP.replace(a=-1.2),
+@pytest.mark.parametrize("model", [STICK_FIG2, SLIP_A12, STICK_FIG2.replace(a=-0.3), SLIP_A12.replace(a=-1.2),
                                    STICK_FIG2.replace(a=0.7), STICK_FIG2.replace(a=0.0)])
 @pytest.mark.parametrize("v0", [1.5, -1.5, 0.4])
 def test_deterministic_path_has_zero_action(model, v0):
@@ -76,7 +74,7 @@ def test_delta_zero_is_ornstein_uhlenbeck(a, v0, t):
     assert np.allclose(wn.action(model, v, t, v0), ou, rtol=1e-9, atol=1e-12)
 
 
-@pytest.mark.parametrize("model", [STICK_FIG2, SLIP, STICK_FIG2.replace(a=0.7), STICK_FIG2.replace(delta=0.0)])
+@pytest.mark.parametrize("model", [STICK_FIG2, SLIP_A12, STICK_FIG2.replace(a=0.7), STICK_FIG2.replace(delta=0.0)])
 @pytest.mark.parametrize("v0", [1.5, -1.0, 0.0])
 def test_mirror_symmetry(model, v0):
     """f(v,t|v0;a) = f(-v,t|-v0;-a) (section II).  For a = 0 this is a genuine check of the
@@ -112,11 +110,11 @@ FIVE_KINDS = [
     (STICK_FIG2, 1.5, -0.5, 0.5, "direct-crossing"),
     (STICK_FIG2, 1.5, 0.3, 3.0, "indirect"),
     (STICK_FIG2, 1.5, -0.3, 3.0, "indirect-crossing"),
-    (SLIP, -1.5, -0.3, 2.0, "twice-crossing"),
-    (SLIP.replace(a=-1.2), 1.5, 0.3, 2.0, "twice-crossing"),
+    (SLIP_A12, -1.5, -0.3, 2.0, "twice-crossing"),
+    (SLIP_A12.replace(a=-1.2), 1.5, 0.3, 2.0, "twice-crossing"),
     (STICK_FIG2.replace(a=-0.3), -1.5, 0.3, 3.0, "indirect-crossing"),
-    (SLIP, -1.0, 0.5, 2.0, "direct-crossing"),
-    (SLIP, -1.5, -0.5, 0.5, "direct"),
+    (SLIP_A12, -1.0, 0.5, 2.0, "direct-crossing"),
+    (SLIP_A12, -1.5, -0.5, 0.5, "direct"),
 ]
 
 
@@ -212,7 +210,7 @@ def test_w_matches_paper_eq_dpm_and_u_eq_vc_b():
         assert b["u"] == pytest.approx(u_paper, rel=1e-11)
 
 
-@pytest.mark.parametrize("model,v0", [(SLIP, -1.0), (SLIP.replace(a=-1.2), 1.0), (SLIP, -0.2),
+@pytest.mark.parametrize("model,v0", [(SLIP_A12, -1.0), (SLIP_A12.replace(a=-1.2), 1.0), (SLIP_A12, -0.2),
                                       (Model(1.0, 0.2, 0.5, 1.0), -2.0)])
 def test_w_cr_is_where_the_action_switches_continuously(model, v0):
     for t in (1.5, 3.0):
@@ -236,9 +234,9 @@ def test_boundaries_apply_only_where_they_should():
     assert np.isnan(b["w"][:2]).all() and np.isnan(b["u"][:2]).all()
     assert np.isfinite(b["w"][2]) and np.isnan(b["w_cr"]).all()
     assert wn.boundaries(STICK_FIG2, STICK_FIG2.stick_time(1.5), 1.5)["w"] == pytest.approx(0.0, abs=1e-12)
-    s = wn.boundaries(SLIP, np.array([1.0, 2.0]), 1.0)  # v0 on the attractor side
+    s = wn.boundaries(SLIP_A12, np.array([1.0, 2.0]), 1.0)  # v0 on the attractor side
     assert all(np.isnan(s[k]).all() for k in s)
-    s = wn.boundaries(SLIP, np.array([1.0, 2.0]), -1.0)
+    s = wn.boundaries(SLIP_A12, np.array([1.0, 2.0]), -1.0)
     assert np.isnan(s["w"]).all() and np.isnan(s["u"]).all() and np.isfinite(s["w_cr"]).all()
     assert (np.diff(s["w_cr"]) < 0).all()  # the twice-crossing region grows with t
 
@@ -267,7 +265,7 @@ def test_edge_parameters_are_the_limit(name, value):
                                    atol=1e-5)
 
 
-@pytest.mark.parametrize("model", [STICK_FIG2, SLIP, STICK_FIG2.replace(a=0.7), STICK_FIG2.replace(delta=0.0)])
+@pytest.mark.parametrize("model", [STICK_FIG2, SLIP_A12, STICK_FIG2.replace(a=0.7), STICK_FIG2.replace(delta=0.0)])
 def test_v0_zero_and_v_zero_are_the_limit(model):
     v = np.linspace(-2.0, 2.0, 81)
     for t in (0.5, 2.5):
@@ -282,7 +280,7 @@ def test_v0_zero_and_v_zero_are_the_limit(model):
 
 
 def test_long_times_do_not_overflow():
-    for model, v0 in [(STICK_FIG2, 1.0), (SLIP, -1.0), (SLIP, 1.0)]:
+    for model, v0 in [(STICK_FIG2, 1.0), (SLIP_A12, -1.0), (SLIP_A12, 1.0)]:
         v = np.linspace(-3, 3, 31)
         A = wn.action(model, v, 800.0, v0)
         assert np.all(np.isfinite(A))
@@ -291,13 +289,13 @@ def test_long_times_do_not_overflow():
         key = "w" if model is STICK_FIG2 else "w_cr"
         if model is STICK_FIG2 or v0 < 0:
             assert abs(b[key]) > 1e100  # the boundaries run off to infinity like e^{t/tau}
-    w_cr = wn.boundaries(SLIP, np.array([10.0, 20.0, 40.0]), -1.0)["w_cr"]
+    w_cr = wn.boundaries(SLIP_A12, np.array([10.0, 20.0, 40.0]), -1.0)["w_cr"]
     assert np.all(np.diff(np.log(-w_cr)) > 0.9 * 10.0)  # ~ e^{t/tau}: no saturation by rounding
 
 
 # ----------------------------------------------------------------------------- propagator
-@pytest.mark.parametrize("model,v0", [(STICK_FIG2, 2.0), (STICK_FIG2, -2.0), (SLIP, -1.0), (SLIP, 1.0),
-                                      (SLIP.replace(a=-1.2), 1.0)])
+@pytest.mark.parametrize("model,v0", [(STICK_FIG2, 2.0), (STICK_FIG2, -2.0), (SLIP_A12, -1.0), (SLIP_A12, 1.0),
+                                      (SLIP_A12.replace(a=-1.2), 1.0)])
 def test_propagator_tends_to_stationary_law(model, v0):
     v = np.linspace(-4.0, 4.0, 1601)  # h = 0.005; 0 on the grid
     ps = model.stationary_pdf(v)
@@ -360,7 +358,7 @@ def test_propagator_piecewise_form_sol3_and_stationary_switching_times():
     """eq. sol3 (a > Delta, v0 < 0): Lambda_- below w_cr, the three-piece eq. Adc between w_cr
     and 0, the direct crossing eq. Adirx above 0.  The switching times from optimal_path make
     eqs. Adc / Adirx stationary (finite differences), independently of how they were found."""
-    m, v0, t = SLIP, -1.0, 2.0
+    m, v0, t = SLIP_A12, -1.0, 2.0
     v = np.linspace(-3.0, 3.0, 241)
     f = wn.propagator(m, v, t, v0)
     x = wn.boundaries(m, t, v0)["w_cr"]

@@ -10,11 +10,11 @@ from scipy import integrate
 from analogue import Model
 from analogue.theory import ornstein_uhlenbeck as ou
 from analogue.theory import work_statistics as ws
+from conftest import SLIP_A12
 
 OU10 = Model(tau_m=1.0, delta=0.0, a=0.5, gamma=10.0)
 OU100 = Model(tau_m=0.7, delta=0.0, a=-0.8, gamma=100.0, mass=2.0)
 FIG8 = Model(tau_m=1.0, delta=1.0, a=0.5, gamma=10.0)       # paper's Fig. 8 parameters
-SLIP = Model(tau_m=1.0, delta=0.7, a=1.2, gamma=10.0)
 
 
 # ----------------------------------------------------------------- OU closed forms
@@ -83,7 +83,7 @@ def test_rate_function_equals_ou_closed_form(model):
 
 
 # ------------------------------------------------------------- SCGF (Delta > 0)
-@pytest.mark.parametrize("model", [FIG8, SLIP])
+@pytest.mark.parametrize("model", [FIG8, SLIP_A12])
 def test_scgf_zero_slope_mean_and_convexity(model):
     assert float(ws.scgf(model, 0.0)) == pytest.approx(0.0, abs=1e-9)
     mean = ws.work_rate_mean(model)
@@ -108,7 +108,7 @@ def test_scgf_converged_in_grid_spacing():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("model", [FIG8, SLIP])
+@pytest.mark.parametrize("model", [FIG8, SLIP_A12])
 def test_rate_function_zero_at_mean_nonnegative_convex_and_legendre(model):
     mean = ws.work_rate_mean(model)
     assert float(ws.rate_function(model, mean)) == pytest.approx(0.0, abs=1e-12)
@@ -155,11 +155,11 @@ def slip_density():
     """Work-rate density at tau = 4 on a trapezoid grid (spectrally accurate for an analytic
     density: step 0.15 against a standard deviation 0.2) from -4 to +5 standard deviations."""
     tau = 4.0
-    mean = ws.work_rate_mean(SLIP)
+    mean = ws.work_rate_mean(SLIP_A12)
     w = np.linspace(mean - 0.75, mean + 1.05, 13)
     # 32 modes: at tau = 4 the higher modes are damped by exp(-4 * gap); convergence in modes is
     # tested separately (test_work_pdf_converged_in_modes)
-    return tau, w, ws.work_pdf(SLIP, w, tau, modes=32)
+    return tau, w, ws.work_pdf(SLIP_A12, w, tau, modes=32)
 
 
 @pytest.mark.slow
@@ -168,7 +168,7 @@ def test_work_pdf_normalised_with_mean_F_v(slip_density):
     assert p[0] < 1e-6 * p.max() and p[-1] < 1e-3 * p.max()
     # truncated tails hold < 2e-4 of the mass (the density falls faster than the Gaussian beyond)
     assert integrate.trapezoid(p, w) == pytest.approx(1.0, abs=5e-4)
-    assert integrate.trapezoid(w * p, w) == pytest.approx(ws.work_rate_mean(SLIP), abs=1e-3)
+    assert integrate.trapezoid(w * p, w) == pytest.approx(ws.work_rate_mean(SLIP_A12), abs=1e-3)
 
 
 @pytest.mark.slow
@@ -178,12 +178,12 @@ def test_work_pdf_variance_matches_monte_carlo(slip_density):
     mean = integrate.trapezoid(w * p, w) / integrate.trapezoid(p, w)
     var = integrate.trapezoid((w - mean) ** 2 * p, w) / integrate.trapezoid(p, w)
     n = 4000
-    ens = simulate_sde(SLIP, v0="stationary", t_end=tau, replicas=n, seed=20261122, sample_dt=tau)
-    wr = SLIP.force * (ens.x[:, -1] - ens.x[:, 0]) / tau
+    ens = simulate_sde(SLIP_A12, v0="stationary", t_end=tau, replicas=n, seed=20261122, sample_dt=tau)
+    wr = SLIP_A12.force * (ens.x[:, -1] - ens.x[:, 0]) / tau
     mc_var = np.var(wr, ddof=1)
     se_var = mc_var * math.sqrt(2.0 / (n - 1))
     assert abs(mc_var - var) < 4 * se_var
-    assert abs(np.mean(wr) - ws.work_rate_mean(SLIP)) < 4 * math.sqrt(mc_var / n)
+    assert abs(np.mean(wr) - ws.work_rate_mean(SLIP_A12)) < 4 * math.sqrt(mc_var / n)
 
 
 def test_work_pdf_variance_matches_autocorrelation_route(slip_density):
@@ -195,8 +195,8 @@ def test_work_pdf_variance_matches_autocorrelation_route(slip_density):
     mean = integrate.trapezoid(w * p, w) / norm
     var = integrate.trapezoid((w - mean) ** 2 * p, w) / norm
     s = np.linspace(0.0, tau, 81)
-    C = autocorrelation(SLIP, s)
-    ref = 2 * SLIP.force**2 * integrate.simpson((tau - s) * C, x=s) / tau**2
+    C = autocorrelation(SLIP_A12, s)
+    ref = 2 * SLIP_A12.force**2 * integrate.simpson((tau - s) * C, x=s) / tau**2
     # the density's truncated tails (< 2e-4 of the mass, 4-5 sd out) bias the variance low by
     # < 25 * 2e-4 relative; Simpson on 81 lags of a smooth C: < 1e-6
     assert var == pytest.approx(ref, rel=5e-3)
@@ -213,7 +213,7 @@ def test_work_pdf_finite_and_unimodal_across_the_report_range():
     top = int(np.argmax(p))
     assert np.all(np.diff(p[:top + 1]) > 0) and np.all(np.diff(p[top:]) < 0)
     assert p[-1] < 1e-30 and p[0] < 1e-20          # far tails stay far tails
-    p_slip = ws.work_pdf(SLIP, np.array([-1.5, 0.5, 2.5]), 5.0)
+    p_slip = ws.work_pdf(SLIP_A12, np.array([-1.5, 0.5, 2.5]), 5.0)
     assert np.all(np.isfinite(p_slip)) and p_slip[1] > p_slip[0] and p_slip[1] > p_slip[2]
 
 
@@ -221,8 +221,8 @@ def test_work_pdf_finite_and_unimodal_across_the_report_range():
 def test_work_pdf_converged_in_modes():
     w = np.array([0.3])
     np.testing.assert_allclose(ws.work_pdf(FIG8, w, 2.0), ws.work_pdf(FIG8, w, 2.0, modes=80), rtol=2e-4)
-    slip_w = np.array([ws.work_rate_mean(SLIP) + 0.6])
-    np.testing.assert_allclose(ws.work_pdf(SLIP, slip_w, 4.0, modes=32), ws.work_pdf(SLIP, slip_w, 4.0),
+    slip_w = np.array([ws.work_rate_mean(SLIP_A12) + 0.6])
+    np.testing.assert_allclose(ws.work_pdf(SLIP_A12, slip_w, 4.0, modes=32), ws.work_pdf(SLIP_A12, slip_w, 4.0),
                                rtol=1e-4)
 
 

@@ -10,7 +10,6 @@ import zipfile
 from pathlib import Path
 
 import pytest
-from click.testing import CliRunner
 
 from analogue.cli import main
 from analogue.circuit import experiments as E
@@ -42,12 +41,6 @@ def toml_text(doc: dict) -> str:
                 lines += ["", f"[{name}]", *table(v, name)]
         return lines
     return "\n".join(table(doc, "")) + "\n"
-
-
-@pytest.fixture
-def cli(monkeypatch):
-    monkeypatch.delenv("ANALOGUE_DEBUG", raising=False)
-    return CliRunner()
 
 
 def err_line(r) -> str:

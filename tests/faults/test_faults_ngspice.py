@@ -20,11 +20,12 @@ import numpy as np
 import pytest
 
 import analogue
-from analogue import Model
 from analogue.circuit import ngspice as ng
 from analogue.circuit.rawfile import read_raw
+from conftest import STICK_A02
 
-STICK = Model(tau_m=1.0, delta=0.7, a=0.2, gamma=10.0)
+pytestmark = pytest.mark.requires_ngspice
+
 GOOD_DECK = ("ok\nC1 v1 0 1e-6\nR1 v1 0 1e3\n.ic v(v1)=1\n.tran 1e-5 1e-3 0 1e-5 uic\n"
              ".save v(v1)\n.end\n")
 HEADER = ("Title: t\nDate: x\nPlotname: Transient Analysis\nFlags: real\nNo. Variables: {nvar}\n"
@@ -217,7 +218,7 @@ def test_simulate_timeout_keyword_holds(fake, tmp_path):
     """)
     t0 = time.monotonic()
     with pytest.raises(ng.NgspiceError) as exc:
-        analogue.simulate(STICK, v0=0.4, t_end=1.0, replicas=2, seed=1, replicas_per_deck=1,
+        analogue.simulate(STICK_A02, v0=0.4, t_end=1.0, replicas=2, seed=1, replicas_per_deck=1,
                           workers=2, store=tmp_path / "store", progress=False, timeout=1.5)
     assert time.monotonic() - t0 < 30.0  # imports + 1.5 s, on a loaded machine; not 300 s
     assert "timeout=1.5" in _one_line(exc)

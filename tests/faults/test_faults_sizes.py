@@ -15,12 +15,11 @@ import numpy as np
 import pytest
 
 import analogue
-from analogue import Model
 from analogue.circuit import limits
 from analogue.circuit import ngspice as ng
 from analogue.circuit import simulate as sim
+from conftest import STICK_A02
 
-STICK = Model(tau_m=1.0, delta=0.7, a=0.2, gamma=10.0)
 BASE = {"v0": 0.4, "seed": 1, "progress": False, "workers": 1}
 
 
@@ -36,7 +35,7 @@ def _refused(match_all, **kw):
     t0 = time.monotonic()
     try:
         with pytest.raises(ValueError) as exc:
-            analogue.simulate(STICK, **{**BASE, **kw})
+            analogue.simulate(STICK_A02, **{**BASE, **kw})
         elapsed = time.monotonic() - t0
         _, peak = tracemalloc.get_traced_memory()
     finally:
@@ -86,7 +85,7 @@ def test_store_limit_from_environment(no_ngspice, monkeypatch, tmp_path):
 def test_bad_limit_settings_are_named(monkeypatch, value, tmp_path):
     monkeypatch.setenv("ANALOGUE_MEMORY_LIMIT", value)
     with pytest.raises(ValueError, match="ANALOGUE_MEMORY_LIMIT"):
-        analogue.simulate(STICK, t_end=1.0, replicas=1, store=tmp_path, **BASE)
+        analogue.simulate(STICK_A02, t_end=1.0, replicas=1, store=tmp_path, **BASE)
 
 
 def test_within_the_limits_it_runs(monkeypatch, tmp_path):
@@ -94,11 +93,11 @@ def test_within_the_limits_it_runs(monkeypatch, tmp_path):
     refusing everything)."""
     monkeypatch.setenv("ANALOGUE_MEMORY_LIMIT", "200000")
     monkeypatch.setenv("ANALOGUE_STORE_LIMIT", "100k")
-    e = analogue.simulate(STICK, t_end=1.0, replicas=2, store=tmp_path, **BASE)
+    e = analogue.simulate(STICK_A02, t_end=1.0, replicas=2, store=tmp_path, **BASE)
     assert e.v.shape == (2, 101) and np.all(np.isfinite(e.v)) and e.meta["ran"] == 1
     # without a store only memory counts: the store limit does not refuse this one
     monkeypatch.delenv("ANALOGUE_MEMORY_LIMIT")
-    e2 = analogue.simulate(STICK, t_end=10.0, replicas=4, store=False, **BASE)
+    e2 = analogue.simulate(STICK_A02, t_end=10.0, replicas=4, store=False, **BASE)
     assert e2.v.shape == (4, 1001)
 
 
@@ -120,7 +119,7 @@ def test_limits_are_reported():
 def test_wrong_types_are_type_errors(no_ngspice, change, name):
     kw = {**BASE, "t_end": 1.0, "replicas": 2, "store": False, **change}
     with pytest.raises(TypeError, match=name) as exc:
-        analogue.simulate(STICK, **kw)
+        analogue.simulate(STICK_A02, **kw)
     assert isinstance(exc.value, ValueError)  # what these raised before: callers keep working
     with pytest.raises(TypeError, match="model"):
         analogue.simulate({"tau_m": 1.0}, **{**BASE, "t_end": 1.0, "replicas": 2})
@@ -137,6 +136,6 @@ def test_wrong_types_are_type_errors(no_ngspice, change, name):
 def test_odd_values_are_value_errors(no_ngspice, change, name):
     kw = {**BASE, "t_end": 1.0, "replicas": 2, "store": False, **change}
     with pytest.raises(ValueError, match=name) as exc:
-        analogue.simulate(STICK, **kw)
+        analogue.simulate(STICK_A02, **kw)
     assert not isinstance(exc.value, TypeError)
     assert "\n" not in str(exc.value)

@@ -25,11 +25,12 @@ import numpy as np
 import pytest
 
 import analogue
-from analogue import Model
 from analogue.circuit import store as store_mod
 from analogue.circuit.store import RunStore
+from conftest import STICK_A02
 
-STICK = Model(tau_m=1.0, delta=0.7, a=0.2, gamma=10.0)
+pytestmark = pytest.mark.requires_ngspice
+
 KW = {"v0": 0.4, "t_end": 1.0, "replicas": 4, "seed": 7, "replicas_per_deck": 1, "progress": False,
       "workers": 2}
 LOGGER = "analogue.circuit.store"
@@ -38,7 +39,7 @@ LOGGER = "analogue.circuit.store"
 @pytest.fixture(scope="module")
 def reference(tmp_path_factory):
     root = tmp_path_factory.mktemp("ref") / "store"
-    ens = analogue.simulate(STICK, store=root, **KW)
+    ens = analogue.simulate(STICK_A02, store=root, **KW)
     assert ens.meta["ran"] == 4
     return root, ens
 
@@ -63,7 +64,7 @@ def _store_warnings(caplog) -> list[str]:
 def _rerun(root, caplog, expect_ran, ref):
     caplog.clear()
     with caplog.at_level(logging.WARNING, logger="analogue"):
-        ens = analogue.simulate(STICK, store=root, **KW)
+        ens = analogue.simulate(STICK_A02, store=root, **KW)
     assert ens.meta["ran"] == expect_ran and ens.meta["from_store"] == 4 - expect_ran
     assert _same_bytes(ens.v, ref.v) and _same_bytes(ens.x, ref.x) and _same_bytes(ens.t, ref.t)
     return _store_warnings(caplog)
@@ -185,7 +186,7 @@ def test_store_path_is_a_file(reference, tmp_path, caplog):
     blocker.write_text("a file where the store directory should be")
     caplog.clear()
     with caplog.at_level(logging.WARNING, logger="analogue"):
-        ens = analogue.simulate(STICK, store=blocker, **KW)
+        ens = analogue.simulate(STICK_A02, store=blocker, **KW)
     assert _same_bytes(ens.v, ref.v) and _same_bytes(ens.x, ref.x)
     assert ens.meta["ran"] == 4
     warnings = _store_warnings(caplog)
@@ -204,7 +205,7 @@ def test_commit_refused_permission(reference, tmp_path, caplog, monkeypatch):
     monkeypatch.setattr(store_mod.os, "replace", refuse)
     caplog.clear()
     with caplog.at_level(logging.WARNING, logger="analogue"):
-        ens = analogue.simulate(STICK, store=root, **KW)
+        ens = analogue.simulate(STICK_A02, store=root, **KW)
     monkeypatch.undo()
     assert _same_bytes(ens.v, ref.v) and _same_bytes(ens.x, ref.x)
     warnings = _store_warnings(caplog)

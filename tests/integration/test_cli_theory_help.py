@@ -7,7 +7,6 @@ import re
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
 from analogue import Model
 from analogue.cli import main
@@ -17,11 +16,6 @@ from analogue.theory.query import QUANTITIES
 STICK = ["--tau-m", "1", "--delta", "0.7", "--a", "0.2", "--gamma", "10"]
 SLIP = ["--tau-m", "1", "--delta", "0.7", "--a", "1.2", "--gamma", "10"]
 WORK = ["--tau-m", "1", "--delta", "1", "--a", "0.5", "--gamma", "10"]
-
-
-@pytest.fixture
-def cli():
-    return CliRunner()
 
 
 def _strict(text):
