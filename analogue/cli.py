@@ -8,10 +8,12 @@ Set ``ANALOGUE_DEBUG=1`` to see the traceback instead.
 from __future__ import annotations
 
 import json
+import logging
 import math
 import os
 import re
 import sys
+import time
 from pathlib import Path
 
 import click
@@ -93,10 +95,36 @@ class _Command(click.Command):
     context_class = _Context
 
 
+class _ProgressLines(logging.Handler):
+    """The report job's progress (logger ``analogue.report``) as ``analogue [  12.3 s]: ...``
+    lines on the current stderr, timed from the start of the command."""
+
+    def __init__(self) -> None:
+        super().__init__(logging.INFO)
+        self.start = time.perf_counter()
+
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            print(f"analogue [{time.perf_counter() - self.start:6.1f} s]: {record.getMessage()}",
+                  file=sys.stderr, flush=True)
+        except Exception:  # noqa: BLE001 - logging must never break the run
+            self.handleError(record)
+
+
+def _show_progress() -> None:
+    """One progress handler per command (a fresh start time; none left from a previous one)."""
+    logger = logging.getLogger("analogue.report")
+    for h in [h for h in logger.handlers if isinstance(h, _ProgressLines)]:
+        logger.removeHandler(h)
+    logger.addHandler(_ProgressLines())
+    logger.setLevel(logging.INFO)
+
+
 class _Group(click.Group):
     """Turn every failure into one clear line and an exit code (module docstring)."""
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
+        _show_progress()
         if not standalone_mode:
             return super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
         try:

@@ -301,7 +301,9 @@ def _finite_tau_pdfs(model, dists, min_replicas=10):
     for tau, d in dists.items():
         w = d.centres[d.contributing >= min_replicas]
         with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)  # far-tail fallbacks: noted below
+            # work_pdf warns where it falls back to the large-deviation form (far tails, ln p
+            # right to O(1)); only bins the circuit reaches are evaluated here
+            warnings.simplefilter("ignore", RuntimeWarning)
             p = np.asarray(exact.work_pdf(model, w, tau))
         out[tau] = dict(zip(np.round(w, 12), p))
     return out

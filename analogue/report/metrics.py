@@ -22,7 +22,7 @@ class Budget:
     sign is known: circuit - ideal model, as predicted or measured by an independent route."""
 
     smoothing: float = 0.0      # diode tanh width: exact(eps) - exact(0)
-    bandwidth: float = 0.0      # held noise of finite sample interval (SDE at TS vs TS/2)
+    bandwidth: float = 0.0      # held noise: SDE with held vs white noise, same increments
     integration: float = 0.0    # ngspice tolerances (same noise, tighter reltol)
     sampling: float = 0.0       # output grid / histogram binning
     finite_noise: float = 0.0   # weak-noise comparisons: exact(gamma) - (gamma -> infinity)

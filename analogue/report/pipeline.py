@@ -15,6 +15,7 @@ finished: it is written as a failed section with its error, ``metrics.json`` lis
 from __future__ import annotations
 
 import json
+import logging
 import os
 import platform
 import sys
@@ -75,11 +76,13 @@ class _Failures:
             return None, err
 
 
-_T0 = time.perf_counter()
+log = logging.getLogger(__name__)
 
 
 def _log(msg: str) -> None:
-    print(f"analogue [{time.perf_counter() - _T0:6.1f} s]: {msg}", file=sys.stderr, flush=True)
+    """Progress of the report job, on the ``analogue.report.pipeline`` logger (the command line
+    shows it on stderr with the time since the command started: see analogue.cli)."""
+    log.info(msg)
 
 
 @dataclass
