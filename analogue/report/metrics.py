@@ -26,6 +26,8 @@ class Budget:
     integration: float = 0.0    # ngspice tolerances (same noise, tighter reltol)
     sampling: float = 0.0       # output grid / histogram binning
     finite_noise: float = 0.0   # weak-noise comparisons: exact(gamma) - (gamma -> infinity)
+    element: float = 0.0        # the model family's circuit elements (issue 9): cubic network
+    #                             approximation, inductor series resistance, shot pulse shape
 
     def total(self) -> float:
         return sum(abs(v) for v in asdict(self).values())

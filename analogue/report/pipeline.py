@@ -126,9 +126,12 @@ def _board_link(out: Path):
 
 
 def build_paper_report(out, opts: RunOptions) -> Path:
-    """The paper's experiments only (:data:`PAPER_EXPERIMENTS`, standard circuits)."""
+    """The paper's experiments (:data:`PAPER_EXPERIMENTS`, standard circuits), then the
+    chapter "Beyond the paper" (one experiment per extension, :mod:`.beyond`, quick sizes)."""
+    from .beyond import MEMBERS
     return build_report([standard_circuit(n) for n in PAPER_EXPERIMENTS], Path(out), opts,
-                        title="Stick-slip friction with noise: the paper on an analogue circuit")
+                        title="Stick-slip friction with noise: the paper on an analogue circuit",
+                        chapter=[standard_circuit(n) for n in MEMBERS])
 
 
 def experiment_section_text(exp: Experiment) -> list[str]:
@@ -139,9 +142,9 @@ def experiment_section_text(exp: Experiment) -> list[str]:
 
 
 # ------------------------------------------------------------------------------ sections
-def _mapping_table(runs: ExperimentRuns) -> Table:
+def _mapping_table(runs) -> Table:
     from ..circuit.mapping import map_model
-    m = map_model(runs.exp.model, runs.exp.spec)
+    m = map_model(runs.exp.model, runs.exp.spec)  # runs: ExperimentRuns or MemberAnalysis
     rows = [[name, float(value), unit, meaning] for name, value, unit, meaning in m.table()]
     element = (f"{runs.exp.spec.coulomb}, diode {runs.exp.spec.diode}"
                if m.coulomb_element is not None else "no Coulomb element (Delta = 0)")
@@ -239,14 +242,19 @@ def _open_question_section(out: Path, opts: RunOptions) -> Section:
                    figures=[Figure(p, caps[i] if i < len(caps) else "") for i, p in enumerate(paths)])
 
 
-def build_report(names, out: Path, opts: RunOptions, title: str) -> Path:
+def build_report(names, out: Path, opts: RunOptions, title: str, chapter=()) -> Path:
     """Run and analyse the experiments ``names`` (names, TOML paths or Experiment objects) and
-    write the report into ``out``.  Raises :class:`ReportIncomplete` after writing the page
+    write the report into ``out``.  Family members among them (and the experiments of
+    ``chapter``, written as the chapter "Beyond the paper" after the paper's sections) are
+    analysed by :mod:`.beyond`.  Raises :class:`ReportIncomplete` after writing the page
     when some section failed."""
+    from . import beyond
     t0 = time.perf_counter()
     out = Path(out)
     # every experiment is validated before anything runs (bad input: nothing started yet)
     experiments = [_load(n) for n in names]
+    members = [e for e in experiments if beyond.is_member_experiment(e)] + [_load(n) for n in chapter]
+    experiments = [e for e in experiments if not beyond.is_member_experiment(e)]
     out.mkdir(parents=True, exist_ok=True)
     fails = _Failures()
     all_runs, analyses, exp_sections = [], [], {}
@@ -269,16 +277,31 @@ def build_report(names, out: Path, opts: RunOptions, title: str) -> Path:
         all_runs.append(runs)
         analyses.append(analysis)
 
+    t_members = time.perf_counter()
+    member_analyses = []
+    for exp in members:
+        section = f"{beyond.CHAPTER_TITLE}: {exp.name}"
+        _log(f"{exp.name}: family member: circuit against theory")
+        ma, err = fails.attempt(section, "member analysis",
+                                lambda exp=exp: beyond.analyse_member(exp, opts, progress=_log),
+                                exp.name)
+        if ma is None:
+            exp_sections[exp.name] = Section(f"{section}: failed", experiment_section_text(exp),
+                                             error=err)
+        else:
+            member_analyses.append(ma)
+    member_wall = time.perf_counter() - t_members
+
     _log("drawing figures")
     sections = []
-    comps = [c for a in analyses for c in a.comparisons]
+    comps = [c for a in analyses + member_analyses for c in a.comparisons]
     n_ok = sum(c.within_budget for c in comps)
     n_z = sum(abs(c.z) < 3 for c in comps)
     summary_rows = []
-    for a in analyses:
+    for a in analyses + member_analyses:
         s = a.summary()
         ex = [c for c in a.comparisons if c.theory_kind == "exact"]
-        summary_rows.append([a.runs.exp.name, s["comparisons"], s["abs_z_below_3"], s["within_budget"],
+        summary_rows.append([a.exp.name if hasattr(a, "exp") else a.runs.exp.name, s["comparisons"], s["abs_z_below_3"], s["within_budget"],
                              sum(abs(c.z) < 3 for c in ex), len(ex)])
     failed_names = [f["experiment"] for f in fails.items if f["experiment"]]
     summary_text = [
@@ -303,7 +326,7 @@ def build_report(names, out: Path, opts: RunOptions, title: str) -> Path:
         "position for the work W = F (x(t+tau) - x(t)). Time is scaled by theta seconds per "
         "model time unit. The decks are in netlists/ (regenerate with `analogue netlist`)."]
     tables = []
-    for r in all_runs:
+    for r in all_runs + member_analyses:
         t, _ = fails.attempt("The circuit and its component values", "component table",
                              lambda r=r: _mapping_table(r), r.exp.name)
         if t is not None:
@@ -334,6 +357,22 @@ def build_report(names, out: Path, opts: RunOptions, title: str) -> Path:
                                  lambda: _open_question_section(out, opts))
         sections.append(sec if sec is not None else Section(title_, error=err))
 
+    if members:
+        t_fig = time.perf_counter()
+        chapter_sections = []
+        for exp in members:
+            if exp.name in exp_sections:
+                chapter_sections.append(exp_sections[exp.name])
+                continue
+            ma = next(a for a in member_analyses if a.exp.name == exp.name)
+            title_ = f"{beyond.CHAPTER_TITLE}: {exp.name}"
+            chapter_sections.append(beyond.member_section(
+                ma, out, lambda what, fn, t=title_, n=exp.name: fails.attempt(t, what, fn, n)))
+        member_wall += time.perf_counter() - t_fig
+        sections.append(Section(beyond.CHAPTER_TITLE,
+                                beyond.chapter_intro(member_analyses, member_wall, opts.quick)))
+        sections.extend(chapter_sections)
+
     sections.append(Section("All comparisons and their error budgets", [
         "Rows in red are deviations the budget does not explain. Budget terms (absolute, in "
         "the observable's units): smoothing = exact(epsilon) - exact(0) (the diode bridge's "
@@ -344,6 +383,7 @@ def build_report(names, out: Path, opts: RunOptions, title: str) -> Path:
 
     wall = time.perf_counter() - t0
     provs = {r.exp.name: r.provenance() for r in all_runs}
+    provs.update({a.exp.name: a.provenance for a in member_analyses})
     software = _software()
     provenance: dict = {
         "parameters": {k: p["parameters"] for k, p in provs.items()},
@@ -357,6 +397,7 @@ def build_report(names, out: Path, opts: RunOptions, title: str) -> Path:
         "tolerances": {k: p.get("tolerances") for k, p in provs.items()},
         "deck_size": {k: p.get("deck_size") for k, p in provs.items()},
         "wall_time_s": wall,
+        "beyond_wall_time_s": member_wall if members else None,
         "quick": opts.quick,
         "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
         "software": software,

@@ -1,0 +1,207 @@
+"""Figures of the model family's members ("Beyond the paper").
+
+Every function draws data already computed by :func:`analogue.report.beyond.analyse_member`
+(``MemberAnalysis.figures``): no theory is evaluated here.  Each returns ``(path, caption)`` or
+None when the member has no such figure.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..plots.style import new_figure, save
+
+__all__ = [
+    "fig_member_budget",
+    "fig_member_propagator",
+    "fig_member_rate_function",
+    "fig_member_stationary",
+    "fig_spring_series",
+    "fig_spring_stationary",
+    "member_figures",
+]
+
+
+def fig_member_stationary(a, out: Path):
+    d = a.figures.get("stationary")
+    if d is None:
+        return None
+    name = a.exp.name
+    fig, ax = new_figure(1, 1, width=6.0, height=3.8)
+    s = np.asarray(d["samples"])
+    thr = d["threshold"]
+    has_atom = d["atom"] > 0
+    moving = s[np.abs(s) >= thr] if has_atom else s
+    lo, hi = float(d["v"].min()), float(d["v"].max())
+    bins = np.linspace(lo, hi, 61)
+    counts, edges = np.histogram(moving, bins=bins)
+    width = edges[1] - edges[0]
+    ax.stairs(counts / (s.size * width), edges, color="tab:orange", lw=1.2,
+              label=f"circuit ({s.size} samples)" + (f", |v| >= {thr:g}" if has_atom else ""))
+    ax.plot(d["v"], d["density"], "k-", lw=1.2, label="exact (continuous part)" if has_atom
+            else "exact")
+    if "paper_density" in d:
+        ax.plot(d["v"], d["paper_density"], "--", color="tab:blue", lw=1.0, label=d["paper_label"])
+    if has_atom:
+        top = float(np.max(d["density"])) * 1.1
+        ax.vlines(0.0, 0.0, top, color="k", lw=3, alpha=0.3)
+        ax.annotate(f"atom P(v=0): exact {d['atom']:.3f}\ncircuit |v|<{thr:g}: "
+                    f"{d['atom_measured']:.3f}", (0.0, top), xytext=(0.3 * hi, 0.9 * top),
+                    fontsize=8, arrowprops={"arrowstyle": "->", "lw": 0.8})
+    # the exact grid reaches far into the tail: show where the law has its mass
+    c = np.cumsum(d["density"]) / max(float(np.sum(d["density"])), 1e-300)
+    ax.set_xlim(float(d["v"][np.searchsorted(c, 1e-4)]) - 0.1,
+                float(d["v"][min(np.searchsorted(c, 1 - 1e-4), c.size - 1)]) + 0.1)
+    ax.set_xlabel("v")
+    ax.set_ylabel("density")
+    ax.legend(fontsize=7)
+    ax.set_title(f"Stationary law — {name}", fontsize=10)
+    path = save(fig, out / f"beyond_stationary_{name}.png")
+    cap = (f"{name}: stationary velocity law, circuit histogram after the burn-in against the "
+           "exact law (family numerics)")
+    if has_atom:
+        cap += ("; the object sticks with probability P(v = 0) (grey bar: an atom, not a "
+                "density), the histogram shows the moving part only")
+    if "paper_density" in d:
+        cap += "; dashed: the paper's law with the same kinetic friction Delta"
+    return path, cap + "."
+
+
+def fig_member_propagator(a, out: Path):
+    d = a.figures.get("propagator")
+    if d is None:
+        return None
+    name = a.exp.name
+    times = d["times"]
+    fig, axes = new_figure(1, len(times), width=3.4, height=3.2, squeeze=False)
+    for i, t in enumerate(times):
+        ax = axes[0, i]
+        s = np.asarray(d["samples"][i])
+        atom = float(d["atom"][i])
+        thr = d["threshold"]
+        moving = s[np.abs(s) >= thr] if atom > 0 else s
+        bins = np.linspace(float(d["v"].min()), float(d["v"].max()), 31)
+        c, e = np.histogram(moving, bins=bins)
+        ax.stairs(c / (s.size * (e[1] - e[0])), e, color="tab:orange", label="circuit")
+        ax.plot(d["v"], d["density"][i], "k-", lw=1.0, label="exact")
+        if atom > 0:
+            ax.set_title(f"t = {t:g}: P(v=0) exact {atom:.2f}, circuit "
+                         f"{np.mean(np.abs(s) < thr):.2f}", fontsize=8)
+        else:
+            ax.set_title(f"t = {t:g}", fontsize=9)
+        ax.set_xlabel("v")
+    axes[0, 0].set_ylabel(f"f(v, t | v0 = {d['v0']:g})")
+    axes[0, 0].legend(fontsize=7)
+    path = save(fig, out / f"beyond_propagator_{name}.png")
+    return path, (f"{name}: transition density from v0 = {d['v0']:g} at t = "
+                  f"{', '.join(f'{t:g}' for t in times)}, circuit against the exact propagator.")
+
+
+def fig_member_rate_function(a, out: Path):
+    d = a.figures.get("rate_function")
+    if d is None:
+        return None
+    name = a.exp.name
+    fig, ax = new_figure(1, 1, width=5.5, height=3.6)
+    ax.plot(d["w"], d["member"], "k-", label=f"exact, {name}")
+    ax.plot(d["w"], d["paper"], "--", color="tab:blue", label=d["paper_label"])
+    ax.axvline(d["mean"], color="0.6", lw=0.8)
+    ax.set_xlabel("work rate w")
+    ax.set_ylabel("I(w)")
+    ax.legend(fontsize=7)
+    ax.set_title(f"Work rate function — {name}", fontsize=10)
+    path = save(fig, out / f"beyond_rate_function_{name}.png")
+    return path, (f"{name}: exact work rate function I(w) = sup_k [k w - lambda(k)]/gamma from "
+                  "the tilted generator, against the paper's model at the same Delta (grey: "
+                  "<w> of the member).")
+
+
+def fig_spring_series(a, out: Path):
+    d = a.figures.get("spring_series")
+    if d is None:
+        return None
+    name = a.exp.name
+    fig, axes = new_figure(2, 1, width=7.5, height=2.4, squeeze=False)
+    t = d["t"]
+    for r in range(len(d["x"])):
+        axes[0, 0].plot(t, d["x"][r], lw=0.7, alpha=0.8)
+        axes[1, 0].plot(t, d["v"][r], lw=0.7, alpha=0.8)
+    axes[0, 0].plot(t, d["x_mc_mean"], "k--", lw=1.0, label="Monte Carlo mean")
+    axes[0, 0].plot(t, d["x_circ_mean"], "k-", lw=1.0, label="circuit mean")
+    band = d["stick_band"]
+    axes[0, 0].axhspan(-band, band, color="0.85", zorder=0, label="|spring x - a| < Delta: sticks")
+    axes[1, 0].plot(t, d["v_mc_mean"], "k--", lw=1.0)
+    for ax in axes[:, 0]:
+        ax.axvline(d["burn_in"], color="0.6", lw=0.8)
+    axes[0, 0].set_ylabel("x (inductor current)")
+    axes[1, 0].set_ylabel("v")
+    axes[1, 0].set_xlabel("t")
+    axes[0, 0].legend(fontsize=7, loc="upper right")
+    path = save(fig, out / f"beyond_spring_series_{name}.png")
+    f = a.facts
+    return path, (f"{name}: released from x0 at rest, four circuit replicas (colours) and the "
+                  "means of circuit and Monte Carlo: stick-slip oscillations. First swing: "
+                  f"half period {f['circuit_half_period']:.2f} (circuit) vs "
+                  f"{f['mc_half_period']:.2f} (Monte Carlo; pi/sqrt(spring) = "
+                  f"{f['omega_undamped_half_period']:.2f} without damping), amplitude "
+                  f"{f['circuit_amplitude']:.2f} vs {f['mc_amplitude']:.2f} (Coulomb friction "
+                  f"alone takes {f['coulomb_loss']:.2f} off per half swing). Grey line: burn-in.")
+
+
+def fig_spring_stationary(a, out: Path):
+    d = a.figures.get("spring_stationary")
+    if d is None:
+        return None
+    name = a.exp.name
+    fig, axes = new_figure(1, 2, width=3.8, height=3.2, squeeze=False)
+    for ax, key, lab in ((axes[0, 0], "x", "x"), (axes[0, 1], "v", "v")):
+        c, m = np.asarray(d[f"{key}_circ"]), np.asarray(d[f"{key}_mc"])
+        lo, hi = np.percentile(np.concatenate([c, m]), [0.5, 99.5])
+        bins = np.linspace(lo, hi, 41)
+        ax.hist(m, bins=bins, density=True, histtype="step", color="k", label="Monte Carlo")
+        ax.hist(c, bins=bins, density=True, histtype="step", color="tab:orange", label="circuit")
+        ax.set_xlabel(lab)
+    axes[0, 0].legend(fontsize=7)
+    path = save(fig, out / f"beyond_spring_stationary_{name}.png")
+    return path, (f"{name}: position and velocity after the burn-in, circuit against Monte Carlo "
+                  "(the spring's reference: no exact 2-D solver).")
+
+
+def fig_member_budget(a, out: Path):
+    comps = a.comparisons
+    if not comps:
+        return None
+    names = [c.observable for c in comps]
+    y = np.arange(len(comps))
+    fig, axes = new_figure(1, 1, squeeze=False, width=9.0, height=0.28 * len(comps) + 1.5)
+    ax = axes[0, 0]
+    terms = [("statistical (3 SE)", lambda c: 3 * c.circuit_stderr, "0.75"),
+             ("smoothing", lambda c: abs(c.budget.smoothing), "tab:blue"),
+             ("bandwidth", lambda c: abs(c.budget.bandwidth), "tab:green"),
+             ("circuit element", lambda c: abs(c.budget.element), "tab:red"),
+             ("sampling", lambda c: abs(c.budget.sampling), "tab:brown")]
+    left = np.zeros(len(comps))
+    for label, fn, colour in terms:
+        vals = np.array([fn(c) for c in comps])
+        ax.barh(y, vals, left=left, color=colour, label=label, height=0.6)
+        left += vals
+    dev = np.array([abs(c.circuit - c.theory) for c in comps])
+    ax.plot(dev, y, "D", color="k", ms=4, label="|circuit - reference|")
+    ax.set_yticks(y, names, fontsize=7)
+    pos = left[left > 0]
+    ax.set_xscale("symlog", linthresh=max(1e-5, float(pos.min()) if pos.size else 1e-5))
+    ax.invert_yaxis()
+    ax.set_xlabel("absolute error (observable's units)")
+    ax.legend(fontsize=7, loc="lower right")
+    ax.set_title(f"Error budget — {a.exp.name}", fontsize=10)
+    path = save(fig, out / f"beyond_budget_{a.exp.name}.png")
+    return path, (f"{a.exp.name}: error budget per observable; stacked bars are the allowed "
+                  "deviation, diamonds the actual |circuit - reference|.")
+
+
+def member_figures(a) -> list:
+    """(what, drawing function) for every figure of a member, in page order."""
+    return [("stationary law", fig_member_stationary), ("spring time series", fig_spring_series),
+            ("spring stationary", fig_spring_stationary), ("propagator", fig_member_propagator),
+            ("rate function", fig_member_rate_function), ("error budget", fig_member_budget)]

@@ -1,0 +1,77 @@
+"""Beyond the paper (issue 9): ``analogue report <member> --quick`` for every family member,
+and the chapter "Beyond the paper" of the paper report.
+
+Quick sizes (32 stationary replicas of 40 time units, 32 transition replicas): ~5-20 s of
+ngspice per member on 2 cores."""
+from __future__ import annotations
+
+import json
+
+import pytest
+from click.testing import CliRunner
+
+from analogue.cli import main
+from analogue.report.metrics import validate_metrics
+
+pytestmark = pytest.mark.slow
+
+# what each member must report (labels as the paper's experiments name theirs)
+EXPECTED = {
+    "shot": {"mean v", "var v", "P(v=0)", "P(v>0.05)", "P(v=0) at t=1 from v0=0"},
+    "cubic": {"mean v", "var v", "P(v>0)", "stick fraction", "mean v at t=0.5 from v0=0"},
+    "stribeck": {"mean v", "var v", "P(v>0)", "stick fraction", "P(v<0) at t=1 from v0=0"},
+    "spring": {"mean v", "var v", "mean x", "var x", "half period (first swing)",
+               "amplitude (first swing)", "identity <v> = 0",
+               "identity spring <x> - a + <Delta(v) sgn v> + cubic <v^3> = 0"},
+}
+
+
+@pytest.mark.parametrize("member", sorted(EXPECTED))
+def test_member_report_quick(member, tmp_path):
+    out = tmp_path / "rep"
+    r = CliRunner().invoke(main, ["report", member, "--quick", "--out", str(out), "--store",
+                                  str(tmp_path / "store"), "--no-progress"])
+    assert r.exit_code == 0, r.output
+    html = (out / "index.html").read_text()
+    assert "Beyond the paper" in html
+    metrics = json.loads((out / "metrics.json").read_text())
+    validate_metrics(metrics)
+    rows = {c["observable"]: c for c in metrics["comparisons"] if c["experiment"] == member}
+    assert EXPECTED[member] <= set(rows), sorted(rows)
+    assert metrics["failures"] == []
+    for name, c in rows.items():
+        # within budget: |circuit - reference| <= 3 SE + the systematic terms
+        diff = abs(c["circuit"] - c["theory"])
+        assert c["within_budget"], (name, c)
+        assert diff <= 3 * c["circuit_stderr"] + c["budget"]["total"] + 1e-12
+        assert c["circuit_stderr"] > 0, name
+    if member == "shot":
+        # the atom: P(v = 0) of the exact law is well away from 0 and 1 in the stick regime,
+        # and the circuit's stuck fraction is measured against it
+        assert 0.2 < rows["P(v=0)"]["theory"] < 0.6
+    if member == "spring":
+        assert rows["identity <v> = 0"]["theory"] == 0.0
+
+
+def test_paper_chapter_is_built(tmp_path, monkeypatch):
+    """The chapter builder inside the paper's pipeline (one member, to stay small), and
+    build_paper_report asks for every member."""
+    from analogue.report import pipeline
+    from analogue.report.beyond import MEMBERS
+    from analogue.report.plan import RunOptions
+
+    out = tmp_path / "paper"
+    opts = RunOptions(quick=True, progress=False, store=tmp_path / "store")
+    pipeline.build_report([], out, opts, title="t", chapter=["shot"])
+    html = (out / "index.html").read_text()
+    assert "Beyond the paper" in html and "atom" in html
+    m = json.loads((out / "metrics.json").read_text())
+    validate_metrics(m)
+    assert m["provenance"]["beyond_wall_time_s"] > 0
+    assert any(c["experiment"] == "shot" and c["observable"] == "P(v=0)" for c in m["comparisons"])
+
+    seen = {}
+    monkeypatch.setattr(pipeline, "build_report",
+                        lambda names, out, opts, title, chapter=(): seen.update(chapter=chapter))
+    pipeline.build_paper_report(tmp_path / "p2", opts)
+    assert [c.stem for c in seen["chapter"]] == list(MEMBERS)
