@@ -84,29 +84,46 @@ def _factor(M: sparse.spmatrix, extra_dense=()):
     return solve
 
 
-def _bordered_solve(g: ShotGrid, rhs: np.ndarray) -> np.ndarray:
-    """Solve ``L x = rhs[:n]`` with ``sum x = rhs[n]`` (rhs[:n] sums to 0).  L has the left null
-    vector 1, so in the banded form ``N L`` (N invertible, ``N^{-T} 1 > 0``) any one row is
-    redundant: the last is replaced by the normalisation (see :func:`_factor`)."""
-    n = g.n
-    A = g.banded_L().tolil()
-    A[n - 1, :] = np.ones(n)
-    top = rhs[:n] if g.premultiplier is None else g.premultiplier @ rhs[:n]
-    top = np.array(top, dtype=float)
-    top[n - 1] = rhs[n]
-    A = A.tocsr()
-    x = _factor(A, extra_dense=(n - 1,))(top)
-    if np.all(np.isfinite(x)) and np.abs(A @ x - top).max() <= 1e-9 * max(1.0, np.abs(top).max()):
-        return x
-    return spsolve(A.tocsc(), top)  # pivoting fallback
+def _anchor(model: Model, g: ShotGrid) -> int:
+    """A recurrent state (one that carries stationary mass): the stuck state when there is an
+    atom, else the state nearest the noise-free attractor of the mean force (``a`` plus the
+    mean kick force ``rate mean`` for one-sided kicks): states below the support of one-sided
+    kicks are transient and must not be anchored."""
+    if g.atom:
+        return g.n - 1
+    a_eff = model.a + (model.shot.mean_force if model.shot is not None else 0.0)
+    target = model.replace(a=a_eff, shot=None, gamma=math.inf).attractor
+    return int(np.argmin(np.abs(g.v - target)))
 
 
-def _solve_stationary(g: ShotGrid) -> np.ndarray:
+def _solve_singular(model: Model, g: ShotGrid, rhs: np.ndarray, value: float) -> np.ndarray:
+    """A solution of ``L x = rhs`` (``sum rhs = 0``) with ``x_j = value`` at the anchor j.  In
+    the banded form ``N L`` any single row is redundant (the left null vector ``N^{-T} 1`` is
+    positive), so row and column j are removed: the rest is a nonsingular M-matrix-like
+    system, factorised by :func:`_factor` with diagonal pivots (no normalisation row, whose
+    last pivot cancels)."""
     n = g.n
-    b = np.zeros(n + 1)
-    b[-1] = 1.0
-    p = _bordered_solve(g, b)
-    return np.clip(p, 0.0, None) / np.clip(p, 0.0, None).sum()
+    j = _anchor(model, g)
+    A = g.banded_L().tocsc()
+    top = rhs if g.premultiplier is None else g.premultiplier @ rhs
+    top = np.asarray(top, dtype=float) - value * A[:, j].toarray().ravel()
+    keep = np.r_[0:j, j + 1:n]
+    B = A[keep][:, keep]
+    x = np.empty(n)
+    x[j] = value
+    x[keep] = _factor(B)(top[keep])
+    if not np.all(np.isfinite(x)):
+        raise RuntimeError("the stationary/Poisson solve failed (non-finite solution)")
+    return x
+
+
+def _solve_stationary(g: ShotGrid, model: Model) -> np.ndarray:
+    p = _solve_singular(model, g, np.zeros(g.n), 1.0)
+    if p.min() < -1e-9 * p.max():
+        raise RuntimeError(f"stationary solve gave negative weights ({p.min():.3g}): the anchor "
+                           "state is not recurrent")
+    p = np.clip(p, 0.0, None)
+    return p / p.sum()
 
 
 def stationary_law(model: Model, h: float | None = None):
@@ -114,7 +131,7 @@ def stationary_law(model: Model, h: float | None = None):
     velocities, atom at 0) at spacing h (default :func:`kolmogorov_feller.default_spacing`)."""
     check_one_dimensional(model)
     g = shot_generator(model, h)
-    p = _solve_stationary(g)
+    p = _solve_stationary(g, model)
     dens, atom = g.weights_to_density(p)
     v = g.v[:-1] if g.atom else g.v
     return v, dens, float(atom)
@@ -123,7 +140,7 @@ def stationary_law(model: Model, h: float | None = None):
 def _grid_moments(model: Model, h: float) -> np.ndarray:
     """[mean, second moment, P(v>0), P(v<0), <sgn v>, P(v=0), D_x] on one grid."""
     g = shot_generator(model, h)
-    p = _solve_stationary(g)
+    p = _solve_stationary(g, model)
     v = g.v
     cells = p[:-1] if g.atom else p
     vc = v[:-1] if g.atom else v
@@ -140,10 +157,38 @@ def _grid_moments(model: Model, h: float) -> np.ndarray:
         pp, pm = float(cells[vc > 0].sum()), float(cells[vc < 0].sum())
         sign = pp - pm
     dv = v - mean
-    rhs = np.concatenate([-(dv * p), [0.0]])
-    gk = _bordered_solve(g, rhs)
+    # D_x = sum dv g with L g = -dv p; g is fixed up to + c p, which dv . p = 0 ignores
+    gk = _solve_singular(model, g, -(dv * p), 0.0)
     diff = float(np.dot(dv, gk))
     return np.array([mean, second, pp, pm, sign, atom, diff])
+
+
+def _gradient_smooth_moments(model: Model):
+    """[mean, second, P(v>0), P(v<0), <tanh(v/eps)>] of exp(-gamma U)/Z for a smooth law
+    (epsilon > 0): U by cumulative Simpson of the drift (U' = -drift) and the moments by
+    Simpson on a uniform grid resolving epsilon/20, the width/400 and the Stribeck length/100
+    (fourth order; the per-point quadrature of the tanh-Stribeck U took ~10 s)."""
+    from .kolmogorov_feller import _gaussian_range
+    lo, hi = _gaussian_range(model)
+    h = min(model.epsilon / 20.0, model.velocity_scale / 400.0,
+            model.stribeck[1] / 100.0 if model.stribeck is not None else math.inf)
+    def nodes(a, b):
+        n = int(min(2_000_000, 2 * math.ceil((b - a) / (2 * h))))
+        return np.linspace(a, b, max(n, 2) + 1)
+    if lo < 0.0 < hi:  # v = 0 a node, so that P(v > 0) is a Simpson sum of a smooth integrand
+        v = np.concatenate([nodes(lo, 0.0), nodes(0.0, hi)[1:]])
+        i0 = int(np.flatnonzero(v == 0.0)[0])
+    else:
+        v = nodes(lo, hi)
+        i0 = 0 if lo >= 0 else v.size - 1
+    u = integrate.cumulative_simpson(-model.drift(v), x=v, initial=0.0)
+    w = np.exp(-model.gamma * (u - u.min()))
+    z = integrate.simpson(w, x=v)
+    m1 = integrate.simpson(w * v, x=v) / z
+    m2 = integrate.simpson(w * v * v, x=v) / z
+    pp = integrate.simpson(w[i0:], x=v[i0:]) / z if i0 < v.size - 1 else 0.0
+    sign = integrate.simpson(w * np.tanh(v / model.epsilon), x=v) / z
+    return np.array([m1, m2, pp, 1.0 - pp, sign])
 
 
 def _gradient_quadrature(model: Model):
@@ -195,7 +240,8 @@ def stationary_moments(model: Model, h: float | None = None):
     coarse = _grid_moments(model, h)
     fine = _grid_moments(model, h / 2.0)
     if model.shot is None:
-        quad = _gradient_quadrature(model)
+        quad = (_gradient_quadrature(model) if model.epsilon == 0
+                else _gradient_smooth_moments(model))
         mean, second, pp, pm, sign = quad
         # SG is second order: Richardson (4 f - c)/3 for the diffusion
         diff = (4.0 * fine[6] - coarse[6]) / 3.0
@@ -372,7 +418,7 @@ def autocorrelation(model: Model, lags, h: float | None = None) -> np.ndarray:
     vals = []
     for hh in (h, h / 2.0):
         g = shot_generator(model, hh)
-        p = _solve_stationary(g)
+        p = _solve_stationary(g, model)
         dv = g.v - np.dot(g.v, p)
         out = np.full(flat.size, float(np.dot(dv * dv, p)))
         pos = flat > 0
@@ -424,9 +470,11 @@ def _principal(g: ShotGrid, k: float, F: float, guess: float, scale: float) -> f
 
 def _principal_gradient(model: Model, h: float, k: float, F: float) -> float:
     from .fokker_planck import Grid, symmetric_generator
-    lo = -model._support_bound(45.0) - 2.0 * abs(k * F) * model.tau_m ** 2 / model.gamma * 4
-    hi = -lo
-    grid = Grid.span(lo, hi, h)
+    from .kolmogorov_feller import _gaussian_range
+    # the tilted ground state sits near tau_m (2 k F tau_m/gamma + a): widen by that shift
+    lo, hi = _gaussian_range(model)
+    shift = 4.0 * abs(k * F) * model.tau_m ** 2 / model.gamma
+    grid = Grid.span(lo - shift, hi + shift, h)
     diag, off, _ = symmetric_generator(model, grid)
     lam = eigh_tridiagonal(diag + k * F * grid.v, off, select="i",
                            select_range=(grid.n - 1, grid.n - 1), eigvals_only=True)
@@ -536,7 +584,7 @@ def sample_stationary(model: Model, size, seed=None) -> np.ndarray:
         cdf /= cdf[-1]
         return np.interp(rng.random(shape), cdf, v)
     g = shot_generator(model, h)
-    p = _solve_stationary(g)
+    p = _solve_stationary(g, model)
     idx = rng.choice(g.n, size=shape, p=p)
     v = g.v[idx]
     is_cell = ~(g.atom & (idx == g.n - 1)) if g.atom else np.ones(shape, bool)

@@ -66,7 +66,7 @@ def has_atom(model: Model) -> bool:
     and the stick regime ``|a| <= Delta(0)`` (the flow reaches 0 in finite time from both sides
     and stays until the next kick)."""
     return (not math.isfinite(model.gamma) and model.epsilon == 0
-            and abs(model.a) <= model.static_friction)
+            and model.static_friction > 0 and abs(model.a) <= model.static_friction)
 
 
 @dataclass(frozen=True)

@@ -206,3 +206,12 @@ def test_paper_only_functions_refuse_family_members():
         weak_noise.action(m, 0.5, 1.0, 0.2)
     with pytest.raises(ValueError, match="paper's model only"):
         exact.work_pdf(m, 0.1, 1.0)
+
+
+def test_smooth_law_moments_two_routes():
+    """epsilon > 0: Simpson on the cumulative drift against quadrature of the closed-form
+    (Gauss-Legendre) potential."""
+    m = Model(2.0, 0.3, 0.7, 10.0, stribeck=(1.0, 0.2), epsilon=0.02)
+    a = family._gradient_smooth_moments(m)
+    b = family._gradient_quadrature(m)
+    assert np.allclose(a[:4], b[:4], rtol=1e-7, atol=1e-9)
