@@ -79,7 +79,8 @@ class Ensemble:
         return self.v[:, i]
 
     def window(self, t_start: float, t_stop: float | None = None) -> Ensemble:
-        """Sub-ensemble on ``t_start <= t <= t_stop`` (positions re-zeroed at the start)."""
+        """Sub-ensemble on ``t_start <= t <= t_stop`` (positions re-zeroed at the start; the
+        recorded noise, on its own hold grid, is not carried over)."""
         hi = self.t[-1] if t_stop is None else t_stop
         sel = (self.t >= t_start - 1e-12) & (self.t <= hi + 1e-12)
         x = self.x[:, sel]

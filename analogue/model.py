@@ -1,7 +1,7 @@
 """Model parameters of the stick-slip Langevin equation, its family of extensions, and its
 noise-free facts.
 
-The reduced equation (paper, eqs. bm and U_pot) is
+The reduced equation (paper, eqs. (4) and (5)) is
 
     dv/dt = -U'(v) + xi(t)/m,   U(v) = v^2/(2 tau_m) + Delta |v| - a v,
 
@@ -65,7 +65,7 @@ VELOCITY_LIMIT = 1e15
 
 
 class MechanicalParameters(NamedTuple):
-    """The paper's eq. (model) in mechanical units: m v' + alpha v + Delta_F sgn(v) = F + xi."""
+    """The paper's eq. (1) in mechanical units: m v' + alpha v + Delta_F sgn(v) = F + xi."""
 
     mass: float
     alpha: float
@@ -151,7 +151,7 @@ _GL_WEIGHTS = np.tile(0.5 * _GL_W / _PANELS, _PANELS)
 
 @dataclass(frozen=True)
 class Model:
-    """Parameters of the reduced stick-slip model (paper, eqs. bm and U_pot) and its family.
+    """Parameters of the reduced stick-slip model (paper, eqs. (4) and (5)) and its family.
 
     Parameters
     ----------
@@ -249,7 +249,7 @@ class Model:
     # ------------------------------------------------------------------ units
     @classmethod
     def from_mechanical(cls, mass, alpha, delta_F, F, D, epsilon=0.0) -> Model:
-        """Build from the paper's eq. (model) parameters: tau_m = m/alpha, Delta = Delta_F/m,
+        """Build from the paper's eq. (1) parameters: tau_m = m/alpha, Delta = Delta_F/m,
         a = F/m, gamma = m^2/D."""
         mass = _positive("mass", mass)
         alpha = _positive("alpha", alpha)
@@ -312,13 +312,13 @@ class Model:
 
     @property
     def regime(self) -> str:
-        """``"stick"`` if |a| < Delta(0) (v = 0 attracts, eq. det_eq case a), else ``"slip"``."""
+        """``"stick"`` if |a| < Delta(0) (v = 0 attracts, eq. (13) case a), else ``"slip"``."""
         return "stick" if abs(self.a) < self.static_friction else "slip"
 
     @property
     def attractor(self) -> float:
         """Deterministic attractor: 0 if |a| <= Delta(0), else ``v_ss = (a - Delta sgn a) tau_m``
-        (eq. v_st, and its mirror for a < -Delta); for the family, the zero of the drift
+        (eq. (14), and its mirror for a < -Delta); for the family, the zero of the drift
         reached from rest.  With a spring every motion ends at rest: 0."""
         if abs(self.a) <= self.static_friction or self.spring > 0:
             return 0.0
@@ -354,7 +354,7 @@ class Model:
     friction = coulomb
 
     def drift(self, v: ArrayLike, x: ArrayLike = 0.0) -> np.ndarray:
-        """The force law ``-v/tau_m - cubic v^3 - Delta(v) sgn(v) - spring x + a`` (eq. det_eq
+        """The force law ``-v/tau_m - cubic v^3 - Delta(v) sgn(v) - spring x + a`` (eq. (13)
         for the paper's model, where it is ``-U'(v)``)."""
         v = np.asarray(v, dtype=float)
         out = -v / self.tau_m - self.coulomb(v) + self.a
@@ -388,7 +388,7 @@ class Model:
         return base + (ds - d) * (head + tail)
 
     def potential(self, v: ArrayLike) -> np.ndarray:
-        """Effective potential U(v) (eq. U_pot) of the velocity equation; with epsilon > 0 the
+        """Effective potential U(v) (eq. (5)) of the velocity equation; with epsilon > 0 the
         term Delta|v| becomes ``Delta epsilon ln cosh(v/epsilon)``.  For the family:
         ``+ cubic v^4/4 + (delta_s - Delta) v_s (1 - e^{-|v|/v_s})`` (the spring force is not
         a function of v: for spring > 0 this is U at x = 0 and the motion is not gradient)."""
@@ -481,14 +481,14 @@ class Model:
         return math.log(val) - g * u_star
 
     def stationary_pdf(self, v: ArrayLike) -> np.ndarray:
-        """Normalised stationary density ``p_s = exp(-gamma U)/Z`` (eq. p_stat); exact at every
+        """Normalised stationary density ``p_s = exp(-gamma U)/Z`` (eq. (6)); exact at every
         gamma for the 1-D additive-Gaussian-noise members."""
         log_z = self.log_normaliser()  # refuses non-gradient members and gamma = inf first
         return np.exp(-self.gamma * self.potential(v) - log_z)
 
     # ------------------------------------------------------- deterministic
     def stick_time(self, v0: float) -> float:
-        """Time for the noise-free motion from v0 to reach v = 0 (``t_a`` of eq. tbar1), or
+        """Time for the noise-free motion from v0 to reach v = 0 (``t_a`` of eq. (31)), or
         ``inf`` if it never does.  Exact sgn law (epsilon = 0) only; for the family
         (cubic, Stribeck) the ODE is integrated numerically."""
         v0 = _finite("v0", v0)
@@ -504,13 +504,13 @@ class Model:
         return self.tau_m * math.log1p(abs(v0) / b)
 
     def deterministic(self, v0: float, t: ArrayLike) -> np.ndarray:
-        """Noise-free solution of eq. (det_eq) from ``v(0) = v0`` at times ``t >= 0``.
+        """Noise-free solution of eq. (13) from ``v(0) = v0`` at times ``t >= 0``.
 
         On each half line the motion is the basic solution
         ``v(t) = (v0 + (Delta - a) tau_m) e^{-t/tau_m} - (Delta - a) tau_m`` (v > 0) and its
-        mirror; v = 0 is reached in the finite time ``t_a`` (eq. tbar1) when |a| < Delta and
+        mirror; v = 0 is reached in the finite time ``t_a`` (eq. (31)) when |a| < Delta and
         the object then sticks; for |a| > Delta it crosses v = 0 with a kink and relaxes to
-        ``v_ss`` (eq. v_st).  With epsilon > 0 the smooth ODE is integrated numerically, and
+        ``v_ss`` (eq. (14)).  With epsilon > 0 the smooth ODE is integrated numerically, and
         so is every extension (from ``x(0) = x0`` with a spring; velocity returned).
         """
         v0 = _finite("v0", v0)

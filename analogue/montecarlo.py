@@ -1,4 +1,4 @@
-"""Monte Carlo reference: the reduced Langevin equation (paper, eq. bm) integrated in numpy.
+"""Monte Carlo reference: the reduced Langevin equation (paper, eq. (4)) integrated in numpy.
 
 ``dv = (a - v/tau_m - Delta sgn(v)) dt + sqrt(2/gamma) dW`` (or ``tanh(v/epsilon)``), vectorised
 over replicas, looping over time steps only, streaming (only the output grid is stored).
@@ -143,12 +143,12 @@ def _time_grid(model, t_end, dt, sample_dt):
 def simulate_sde(model: Model, *, v0, t_end: float, replicas: int, seed=None, dt: float | None = None,
                  sample_dt: float | None = None, noise: np.ndarray | None = None,
                  scheme: str = "exponential") -> Ensemble:
-    """Integrate eq. (bm) for ``replicas`` independent trajectories from t = 0 to ``t_end``.
+    """Integrate eq. (4) for ``replicas`` independent trajectories from t = 0 to ``t_end``.
 
     Parameters
     ----------
     v0 : float, array (replicas,), or "stationary"
-        Initial velocities; "stationary" draws them from ``p_s`` (eq. p_stat) with
+        Initial velocities; "stationary" draws them from ``p_s`` (eq. (6)) with
         :func:`analogue.theory.stationary.sample_stationary` using a stream derived from seed
         (independent of the noise stream).
     t_end : float
@@ -318,7 +318,7 @@ def _flow_exact(model, v, s):
     """Noise-free flow of the paper's law over durations ``s`` (arrays): ``(v(s), int_0^s v)``.
 
     Mirrored so that the start lies on the upper half line (u = sgn v >= 0, a' = sgn a): there
-    ``u(t) = (u + b) e^{-t/tau} - b`` with ``b = (Delta - a') tau`` (eq. sol_basic), which
+    ``u(t) = (u + b) e^{-t/tau} - b`` with ``b = (Delta - a') tau`` (eq. (16)), which
     reaches 0 at ``t1 = tau ln(1 + u/b)`` if b > 0; then the object sticks (|a| <= Delta) or
     crosses and relaxes on the other side, ``-|b2| (1 - e^{-t'/tau})``, b2 = (Delta + a') tau."""
     tau, d, a = model.tau_m, model.delta, model.a

@@ -15,7 +15,7 @@ k = 0, ``work_pdf(..., share=False)``), the new one, their ratio and the largest
 Differences at gamma >= 100 on the negative-w side are errors of the *old* uniform grid (its
 ground-state transform zone |v| <= tau_m (Delta + |a|) holds sliding states with
 gamma h |U'| ~ 0.2; benchmarks/README.md gives an example); the graded values are converged
-in h (h vs h/2 within 2e-5 at gamma = 1000) and equal eq. Iw where the sliding OU state
+in h (h vs h/2 within 2e-5 at gamma = 1000) and equal eq. (64) where the sliding OU state
 alone carries them: see tests/unit/test_theory_fast_paths.py.
 """
 from __future__ import annotations

@@ -56,7 +56,7 @@ def test_theory_table_output_is_readable(cli):
     assert r.exit_code == 0, r.output
     lines = r.output.strip().splitlines()
     assert len(lines) == 3 and "w" in lines[0]
-    # eq. Iw: I(1) = (1/4)(1/(m a tau_m) + Delta - a)^2 = (1/4)(2.5)^2
+    # eq. (64): I(1) = (1/4)(1/(m a tau_m) + Delta - a)^2 = (1/4)(2.5)^2
     assert float(lines[2].split()[-1]) == pytest.approx(0.25 * 2.5**2)
 
 

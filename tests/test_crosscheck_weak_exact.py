@@ -2,7 +2,7 @@
 parameter sets well away from the paper's (tau_m in {0.3, 2.5}, Delta in {0.2, 1.5},
 a of both signs, a < Delta and a > Delta, mass != 1, v0 of both signs and 0).
 
-1. ``-(1/gamma) ln f_exact(v, t | v0) -> A*(v, t | v0) + c(t)`` (eq. sp_approx): the spread
+1. ``-(1/gamma) ln f_exact(v, t | v0) -> A*(v, t | v0) + c(t)`` (eq. (12)): the spread
    over v of ``-(1/gamma) ln f - A*`` is the prefactor's ``O(ln gamma / gamma)``; it must fall
    by a clear factor when gamma grows 16-fold and be small at the largest gamma.  Only points
    with ``gamma (A* - A*_min) <= 20`` are used, where the exact density is far above rounding.

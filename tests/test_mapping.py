@@ -136,7 +136,7 @@ def test_bias_from_smoothing_is_refused_unless_allowed():
 @pytest.mark.parametrize("model", [STICK_A02, SLIP_A12, WORK, Model(1.0, 0.7, 0.2, 300.0), Model(1.0, 0.7, -1.5, 50.0)])
 def test_bias_measures_against_brute_force_grids(model):
     """stationary_std (closed form) and central_bin_bias (shifted integrals near 0) against
-    plain grid integration of the normalised stationary densities (eq. p_stat)."""
+    plain grid integration of the normalised stationary densities (eq. (6))."""
     from analogue.circuit.mapping import central_bin_bias, stationary_std
     eps = 0.02 * model.velocity_scale
     v = np.linspace(-4.0, 4.0, 2_000_001)

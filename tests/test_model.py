@@ -80,10 +80,10 @@ def test_stick_time_and_vss_match_paper():
     v = m.deterministic(2.0, t)
     assert v[0] == 2.0 and v[1] > 0 and v[3] == 0 and v[4] == 0
     assert abs(v[2]) < 1e-8
-    # Negative start: eq. tbar1 with the lower sign
+    # Negative start: eq. (31) with the lower sign
     assert m.stick_time(-1.0) == pytest.approx(math.log(1 + 1.0 / 0.9))
     assert m.deterministic(-1.0, [10.0])[0] == 0.0
-    # Slip: v_ss = (a - Delta) tau_m (eq. v_st), crossing from below with a kink
+    # Slip: v_ss = (a - Delta) tau_m (eq. (14)), crossing from below with a kink
     s = Model(1.0, 0.7, 1.2, 10.0)
     assert s.attractor == pytest.approx(0.5)
     assert s.deterministic(-1.0, [60.0])[0] == pytest.approx(0.5, abs=1e-12)

@@ -2,9 +2,9 @@
 
 Claims tested (derivation in the docstring of analogue.theory.work_statistics):
 1. the weak-noise limit of the exact rate function is the lower convex envelope of the paper's
-   I(w) completed by I_0(0) = max(|a| - Delta, 0)^2/4 -- convex, continuous, equal to eq. Iw
+   I(w) completed by I_0(0) = max(|a| - Delta, 0)^2/4 -- convex, continuous, equal to eq. (64)
    away from w = 0, linear (time-sharing) near it;
-2. the exact I_gamma approaches that limit as gamma grows, while its distance to eq. Iw near
+2. the exact I_gamma approaches that limit as gamma grows, while its distance to eq. (64) near
    w = 0 does not shrink;
 3. the fluctuation relation I(-w) - I(w) is continuous at w = 0 (no jump 2 a Delta).
 """
@@ -81,7 +81,7 @@ def test_limit_fluctuation_relation_is_continuous_and_joins_eq_ftexp():
     # near w = 0 (both sides on their linear pieces): 2 w/(m tau_m), continuous at 0
     small = w < model.force * tm * (d - a)
     np.testing.assert_allclose(fr[small], 2 * w[small] / (m * tm), rtol=1e-9)
-    # far out (both sides on the parabolas): the paper's eq. ftexp w/(m tau_m) + a Delta
+    # far out (both sides on the parabolas): the paper's eq. (67) w/(m tau_m) + a Delta
     far = w > model.force * tm * (d + a)
     np.testing.assert_allclose(fr[far], w[far] / (m * tm) + a * d, rtol=1e-9)
     assert np.all(np.abs(np.diff(fr)) < 5 * (w[1] - w[0]))      # no jump anywhere
@@ -105,7 +105,7 @@ def test_exact_rate_approaches_limit_not_paper(stick_rates):
     # measured: 0.060 -> 0.0149 -> 0.0039 for gamma = 10, 100, 1000 (w in [-1, 1])
     assert np.max(e100) < 0.5 * np.max(e10)
     assert np.max(e100) < 0.02
-    # the distance to eq. Iw next to w = 0 does not shrink: it tends to |I_lim - I_paper|
+    # the distance to eq. (64) next to w = 0 does not shrink: it tends to |I_lim - I_paper|
     near = np.abs(w) == 0.05
     gap10, gap100 = np.abs(rates[10.0] - paper)[near], np.abs(rates[100.0] - paper)[near]
     target = np.abs(lim - paper)[near]

@@ -33,7 +33,7 @@ def test_figures_draw_on_given_axes_and_show_the_theory():
     out = paper_theory.fig8_rate_function(axes)
     assert out[0] is axes[0] and out[1] is axes[1]
     m = Model(tau_m=1.0, delta=1.0, a=0.5, gamma=10.0)
-    # the first line of panel (a) is the w < 0 branch of eq. Iw, never joined across w = 0
+    # the first line of panel (a) is the w < 0 branch of eq. (64), never joined across w = 0
     line = axes[0].get_lines()[0]
     w, y = line.get_xdata(), line.get_ydata()
     assert np.all(w < 0)

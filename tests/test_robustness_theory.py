@@ -5,7 +5,7 @@ A fixed-seed random sweep over tau_m in [0.1, 10], Delta in {0} u [0.1, 3.2], a 
 signs and 0, t from 1e-3 tau_m to 30 tau_m, plus hand-picked edge cases.  Checked: no
 exceptions, finite output where a finite answer exists, densities >= 0 and normalised,
 action >= 0 and = 0 on the deterministic path, the t -> inf action equals U - U_min
-(eq. p_stat), rate functions >= 0 with zero at the mean, and invalid input raises a
+(eq. (6)), rate functions >= 0 with zero at the mean, and invalid input raises a
 ValueError naming the parameter.
 """
 from __future__ import annotations
@@ -58,7 +58,7 @@ def test_weak_noise_functions_are_finite_and_consistent(model, v0, t):
     A = wn.action(model, v, t, v0)
     assert np.all(np.isfinite(A))
     assert np.all(A >= -1e-12 * (1.0 + np.abs(A)))
-    # zero on the noise-free path (eq. det_eq): the action of the deterministic endpoint
+    # zero on the noise-free path (eq. (13)): the action of the deterministic endpoint
     v_det = float(model.deterministic(v0, t))
     assert abs(wn.action(model, v_det, t, v0)) <= 1e-9 * max(1.0, v_det**2 / model.tau_m)
     # ... and the deterministic endpoint minimises the action
@@ -92,7 +92,7 @@ def test_weak_noise_work_functions(model, v0, t):
     e = weak_noise_limit_rate_function(model, w_fine)
     slopes = np.diff(e) / np.diff(w_fine)
     assert np.all(np.diff(slopes) >= -1e-9 * (1 + np.abs(slopes[1:])))
-    # and below the paper's eq. Iw holding cost everywhere (w != 0)
+    # and below the paper's eq. (64) holding cost everywhere (w != 0)
     assert np.all(env <= I + 1e-12)
 
 
@@ -101,7 +101,7 @@ def test_weak_noise_work_functions(model, v0, t):
                                                       (1.9, -0.4), (-2.5, 0.1)]]
                          + [(Model(tau_m=1.0, delta=0.0, a=0.5, gamma=50.0), 0.0, 1e3)])
 def test_long_time_action_is_potential(model, v0, t):
-    """t -> inf: f -> p_s ~ exp(-gamma U), so A* -> U(v) - U_min (eq. p_stat)."""
+    """t -> inf: f -> p_s ~ exp(-gamma U), so A* -> U(v) - U_min (eq. (6))."""
     v = np.linspace(-0.5, 0.5, 11) + model.attractor
     u = model.potential(v) - model.potential(model.attractor)
     assert np.allclose(wn.action(model, v, t, v0), u, rtol=1e-9, atol=1e-12)

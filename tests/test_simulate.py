@@ -41,7 +41,7 @@ def run(model, **kw):
 
 # -------------------------------------------------------------- exact values, by quadrature
 def exact_moments(model: Model) -> dict:
-    """Mean, variance and P(v > 0) of p_s = exp(-gamma U)/Z (eq. p_stat) by adaptive
+    """Mean, variance and P(v > 0) of p_s = exp(-gamma U)/Z (eq. (6)) by adaptive
     quadrature on each half line (the density has a kink at 0 for epsilon = 0)."""
     w = 40 * model.velocity_scale
     c = model.potential_minimum()
@@ -181,7 +181,7 @@ def test_recorded_noise_drove_the_circuit():
 def test_noise_free_circuit_follows_deterministic_motion(model, v0):
     """gamma = 1e8 makes the noise negligible (deviation <= sqrt(2 t/gamma) ~ 2.4e-4); the
     circuit then follows the noise-free ODE of the model it implements, and the sgn-law
-    facts (stick time t_a of eq. tbar1, slip velocity v_ss of eq. v_st) up to the smoothing."""
+    facts (stick time t_a of eq. (31), slip velocity v_ss of eq. (14)) up to the smoothing."""
     m = model.replace(gamma=1e8)
     T, dt = 3.0, 0.001
     e = run(m, v0=v0, t_end=T, replicas=2, seed=1, sample_dt=dt,

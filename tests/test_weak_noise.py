@@ -47,7 +47,7 @@ def test_deterministic_path_has_zero_action(model, v0):
 @pytest.mark.parametrize("a", [0.3, -0.3, 0.0, 0.7])
 @pytest.mark.parametrize("v0", [1.5, -1.5, 0.0])
 def test_indirect_region_costs_the_potential(a, v0):
-    """eqs. Aind2/Aind2b: between u and w (t >= t_a) the action is U(v) with U(0) = 0."""
+    """eqs. (33)/(34): between u and w (t >= t_a) the action is U(v) with U(0) = 0."""
     model = STICK_FIG2.replace(a=a)
     t = 4.0
     b = wn.boundaries(model, t, v0)
@@ -93,7 +93,7 @@ def test_mirror_symmetry(model, v0):
 
 
 def test_lambda_is_eq_lambda():
-    """Lambda in the paper's unscaled form of eq. lambda (moderate times: no overflow)."""
+    """Lambda in the paper's unscaled form of eq. (20) (moderate times: no overflow)."""
     m = STICK_FIG2
     t0, t, v0 = 0.3, 1.4, -0.8
     v = np.array([-1.0, 0.2, 0.9])
@@ -183,7 +183,7 @@ def test_w_and_u_are_where_the_action_switches_continuously(model, v0):
                 before = wn.optimal_path(model, x * (1 - 1e-6), t, v0).kind
                 after = wn.optimal_path(model, x * (1 + 1e-6), t, v0).kind
                 assert before.startswith("indirect") and after.startswith("direct")
-        # eq. cond1b: at w the direct action Lambda equals U(w); eq. cond2: at u the direct
+        # eq. (38): at w the direct action Lambda equals U(w); eq. (42): at u the direct
         # crossing action (with its own t_x) equals the indirect-crossing action U(u)
         side = 1 if b["w"] > 0 else -1
         assert wn.Lambda(side, b["w"], t, v0, 0.0, model) == pytest.approx(
@@ -199,7 +199,7 @@ def test_w_and_u_are_where_the_action_switches_continuously(model, v0):
 
 
 def test_w_matches_paper_eq_dpm_and_u_eq_vc_b():
-    """My numerically stable form against eq. dpm / eq. vc_b as printed (v0 > 0 upper sign)."""
+    """My numerically stable form against eq. (41) / eq. (45) as printed (v0 > 0 upper sign)."""
     m, v0, t0 = STICK_FIG2, 1.5, 0.2
     for t in (2.0, 3.0, 5.0):
         k, E = (m.delta - m.a) * m.tau_m, math.exp((t - t0) / m.tau_m)
@@ -220,7 +220,7 @@ def test_w_cr_is_where_the_action_switches_continuously(model, v0):
         assert ok, (x, info)
         assert wn.optimal_path(model, x * (1 - 1e-6), t, v0).kind == "twice-crossing"
         assert wn.optimal_path(model, x * (1 + 1e-6), t, v0).kind == "direct"
-        # eq. cond3: the two competing actions agree at w_cr
+        # eq. (49): the two competing actions agree at w_cr
         direct = wn.Lambda(int(np.sign(v0)), x, t, v0, 0.0, model)
         assert direct == pytest.approx(wn.action(model, x, t, v0), rel=1e-9)
 
@@ -312,7 +312,7 @@ def test_propagator_tends_to_stationary_law(model, v0):
 
 
 def test_propagator_piecewise_form_sol2():
-    """eq. sol2 (a < Delta, v0 > 0, t > t_a): exp(-gamma*Lambda_-(..., t_x)) below u, exp(-gamma U)
+    """eq. (47) (a < Delta, v0 > 0, t > t_a): exp(-gamma*Lambda_-(..., t_x)) below u, exp(-gamma U)
     between u and w, exp(-gamma*Lambda_+) above w -- up to one normalisation."""
     m, v0, t = STICK_FIG2, 2.0, 2.5
     v = np.linspace(-3.0, 6.0, 901)
@@ -355,9 +355,9 @@ def test_bad_input_raises_value_error_naming_parameter():
 
 
 def test_propagator_piecewise_form_sol3_and_stationary_switching_times():
-    """eq. sol3 (a > Delta, v0 < 0): Lambda_- below w_cr, the three-piece eq. Adc between w_cr
-    and 0, the direct crossing eq. Adirx above 0.  The switching times from optimal_path make
-    eqs. Adc / Adirx stationary (finite differences), independently of how they were found."""
+    """eq. (51) (a > Delta, v0 < 0): Lambda_- below w_cr, the three-piece eq. (36) between w_cr
+    and 0, the direct crossing eq. (24) above 0.  The switching times from optimal_path make
+    eqs. (36) / (24) stationary (finite differences), independently of how they were found."""
     m, v0, t = SLIP_A12, -1.0, 2.0
     v = np.linspace(-3.0, 3.0, 241)
     f = wn.propagator(m, v, t, v0)

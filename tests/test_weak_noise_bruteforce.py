@@ -256,7 +256,7 @@ FINE_LADDER = (1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5)
 def test_work_optimal_path_matches_bruteforce(params, w, tau, v0, v):
     """Minimise the discretised action at fixed work by projected Newton steps: same action,
     same path, and the same Lagrange multiplier, read off the brute-force gradient
-    (grad A = beta F grad W at a constrained minimum; eqs. Keq, modLag, eqelk1)."""
+    (grad A = beta F grad W at a constrained minimum; eqs. (57), (58), (60))."""
     from analogue.theory.weak_noise_work import work_optimal_path
 
     m = Model(**params)

@@ -1,5 +1,5 @@
-"""Work large deviations of the paper (section V): rate function (eq. Iw), fluctuation relation
-(eq. ftexp) and work-optimal paths (eqs. Keq, modLag, eqelk1).  Brute-force cross-checks of the
+"""Work large deviations of the paper (section V): rate function (eq. (64)), fluctuation relation
+(eq. (67)) and work-optimal paths (eqs. (57), (58), (60)).  Brute-force cross-checks of the
 paths are in test_weak_noise_bruteforce.py."""
 import math
 
@@ -37,7 +37,7 @@ def test_jump_at_zero_is_a_delta_and_value_at_zero_is_lower_semicontinuous(a):
     m = FIG8.replace(a=a)
     h = 1e-12
     right, left, at0 = rate_function(m, h * m.force), rate_function(m, -h * m.force), rate_function(m, 0.0)
-    # eq. Iw: one-sided limits (Delta -+ a)^2/4 on the sides v -> 0+- ; the jump is |a| Delta
+    # eq. (64): one-sided limits (Delta -+ a)^2/4 on the sides v -> 0+- ; the jump is |a| Delta
     assert right == pytest.approx((m.delta - a) ** 2 / 4, abs=1e-9)
     assert left == pytest.approx((m.delta + a) ** 2 / 4, abs=1e-9)
     assert abs(right - left) == pytest.approx(abs(a) * m.delta, abs=1e-9)
@@ -156,7 +156,7 @@ def test_long_paths_sit_on_the_attractor_in_the_middle(v0, v):
 
 @pytest.mark.parametrize("w", [2.0, 4.0])
 def test_action_per_time_tends_to_the_rate_function(w):
-    """A(tau) = tau I(w) + C + O(1/tau) for paths that stay on one half plane (eq. rate_func)."""
+    """A(tau) = tau I(w) + C + O(1/tau) for paths that stay on one half plane (eq. (56))."""
     taus = np.array([20.0, 40.0, 80.0])
     A = np.array([work_optimal_path(FIG8, w, t, 2.0, 1.0, n=50).action for t in taus])
     slopes = np.diff(A) / np.diff(taus)
@@ -200,7 +200,7 @@ def test_twice_crossing_when_both_ends_lie_opposite_the_attractor():
                                          (0.1, 1.0, 1.0, "+0+"), (-0.5, 1.0, 1.0, "+-+")])
 def test_first_integral_is_constant_along_the_whole_path(w, v0, v, kind):
     """K has no explicit time dependence, so H = (v'^2 - U'^2)/4 + beta m a v is conserved on
-    every piece (E-L, eq. eqelk1) and continuous across the kinks at v = 0 (Weierstrass-Erdmann
+    every piece (E-L, eq. (60)) and continuous across the kinks at v = 0 (Weierstrass-Erdmann
     corner condition for free crossing times: v'^2 jumps by (Delta - a)^2 - (Delta + a)^2).
     A stuck piece has H = -U'_Filippov^2/4 = 0, so time-sharing paths must have H = 0."""
     p = work_optimal_path(FIG8, w, 10.0, v0, v, n=20000)
@@ -223,7 +223,7 @@ def test_first_integral_is_constant_along_the_whole_path(w, v0, v, kind):
 def test_small_work_rates_share_time_between_sticking_and_sliding():
     """Not in the paper: for |a| < Delta and small w the optimum sticks on v = 0 (free) and
     slides at v* = (Delta - a) tau_m for the rest, so A/tau -> v_w (Delta - a)/tau_m, below the
-    paper's I(w) (the convex envelope of eq. Iw; cf. work_statistics)."""
+    paper's I(w) (the convex envelope of eq. (64); cf. work_statistics)."""
     w = 0.1  # v_w = 0.2 < v* = 0.5
     A = [work_optimal_path(FIG8, w, t, 1.0, 1.0).action for t in (30.0, 60.0)]
     p = work_optimal_path(FIG8, w, 60.0, 1.0, 1.0)
@@ -237,7 +237,7 @@ def test_small_work_rates_share_time_between_sticking_and_sliding():
 @pytest.mark.parametrize("params,w", [
     (dict(tau_m=1.0, delta=1.0, a=0.5), -0.5),   # stick, time-sharing with v = 0 (free)
     (dict(tau_m=1.0, delta=0.5, a=1.0), -0.5),   # slip, time-sharing with a held v = 0
-    (dict(tau_m=1.0, delta=1.0, a=0.5), 2.0),    # one half plane, eq. Iw itself
+    (dict(tau_m=1.0, delta=1.0, a=0.5), 2.0),    # one half plane, eq. (64) itself
 ])
 def test_long_time_limit_agrees_with_the_convex_envelope_of_work_statistics(params, w):
     """Independent route (another module, derived from the envelope of the holding cost):

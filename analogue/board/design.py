@@ -7,7 +7,7 @@ by two rail-referenced current sources, :mod:`analogue.board.friction`).  With
 
     C du/dt_c = -u/R - I_0 tanh(u/w) + V_F/R_F + V_n(t_c)/R_N,
 
-the paper's eq. (bm) with ``u = kappa v`` and ``t_c = theta t`` (compare
+the paper's eq. (4) with ``u = kappa v`` and ``t_c = theta t`` (compare
 :mod:`analogue.circuit.mapping`):
 
     tau_m = R C/theta,   Delta = theta I_0/(C kappa),   a = theta V_F/(R_F C kappa),

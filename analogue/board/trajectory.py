@@ -4,7 +4,7 @@ sequence.
 A built board is fed the seeded sequence ``(seed, replica)``; the same numbers, passed through
 the exact (numpy) model of the DAC hold, Bessel low-pass and AC coupling
 (:func:`analogue.board.noise_chain.chain_current`), drive ``dv/dt = -v/tau_m - Delta
-tanh(v/epsilon) - spring x + a + eta(t)`` (eq. bm with the bridge's tanh law, the realised
+tanh(v/epsilon) - spring x + a + eta(t)`` (eq. (4) with the bridge's tanh law, the realised
 parameters).  Heun's method on the chain's fine grid (TS/8; the stiffest rate near v = 0 is
 Delta/epsilon = 34, so the step is 25 times inside stability).  Measured on the stick board
 (4 replicas x 20 tau_m): rms path difference 0.0034 (2.5 % of the stationary spread), time

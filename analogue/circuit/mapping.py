@@ -5,8 +5,8 @@ Circuit equation of one replica (node voltage ``V``, circuit time ``t_c``):
     C dV/dt_c = -V/R - I_Delta c(V) + I_F + I_n(t_c),   <I_n I_n'> = 2 D_I delta(t_c - t_c'),
 
 with the Coulomb element ``c(V) = tanh(V/eps_V)`` (diode bridge or B-source).  Writing
-``V = kappa v`` and ``t_c = theta t`` turns it into the paper's eq. bm with the potential of
-eq. U_pot:
+``V = kappa v`` and ``t_c = theta t`` turns it into the paper's eq. (4) with the potential of
+eq. (5):
 
     tau_m = R C / theta,  Delta = theta I_Delta / (C kappa),  a = theta I_F / (C kappa),
     1/gamma = theta D_I / (C kappa)^2,  epsilon = eps_V / kappa.
@@ -106,7 +106,7 @@ DEFAULT_INDUCTOR_Q = 100.0
 # Target of the automatic shot pulse width: max|drift| w / mean (see analogue.circuit.shot).
 SHOT_PULSE_TARGET = 1e-3
 # How far the stationary velocity may wander when checking voltage ratings: to where
-# p_s ~ exp(-gamma U) (eq. p_stat) has fallen to exp(-SWING_LEVEL) ~ 1e-14 of its peak; p_s is
+# p_s ~ exp(-gamma U) (eq. (6)) has fallen to exp(-SWING_LEVEL) ~ 1e-14 of its peak; p_s is
 # log-concave, so it keeps falling at least as fast beyond.  Since U'' >= 1/tau_m this is never
 # more than sqrt(2 SWING_LEVEL) = 8 widths sqrt(tau_m/gamma) from the minimum, and in the stick
 # regime at weak noise (where U rises linearly, with slope Delta - |a|) far less.
@@ -860,7 +860,7 @@ def _positive_part_moments(mu: float, s: float) -> tuple[float, float]:
 
 def stationary_std(model: Model) -> float:
     """Standard deviation of the exact (sgn-law) stationary law p_s ~ exp(-gamma U) (eq.
-    p_stat), in closed form: on each half line p_s is a truncated Gaussian of variance
+    (6)), in closed form: on each half line p_s is a truncated Gaussian of variance
     tau_m/gamma centred at (a - Delta) tau_m (v > 0) or (a + Delta) tau_m (v < 0).  In the stick
     regime at weak noise it is ~ 1/(gamma (Delta - |a|)), far below sqrt(tau_m/gamma): the
     scale the smoothing must be small against."""
@@ -880,7 +880,7 @@ def stationary_std(model: Model) -> float:
 
 
 def stationary_range(model: Model, level: float = SWING_LEVEL) -> tuple[float, float]:
-    """The interval where the stationary density (eq. p_stat) is within ``exp(-level)`` of its
+    """The interval where the stationary density (eq. (6)) is within ``exp(-level)`` of its
     peak: ``gamma (U(v) - U_min) <= level``.  U is convex with ``U'' >= 1/tau_m``, so the ends
     lie within ``sqrt(2 tau_m level/gamma)`` of the minimum, which brackets the root search.
     Returns ``(lo, hi)``."""
@@ -907,7 +907,7 @@ def stationary_range(model: Model, level: float = SWING_LEVEL) -> tuple[float, f
 
 def central_bin_bias(model: Model, epsilon: float, std: float | None = None) -> float:
     """``|P_eps(B) / P_0(B) - 1|`` for the central bin ``B = {|v| < b/2}``, ``b = 0.1``
-    stationary standard deviations, under the stationary law p_s ~ exp(-gamma U) (eq. p_stat)
+    stationary standard deviations, under the stationary law p_s ~ exp(-gamma U) (eq. (6))
     with the smoothed (width ``epsilon``) and the exact sgn friction law: the bias of a
     histogram at the finest resolution the experiments use, at v = 0 where smoothing acts.
 

@@ -156,7 +156,7 @@ def bridge_current(part: DiodePart, i0: float, volts, temperature: float = REFER
 
     Symmetry gives diode currents ``i1 = i4 = (I0 + I)/2`` and ``i2 = i3 = (I0 - I)/2``, and
     ``V = v_d(i1) - v_d(i2)`` with ``v_d(i) = N V_T ln(1 + i/IS) + RS i``; for RS = 0 this is
-    ``I = (I0 + 2 IS) tanh(V / (2 N V_T))`` (the paper's regularisation of sgn, eq. U_pot with
+    ``I = (I0 + 2 IS) tanh(V / (2 N V_T))`` (the paper's regularisation of sgn, eq. (5) with
     Delta|v| -> Delta eps ln cosh(v/eps)).  With RS > 0 it is solved by bisection.  The
     parallel resistor ``rp`` and GMIN are not included.
     """

@@ -157,7 +157,7 @@ def deck_seeds(seed: int, n_decks: int) -> list[int]:
 
 
 def _sample_stationary(model: Model, size: int, rng: np.random.Generator) -> np.ndarray:
-    """Samples from p_s (eq. p_stat) with the exact sampler
+    """Samples from p_s (eq. (6)) with the exact sampler
     (:func:`analogue.theory.exact.sample_stationary`)."""
     from ..theory.exact import sample_stationary
     if not model.is_gradient and model.epsilon > 0:
@@ -692,7 +692,7 @@ def simulate(model: Model, *, v0: float | ArrayLike | Literal["stationary"], t_e
              scheduler: str | None = None, executor: cf.Executor | Any | None = None,
              return_noise: bool = False, return_records: bool = False
              ) -> Ensemble | tuple[Ensemble, np.ndarray] | tuple[Ensemble, dict[str, Any]]:
-    """Simulate ``replicas`` trajectories of the stick-slip model (eqs. bm, U_pot) in ngspice.
+    """Simulate ``replicas`` trajectories of the stick-slip model (eqs. (4), (5)) in ngspice.
 
     Parameters
     ----------
@@ -701,7 +701,7 @@ def simulate(model: Model, *, v0: float | ArrayLike | Literal["stationary"], t_e
         parameters with the diode smoothing width epsilon), recorded in ``meta``.
     v0 : float, array (replicas,) or "stationary"
         Initial velocities in model units; "stationary" draws them from the stationary law of
-        the circuit's model (eq. p_stat) with a seed derived from ``seed``.
+        the circuit's model (eq. (6)) with a seed derived from ``seed``.
     t_end : float
         Final time (model units); a whole number of ``sample_dt``.
     replicas : int

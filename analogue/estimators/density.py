@@ -1,5 +1,5 @@
 """Histogram estimates of the transition density f(v, t | v0) and of the stationary density
-p_s(v) (paper, eq. p_stat), each with a confidence band that is honest for how the samples
+p_s(v) (paper, eq. (6)), each with a confidence band that is honest for how the samples
 were drawn."""
 from __future__ import annotations
 
@@ -59,7 +59,7 @@ class DensityEstimate:
 def transition_density(ensemble: Ensemble, t: float, bins: int | ArrayLike = 50,
                        range: tuple[float, float] | None = None, confidence: float = 0.95,
                        method: str = "wilson") -> DensityEstimate:
-    """Histogram of the transition density ``f(v, t | v0)`` (paper, eqs. sol1-sol3) from the
+    """Histogram of the transition density ``f(v, t | v0)`` (paper, eqs. (46)-(51)) from the
     velocities of all replicas at the grid time nearest ``t``.
 
     Replicas are independent, so each bin count is binomial(n, p): the band is the Wilson
@@ -90,7 +90,7 @@ def transition_density(ensemble: Ensemble, t: float, bins: int | ArrayLike = 50,
 def stationary_density(ensemble: Ensemble, burn_in: float = 0.0, bins: int | ArrayLike = 50,
                        range: tuple[float, float] | None = None, confidence: float = 0.95,
                        batches_per_replica: int = 1) -> DensityEstimate:
-    """Histogram of the stationary density ``p_s(v)`` (paper, eq. p_stat) pooling every sample
+    """Histogram of the stationary density ``p_s(v)`` (paper, eq. (6)) pooling every sample
     after ``burn_in`` (a duration from the first time) across all replicas.
 
     Pooled samples along one trajectory are correlated, so binomial errors would be far too

@@ -1,6 +1,6 @@
 """Prehistory of fluctuations (Dykman et al., PRL 68, 2718 (1992)): the paths that end in a
 velocity window, averaged.  In the weak-noise limit their distribution concentrates on the
-optimal path of the paper (eqs. EL1/EL2, sol_basic), which is how analogue experiments
+optimal path of the paper (eqs. (15a)/(15b), (16)), which is how analogue experiments
 measure optimal paths.
 
 Two selections: :func:`prehistory` (all replicas at one time ``t_target``, the transient

@@ -121,7 +121,7 @@ def mean_estimate(samples: ArrayLike, c: float = 5.0) -> Estimate:
 def stationary_observables(ensemble: Ensemble, burn_in: float = 0.0) -> StationaryObservables:
     """Stationary mean and variance of v and P(v > 0), pooled over replicas and all times
     after ``burn_in`` (a duration from the first time); compare with moments of p_s
-    (paper, eq. p_stat).
+    (paper, eq. (6)).
 
     The variance is the mean of ``(v - mean)^2``; its error treats that as an average of a
     correlated series with its own ``tau_int`` (the mean's uncertainty enters only at second

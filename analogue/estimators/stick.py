@@ -2,7 +2,7 @@
 
 With the exact sgn law the stationary law still has no atom at v = 0 (noise unsticks the
 object at once), so "stuck" means ``|v| < threshold``; its exact stationary probability is
-the integral of p_s (paper, eq. p_stat) over ``(-threshold, threshold)``.
+the integral of p_s (paper, eq. (6)) over ``(-threshold, threshold)``.
 """
 from __future__ import annotations
 
@@ -88,7 +88,7 @@ def _log_phi_diff(u1: float, u2: float) -> float:
 
 
 def stick_fraction_theory(model: Model, threshold: float) -> float:
-    """Exact stationary ``P(|v| < threshold) = integral_{-th}^{th} p_s(v) dv`` (eq. p_stat).
+    """Exact stationary ``P(|v| < threshold) = integral_{-th}^{th} p_s(v) dv`` (eq. (6)).
 
     For the sgn law each half line is a Gaussian piece: on v > 0,
     ``exp(-gamma U) = exp(gamma b^2 tau_m / 2) exp(-(v + b tau_m)^2 / (2 s^2))`` with

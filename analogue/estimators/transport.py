@@ -1,4 +1,4 @@
-"""Transport of the position x(t) = integral v (the integral in the work, paper eq. work):
+"""Transport of the position x(t) = integral v (the integral in the work, paper eq. (3)):
 drift velocity and diffusion coefficient."""
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
-"""Work-rate statistics: samples of ``w = W_tau / tau`` (paper, eqs. work and work_power),
-their distribution ``P_tau(w)``, the fluctuation ratio (eqs. ftexp, dryft) and the empirical
-rate function (eq. largeDev).
+"""Work-rate statistics: samples of ``w = W_tau / tau`` (paper, eqs. (3) and (52)),
+their distribution ``P_tau(w)``, the fluctuation ratio (eqs. (67), (68)) and the empirical
+rate function (eq. (54)).
 
 Windows taken along one trajectory (especially overlapping ones) are strongly correlated,
 so every error here comes from the spread across the INDEPENDENT replicas: each replica
@@ -37,7 +37,7 @@ def _lag(ens: Ensemble, tau: float) -> tuple[int, float]:
 
 def work_rate_samples(ensemble: Ensemble, tau: float, force: float, burn_in: float = 0.0,
                       overlap: bool = True, stride: int | None = None) -> np.ndarray:
-    """Work rates ``w = F (x(s + tau) - x(s)) / tau`` (paper, eqs. work, work_power) for
+    """Work rates ``w = F (x(s + tau) - x(s)) / tau`` (paper, eqs. (3), (52)) for
     windows starting at ``s >= t[0] + burn_in``.
 
     ``overlap=True`` starts a window every ``stride`` samples (default 1); ``overlap=False``
@@ -108,7 +108,7 @@ def work_distribution(ensemble: Ensemble, tau: float, force: float, bins: int | 
                       burn_in: float = 0.0, overlap: bool = True,
                       range: tuple[float, float] | None = None, stride: int | None = None,
                       confidence: float = 0.95) -> WorkDistribution:
-    """Distribution ``P_tau(w)`` of the work rate (paper, eqs. eqpi1, largeDev).
+    """Distribution ``P_tau(w)`` of the work rate (paper, eqs. (53), (54)).
 
     Without ``range`` the bins are symmetric about 0, ``(-max|w|, max|w|)``, so that
     :func:`fluctuation_ratio` can pair ``w`` with ``-w``.  Errors are the spread of the
@@ -156,8 +156,8 @@ class LineFit:
 
 @dataclass(frozen=True, eq=False)
 class FluctuationRatio:
-    """``ln[P(w)/P(-w)] / (tau gamma)`` on the positive bin centres ``w`` (paper, eqs. ftexp,
-    dryft predict ``w/(m tau_m) + a Delta`` for large tau and gamma).
+    """``ln[P(w)/P(-w)] / (tau gamma)`` on the positive bin centres ``w`` (paper, eqs. (67),
+    (68) predict ``w/(m tau_m) + a Delta`` for large tau and gamma).
 
     ``influence[r, j]`` is replica r's linearised contribution to ``ratio[j]`` (mean zero);
     ``stderr = influence.std(ddof=1) / sqrt(R)``, and correlated fits use it too.
@@ -175,7 +175,7 @@ class FluctuationRatio:
     def fit_line(self, through_origin: bool = False) -> LineFit:
         """Fit ``ratio = slope * w (+ intercept)`` with weights 1/stderr^2; the errors come
         from the replica influences, so the correlation between bins is accounted for.  The
-        intercept estimates the paper's jump ``a Delta`` (eq. ftexp)."""
+        intercept estimates the paper's jump ``a Delta`` (eq. (67))."""
         need = 1 if through_origin else 2
         ok = self.stderr > 0
         if np.count_nonzero(ok) < need:
@@ -205,7 +205,7 @@ def _tau_gamma(dist: object, tau: float, gamma: float) -> tuple[float, float]:
 
 def fluctuation_ratio(dist: WorkDistribution, tau: float, gamma: float,
                       min_replicas: int = 10) -> FluctuationRatio:
-    """``ln[P_tau(w)/P_tau(-w)] / (tau gamma)`` (paper, eqs. ftexp, dryft) from a
+    """``ln[P_tau(w)/P_tau(-w)] / (tau gamma)`` (paper, eqs. (67), (68)) from a
     :func:`work_distribution` whose bins are symmetric about 0.
 
     Only pairs of bins ``(w, -w)`` with ``w > 0`` where both sides are reached by at least
@@ -239,7 +239,7 @@ def fluctuation_ratio(dist: WorkDistribution, tau: float, gamma: float,
 @dataclass(frozen=True, eq=False)
 class RateFunctionEstimate:
     """Empirical rate function ``-ln P_tau(w) / (tau gamma)`` shifted to zero at its minimum
-    (paper, eq. largeDev); ``shift`` is the unshifted value at the minimum.  At finite tau it
+    (paper, eq. (54)); ``shift`` is the unshifted value at the minimum.  At finite tau it
     still contains the O(1/tau) prefactor corrections, which vanish as tau grows."""
 
     w: np.ndarray

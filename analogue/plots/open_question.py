@@ -1,9 +1,9 @@
 """Figures for the paper's open question (Section V): is the jump of I(w) at w = 0 real?
 
 Exact rate functions ``I_gamma(w)`` (:func:`analogue.theory.work_statistics.rate_function`) for
-gamma = 10, 100, 1000 against the paper's eq. Iw and the weak-noise limit (the convex envelope,
+gamma = 10, 100, 1000 against the paper's eq. (64) and the weak-noise limit (the convex envelope,
 :func:`analogue.theory.work_statistics.weak_noise_limit_rate_function`), and the fluctuation
-relation ``I(-w) - I(w)`` (Fig. 9, eqs. ftexp/dryft), for the paper's Fig. 8 parameters
+relation ``I(-w) - I(w)`` (Fig. 9, eqs. (67)/(68)), for the paper's Fig. 8 parameters
 (tau_m = m = Delta = 1, a = 0.5) and a sliding case a = 1.5.
 
 The exact curves go through the on-disk theory cache (:mod:`analogue.theory.cache`; a
@@ -75,7 +75,7 @@ def draw_open_question(outdir, points=None, gammas=GAMMAS, cache=None) -> list[P
                       label=f"exact, gamma = {g:g}")
         paper = ws.paper_rate_function(model, fine)
         lim = ws.weak_noise_limit_rate_function(model, fine)
-        ax_i.plot(fine[fine < 0], paper[fine < 0], "k--", lw=1.2, label="paper eq. Iw")
+        ax_i.plot(fine[fine < 0], paper[fine < 0], "k--", lw=1.2, label="paper eq. (64)")
         ax_i.plot(fine[fine > 0], paper[fine > 0], "k--", lw=1.2)
         ax_i.plot(fine, lim, "r-", lw=1.4, alpha=0.8, label="gamma -> inf: convex envelope")
         ax_i.set_ylim(-0.05, min(2.5, float(np.max(paper)) * 1.05))
@@ -83,7 +83,7 @@ def draw_open_question(outdir, points=None, gammas=GAMMAS, cache=None) -> list[P
         ax_i.set_ylabel("I(w)  [P ~ exp(-tau gamma I)]")
         ax_i.set_title(f"tau_m = m = Delta = 1, a = {a:g}")
         ax_f.plot(pos, ws.paper_rate_function(model, -pos) - ws.paper_rate_function(model, pos),
-                  "k--", lw=1.2, label="paper eq. ftexp")
+                  "k--", lw=1.2, label="paper eq. (67)")
         ax_f.plot(pos, ws.weak_noise_limit_rate_function(model, -pos)
                   - ws.weak_noise_limit_rate_function(model, pos), "r-", lw=1.4, alpha=0.8,
                   label="gamma -> inf: convex envelope")

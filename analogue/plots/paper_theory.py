@@ -71,8 +71,8 @@ def _path_panel(ax, model, v0, v, t, title, *, show_attractor=False):
 # ------------------------------------------------------------------------- Fig. 1
 def fig1_deterministic(axes=None, tau_m=1.0, delta=0.7, a_values=(0.3, 1.2), v0s=(2.0, -2.0),
                        t_max=4.0):
-    """Fig. 1: noise-free motion (eq. det_eq): (a) a < Delta sticks at v = 0 in finite time,
-    (b) a > Delta relaxes to v_ss = (a - Delta) tau_m (eq. v_st), with a kink at v = 0."""
+    """Fig. 1: noise-free motion (eq. (13)): (a) a < Delta sticks at v = 0 in finite time,
+    (b) a > Delta relaxes to v_ss = (a - Delta) tau_m (eq. (14)), with a kink at v = 0."""
     axes = _axes(axes, 1, len(a_values))
     s = np.linspace(0.0, t_max, 1001)
     for ax, a, tag in zip(axes, a_values, "abcdef"):
@@ -112,7 +112,7 @@ def _paths_figure(axes, model, points, fig_no, caption):
 
 def fig2_paths_stick(axes=None, tau_m=1.0, delta=0.7, a=0.3, points=FIG2_POINTS):
     """Fig. 2: optimal paths for a < Delta, v0 > 0: direct, direct crossing (t_x from eq.
-    tbar_eq), indirect and indirect crossing (stuck on v = 0 between t_a, t_b; eqs. tbar1/2)."""
+    (25)), indirect and indirect crossing (stuck on v = 0 between t_a, t_b; eqs. (31), (32))."""
     return _paths_figure(axes, _model(tau_m, delta, a), points, 2, f"a={a:g} < $\\Delta$={delta:g}")
 
 
@@ -124,14 +124,14 @@ def fig3_paths_slip_up(axes=None, tau_m=1.0, delta=0.7, a=1.2, points=FIG3_POINT
 
 def fig4_paths_slip_down(axes=None, tau_m=1.0, delta=0.7, a=1.2, points=FIG4_POINTS):
     """Fig. 4: a > Delta, v0 < 0, v < 0: direct path, and for long times the twice crossing path
-    (eq. dc_par) that visits the attractor."""
+    (eq. (35)) that visits the attractor."""
     return _paths_figure(axes, _model(tau_m, delta, a), points, 4, f"a={a:g} > $\\Delta$={delta:g}")
 
 
 # ------------------------------------------------------------------------- Fig. 5
 def fig5_boundaries(axes=None, tau_m=1.0, delta=0.7, a=0.2, v0s=(2.0, -2.0), t_max=4.0,
                     t_end=3.0, margin=0.8):
-    """Fig. 5: boundary lines w^pm (eq. dpm) and u^pm (eq. vc_b) for a < Delta; between them the
+    """Fig. 5: boundary lines w^pm (eq. (41)) and u^pm (eq. (45)) for a < Delta; between them the
     optimal path sticks (indirect / indirect crossing), outside it slips.  Example paths to
     final velocities above, between and below the boundaries at t = t_end are overlaid."""
     from ..theory import weak_noise
@@ -167,9 +167,9 @@ def fig5_boundaries(axes=None, tau_m=1.0, delta=0.7, a=0.2, v0s=(2.0, -2.0), t_m
 # ------------------------------------------------------------------------- Fig. 6
 def fig6_propagator(axes=None, tau_m=1.0, delta=0.7, a=0.2, gamma=10.0, v0=2.0,
                     times=(1.0, 2.2, 3.5, 12.0), v_range=(-1.5, 2.5)):
-    """Fig. 6: saddle-point transition probability f(v, t | v0, 0) (eqs. sol1, sol2), normalised
+    """Fig. 6: saddle-point transition probability f(v, t | v0, 0) (eqs. (46), (47)), normalised
     on the grid, at four times; vertical dashed lines at u^+ and w^+ where they exist; the last
-    time is compared with the stationary law p_s (eq. p_stat)."""
+    time is compared with the stationary law p_s (eq. (6))."""
     from ..theory import weak_noise
 
     axes = _axes(axes, 2, 2)
@@ -203,8 +203,8 @@ FIG7_ENDPOINTS = ((2.0, 1.0), (0.0, 6.0), (8.0, 3.0), (-1.0, 2.0))
 def fig7_work_paths(axes=None, tau_m=1.0, mass=1.0, delta=1.0, a=0.5,
                     panels=((2.0, 10.0), (2.0, 30.0), (4.0, 10.0), (4.0, 30.0)),
                     endpoints=FIG7_ENDPOINTS):
-    """Fig. 7: paths minimising K = A - beta W at fixed work rate w (eqs. Keq, modLag,
-    eqelk1); for long tau they sit near tilde v_w = w/(m a) (eq. wF, dashed)."""
+    """Fig. 7: paths minimising K = A - beta W at fixed work rate w (eqs. (57), (58),
+    (60)); for long tau they sit near tilde v_w = w/(m a) (eq. (63), dashed)."""
     from ..theory.weak_noise_work import rate_function, work_optimal_path
 
     axes = _axes(axes, 2, 2)
@@ -215,7 +215,7 @@ def fig7_work_paths(axes=None, tau_m=1.0, mass=1.0, delta=1.0, a=0.5,
             p = work_optimal_path(m, w, tau, v0, v, n=600)
             ax.plot(p.s, p.v, color=c, lw=1.8,
                     label=f"$v_0$={v0:g}, v={v:g} ({p.kind}), A/$\\tau$={p.action / tau:.2f}")
-        ax.annotate(f"I(w) = {rate_function(m, w):.2f} (eq. Iw)", (0.3, 0.3),
+        ax.annotate(f"I(w) = {rate_function(m, w):.2f} (eq. (64))", (0.3, 0.3),
                     xycoords="axes fraction", fontsize=9)
         ax.axhline(w / (mass * a), color="k", ls="--", lw=1, label=f"$\\tilde v_w$ = {w / (mass * a):g}")
         _zero_line(ax)
@@ -241,7 +241,7 @@ def _branches(ax, w, y, colour, label, dot_value=None):
 
 def fig8_rate_function(axes=None, tau_m=1.0, mass=1.0, delta=1.0, a=0.5,
                        a_values=(0.25, 0.5, 1.0, 1.5), w_max=(1.5, 4.0)):
-    """Fig. 8: rate function I(w) of eq. Iw: (a) a = 0.5, (b) several a.  The jump at w = 0 is
+    """Fig. 8: rate function I(w) of eq. (64): (a) a = 0.5, (b) several a.  The jump at w = 0 is
     a Delta; the filled dot is the value at w = 0 (cheapest way of holding v = 0)."""
     from ..theory.weak_noise_work import rate_function
 
@@ -257,7 +257,7 @@ def fig8_rate_function(axes=None, tau_m=1.0, mass=1.0, delta=1.0, a=0.5,
         mm = m.replace(a=aa)
         _branches(axes[1], w, rate_function(mm, w), c, f"a={aa:g}", rate_function(mm, 0.0))
     for ax, tag, txt in zip(axes, "ab", (f"a={a:g}", "various a")):
-        ax.set_title(f"Fig. 8({tag}): rate function I(w), eq. Iw, $\\tau_m$=m=$\\Delta$=1, {txt}",
+        ax.set_title(f"Fig. 8({tag}): rate function I(w), eq. (64), $\\tau_m$=m=$\\Delta$=1, {txt}",
                      fontsize=10)
         ax.set_xlabel("work rate w (model units)")
         ax.set_ylabel("I(w) (model units)")
@@ -268,14 +268,14 @@ def fig8_rate_function(axes=None, tau_m=1.0, mass=1.0, delta=1.0, a=0.5,
 
 
 def fig9_fluctuation_relation(axes=None, tau_m=1.0, mass=1.0, delta=1.0, a=0.5, w_max=4.0):
-    """Fig. 9: I(-w) - I(w) (eq. ftexp) = w/(m tau_m) + a Delta sgn(w): a jump 2 a Delta at 0;
+    """Fig. 9: I(-w) - I(w) (eq. (67)) = w/(m tau_m) + a Delta sgn(w): a jump 2 a Delta at 0;
     the conventional SSFT line w/(m tau_m) (Delta = 0) for comparison."""
     from ..theory.weak_noise_work import fluctuation_relation
 
     ax = _axes(axes, 1, 1)[0]
     w = np.linspace(-w_max, w_max, 2001)
     m = _model(tau_m, delta, a, mass=mass)
-    _branches(ax, w, fluctuation_relation(m, w), "k", "I(-w) - I(w), eq. ftexp",
+    _branches(ax, w, fluctuation_relation(m, w), "k", "I(-w) - I(w), eq. (67)",
               fluctuation_relation(m, 0.0))
     ax.plot(w, w / (mass * tau_m), color="tab:blue", ls="--", lw=1, label="w/(m $\\tau_m$) ($\\Delta$=0)")
     _zero_line(ax)

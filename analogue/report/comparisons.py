@@ -102,7 +102,7 @@ def analyse(runs: ExperimentRuns, *, progress=None) -> ExperimentAnalysis:
                             finite_noise=ex[k] - weak[k])
                 res.comparisons.append(compare(
                     exp.name, k, val, se, weak[k], "weak-noise", bw,
-                    "saddle-point propagator (eqs. sol1-sol3) normalised on a grid; "
+                    "saddle-point propagator (eqs. (46)-(51)) normalised on a grid; "
                     "finite_noise = exact(gamma) - weak-noise"))
 
         for t, f in zip(times, dens["f"]):

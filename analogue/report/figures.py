@@ -35,7 +35,7 @@ def _title(runs: ExperimentRuns) -> str:
 
 # ------------------------------------------------------------------------------ Fig. 1
 def fig_deterministic(all_runs: list, out: Path):
-    """Paper Fig. 1: noise-free motion, the circuit with its noise off vs eq. det_eq."""
+    """Paper Fig. 1: noise-free motion, the circuit with its noise off vs eq. (13)."""
     fig, axes = new_figure(1, len(all_runs), squeeze=False)
     for ax, runs in zip(axes.ravel(), all_runs):
         ens = runs.noise_free
@@ -43,14 +43,14 @@ def fig_deterministic(all_runs: list, out: Path):
         t = np.linspace(0, ens.t[-1], 600)
         for i, v0 in enumerate(runs.exp.v0):
             ax.plot(t, m.deterministic(v0, t), color=EXACT, lw=1.5,
-                    label="eq. det_eq (sgn law)" if i == 0 else None)
+                    label="eq. (13) (sgn law)" if i == 0 else None)
             ax.plot(ens.t[::8], ens.v[i, ::8], "o", ms=3, color=CIRCUIT, mfc="none",
                     label="circuit, noise off" if i == 0 else None)
             ts = m.stick_time(v0)
             if math.isfinite(ts) and m.regime == "stick":
                 ax.axvline(ts, color="0.6", ls=":", lw=1)
         if m.attractor:
-            ax.axhline(m.attractor, color="0.4", ls="--", lw=0.8, label="$v_{ss}$ (eq. v_st)")
+            ax.axhline(m.attractor, color="0.4", ls="--", lw=0.8, label="$v_{ss}$ (eq. (14))")
         ax.axhline(0, color="0.7", lw=0.7)
         ax.set_title(f"Fig. 1 ({runs.exp.name}): $\\Delta$={m.delta:g}, a={m.a:g}", fontsize=10)
         ax.set_xlabel(TIME)
@@ -60,15 +60,15 @@ def fig_deterministic(all_runs: list, out: Path):
     dev = max(float(np.max(np.abs(r.noise_free.v - np.array(
         [Model(**r.noise_free.meta["model_effective"]).deterministic(v0, r.noise_free.t)
          for v0 in r.exp.v0])))) for r in all_runs)
-    return path, ("Noise-free motion (paper Fig. 1). Lines: eq. det_eq with the exact sgn law "
-                  "(dotted: stick time t_a, eq. tbar1). Circles: the same circuit (its own "
+    return path, ("Noise-free motion (paper Fig. 1). Lines: eq. (13) with the exact sgn law "
+                  "(dotted: stick time t_a, eq. (31)). Circles: the same circuit (its own "
                   f"components and parts) with the noise source off. Largest deviation from the circuit's own smoothed "
                   f"law: {dev:.1e} (model units).")
 
 
 # ------------------------------------------------------------------------- Figs. 2-5
 def fig_prehistory(runs: ExperimentRuns, out: Path, tag: str):
-    """Optimal paths (eqs. sol_basic ... Adc) against the circuit's prehistory: the paths of
+    """Optimal paths (eqs. (16) ... (36)) against the circuit's prehistory: the paths of
     the transition run from v0[0] that end in a window around (v, t)."""
     from ..theory import weak_noise
 
@@ -114,7 +114,7 @@ def fig_prehistory(runs: ExperimentRuns, out: Path, tag: str):
     fig.suptitle(f"Optimal paths and circuit prehistory — {_title(runs)}", fontsize=10)
     path = save(fig, out / f"fig_{tag}_prehistory_{runs.exp.name}.png")
     return path, ("Optimal paths (paper Figs. 2-4: direct, crossing, indirect and twice-crossing "
-                  "kinds from eqs. Adir-Adc) against the prehistory of the circuit (Dykman et al. "
+                  "kinds from eqs. (22)-(36)) against the prehistory of the circuit (Dykman et al. "
                   "1992): all circuit paths from v0 that end within "
                   f"±{runs.settings.prehistory_window:g} of the target; dark grey: their mean, "
                   "light grey: 10-90 % band. At this finite noise the prehistory is broad; "
@@ -122,7 +122,7 @@ def fig_prehistory(runs: ExperimentRuns, out: Path, tag: str):
 
 
 def fig_boundaries(runs: ExperimentRuns, out: Path):
-    """Paper Fig. 5: boundary lines w, u (eqs. dpm, vc_b) with circuit prehistory means."""
+    """Paper Fig. 5: boundary lines w, u (eqs. (41), (45)) with circuit prehistory means."""
     from ..plots.paper_theory import fig5_boundaries
     m = runs.exp.model
     if m.regime != "stick":
@@ -136,7 +136,7 @@ def fig_boundaries(runs: ExperimentRuns, out: Path):
     fig.suptitle(f"Fig. 5: boundaries between path kinds — {_title(runs)}", fontsize=10)
     path = save(fig, out / f"fig5_boundaries_{runs.exp.name}.png")
     return path, ("Boundary lines between direct and indirect optimal paths (paper Fig. 5, "
-                  "eqs. dpm and vc_b, upper sign for v0 > 0); each checked in the tests by the "
+                  "eqs. (41) and (45), upper sign for v0 > 0); each checked in the tests by the "
                   "continuity of the minimal action across it.")
 
 
@@ -173,7 +173,7 @@ def fig_propagator(runs: ExperimentRuns, out: Path, v0: float | None = None):
                     color=CIRCUIT, lw=1.2, label=f"circuit ({ens.replicas} paths, 95 % band)")
             ax.plot(v, f_exact[j], color=EXACT, lw=1.4, label="exact (Fokker-Planck)")
             if f_weak is not None:
-                ax.plot(v, f_weak, color=WEAK, lw=1.2, ls="--", label="weak noise (eqs. sol1-sol3)")
+                ax.plot(v, f_weak, color=WEAK, lw=1.2, ls="--", label="weak noise (eqs. (46)-(51))")
             ax.set_xlim(lo - pad, hi + pad)
             if row == 0:
                 ax.set_title(f"t = {t:g}", fontsize=10)
@@ -206,7 +206,7 @@ def fig_stationary(runs: ExperimentRuns, out: Path):
     for ax, log in zip(axes.ravel(), (False, True)):
         ax.fill_between(d.centres, d.lower, d.upper, step="mid", color=CIRCUIT, alpha=0.25)
         ax.step(d.centres, d.density, where="mid", color=CIRCUIT, label="circuit (95 % band)")
-        ax.plot(v, m.stationary_pdf(v), color=EXACT, label="$p_s \\propto e^{-\\gamma U}$ (eq. p_stat)")
+        ax.plot(v, m.stationary_pdf(v), color=EXACT, label="$p_s \\propto e^{-\\gamma U}$ (eq. (6))")
         if log:
             ax.set_yscale("log")
         ax.set_xlabel(VELOCITY)
@@ -215,7 +215,7 @@ def fig_stationary(runs: ExperimentRuns, out: Path):
     fig.suptitle(f"Stationary law — {_title(runs)}", fontsize=10)
     path = save(fig, out / f"stationary_{runs.exp.name}.png")
     return path, ("Stationary velocity density: circuit (after burn-in, errors from the spread "
-                  "across independent replicas) against the exact p_s (eq. p_stat), which holds "
+                  "across independent replicas) against the exact p_s (eq. (6)), which holds "
                   "at every gamma.")
 
 
@@ -258,8 +258,8 @@ def fig_work_paths(runs: ExperimentRuns, out: Path):
         else:
             v0 = v1 = w / m.force
         p = work_optimal_path(m, w, tau, v0, v1, n=600)
-        ax.plot(p.s, p.v, color=EXACT, lw=2, label="work-optimal path (eq. eqelk1)")
-        ax.axhline(w / m.force, color="0.3", ls="--", lw=1, label="$\\tilde v_w$ = w/(m a) (eq. wF)")
+        ax.plot(p.s, p.v, color=EXACT, lw=2, label="work-optimal path (eq. (60))")
+        ax.axhline(w / m.force, color="0.3", ls="--", lw=1, label="$\\tilde v_w$ = w/(m a) (eq. (63))")
         ax.axhline(0, color="0.7", lw=0.7)
         ax.set_title(f"w = {w:g}, $\\tau$ = {tau:g}", fontsize=10)
         ax.set_xlabel("time within the window (units of tau_m)")
@@ -269,11 +269,11 @@ def fig_work_paths(runs: ExperimentRuns, out: Path):
     fig.suptitle(f"Fig. 7: paths of given work rate — {_title(runs)}", fontsize=10)
     path = save(fig, out / f"fig7_work_paths_{runs.exp.name}.png")
     return path, ("Paths with a prescribed work rate (paper Fig. 7). Black: minimiser of "
-                  "K = A - beta W (eqs. Keq-eqelk1) between the median end points of the circuit "
+                  "K = A - beta W (eqs. (57)-(60)) between the median end points of the circuit "
                   "windows; red: circuit windows of the stationary run whose work rate lies within "
                   "10 % of w (first such window of each replica). Near w = 0 the optimal path "
                   "shares its time between sticking at v = 0 and sliding (the time-sharing that "
-                  "makes the true rate function the convex envelope of eq. Iw); in the circuit "
+                  "makes the true rate function the convex envelope of eq. (64)); in the circuit "
                   "the switching instant varies from window to window, so the mean smears the "
                   "stuck and sliding stretches. " + "; ".join(notes))
 
@@ -314,7 +314,7 @@ def _lookup(table, w):
 
 
 def fig_rate_function(runs: ExperimentRuns, out: Path):
-    """Paper Fig. 8 with circuit data: I(w) of eq. Iw, the exact I_gamma(w), the weak-noise
+    """Paper Fig. 8 with circuit data: I(w) of eq. (64), the exact I_gamma(w), the weak-noise
     limit, the finite-tau exact -ln P_tau(w)/(tau gamma) and the circuit's estimate."""
     from ..theory import exact, weak_noise
     from ..theory.work_statistics import weak_noise_limit_rate_function
@@ -330,7 +330,7 @@ def fig_rate_function(runs: ExperimentRuns, out: Path):
     fig, axes = new_figure(1, 2, squeeze=False, width=5.5)
     ax = axes[0, 0]
     paper = np.asarray(weak_noise.rate_function(m, w))
-    ax.plot(w[w < 0], paper[w < 0], color=WEAK, ls="--", lw=1.5, label="paper I(w) (eq. Iw)")
+    ax.plot(w[w < 0], paper[w < 0], color=WEAK, ls="--", lw=1.5, label="paper I(w) (eq. (64))")
     ax.plot(w[w > 0], paper[w > 0], color=WEAK, ls="--", lw=1.5)
     ax.plot(w, weak_noise_limit_rate_function(m, w), color="tab:purple", lw=1.2, ls="-.",
             label="$\\gamma\\to\\infty$ limit (convex hull)")
@@ -351,7 +351,7 @@ def fig_rate_function(runs: ExperimentRuns, out: Path):
     ax = axes[0, 1]
     wp = w[w > 0]
     ax.plot(wp, np.asarray(weak_noise.fluctuation_relation(m, wp)), color=WEAK, ls="--",
-            label="paper (eq. ftexp)")
+            label="paper (eq. (67))")
     ax.plot(wp, np.asarray(exact.rate_function(m, -wp)) - np.asarray(exact.rate_function(m, wp)),
             color=EXACT, label="exact $I_\\gamma(-w)-I_\\gamma(w)$")
     for (tau, d), c in zip(dists.items(), colours):
@@ -367,7 +367,7 @@ def fig_rate_function(runs: ExperimentRuns, out: Path):
     fig.suptitle(f"Work fluctuations — {_title(runs)}", fontsize=10)
     path = save(fig, out / f"fig8_9_work_{runs.exp.name}.png")
     return path, ("Rate function and fluctuation relation of the work rate (paper Figs. 8 and 9). "
-                  "Blue dashed: the paper's weak-noise formulas (eqs. Iw, ftexp) with the jump "
+                  "Blue dashed: the paper's weak-noise formulas (eqs. (64), (67)) with the jump "
                   "at w = 0; purple: the gamma -> infinity limit of the exact rate function "
                   "(the convex hull, continuous at w = 0); black: exact I_gamma at this gamma "
                   "(tilted generator, Legendre transform); thin coloured lines: exact finite-tau "

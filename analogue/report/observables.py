@@ -45,7 +45,7 @@ def transition_values(ens: Ensemble, v0: float, times) -> dict:
 def stationary_values(ens: Ensemble, *, burn_in: float, threshold: float, force: float,
                            taus=()) -> dict:
     """Time-and-replica averages after ``burn_in``: moments, stick fraction, transport, and the
-    mean and variance of the work rate over windows ``tau`` (paper eqs. work, work_power)."""
+    mean and variance of the work rate over windows ``tau`` (paper eqs. (3), (52))."""
     i0 = int(np.searchsorted(ens.t, ens.t[0] + burn_in - 1e-12))
     v = ens.v[:, i0:]
     out = {
@@ -158,7 +158,7 @@ def histogram_chi2(samples, v, f, min_expected: float = 5.0):
 
 
 def weak_noise_transition(model: Model, v0: float, times) -> dict:
-    """The same moments of the paper's saddle-point propagator (eqs. sol1-sol3)."""
+    """The same moments of the paper's saddle-point propagator (eqs. (46)-(51))."""
     from ..theory import weak_noise
     v = velocity_grid(model, [v0])
     out = {}

@@ -222,7 +222,7 @@ def _open_question_section(out: Path, opts: RunOptions) -> Section:
     gammas = (10.0, 100.0) if opts.quick else (10.0, 100.0, 1000.0)
     paths = draw_open_question(out, gammas=gammas)
     text = [
-        "The paper finds a jump of the rate function I(w) at w = 0 (eq. Iw) and cannot tell "
+        "The paper finds a jump of the rate function I(w) at w = 0 (eq. (64)) and cannot tell "
         "whether it is real. The exact rate function at finite noise, I_gamma(w) = "
         "sup_k [k w - lambda(k)] / gamma with lambda the principal eigenvalue of the tilted "
         "Fokker-Planck generator, answers it: I_gamma is convex and continuous for every gamma, "
@@ -231,12 +231,12 @@ def _open_question_section(out: Path, opts: RunOptions) -> Section:
         "nothing when the object can stick. Near w = 0 the optimal histories share their time "
         "between sticking and sliding, which makes the limit linear there: the jump is an "
         "artefact of restricting the paths to one constant velocity, and the fluctuation "
-        "relation of eq. dryft has no jump either. The tests check the convergence "
+        "relation of eq. (68) has no jump either. The tests check the convergence "
         "(tests/test_open_question.py)."]
     gs = ", ".join(f"{g:g}" for g in gammas)
-    caps = [f"Exact I_gamma(w) for gamma = {gs} against the paper's I(w) (eq. Iw) and the "
+    caps = [f"Exact I_gamma(w) for gamma = {gs} against the paper's I(w) (eq. (64)) and the "
             "gamma -> infinity limit (convex envelope).",
-            "The fluctuation relation I(-w) - I(w): exact at three gammas, the paper's eq. ftexp "
+            "The fluctuation relation I(-w) - I(w): exact at three gammas, the paper's eq. (67) "
             "with its jump 2 a Delta, and the limit."]
     return Section("The paper's open question: is the jump of I(w) at w = 0 real?", text,
                    figures=[Figure(p, caps[i] if i < len(caps) else "") for i, p in enumerate(paths)])
@@ -408,6 +408,14 @@ def build_report(names, out: Path, opts: RunOptions, title: str, chapter=()) -> 
         "Everything needed to reproduce this report: model parameters, seeds, ngspice version, "
         "the sha256 of every deck (full list in metrics.json), software versions, wall time."],
         tables=[Table("run provenance", ["item", "value"], prov_rows)]))
+    from markupsafe import Markup
+
+    from ..paper import references_html
+    sections.append(Section("References", [
+        "Equations and figures are cited by their numbers in Baule, Touchette & Cohen "
+        "(2011); docs/equations.md maps the paper's LaTeX labels to them."]
+        # references_html() escapes every text itself and adds only the DOI/arXiv links
+        + [Markup(p) for p in references_html()]))
 
     metrics = {"comparisons": [c.as_dict() for c in comps], "provenance": provenance,
                "summary": {"comparisons": len(comps), "abs_z_below_3": n_z, "within_budget": n_ok,

@@ -3,14 +3,14 @@
 The ``[report]`` table of ``circuits/<name>.toml`` (all keys optional)::
 
     [report]
-    stationary_replicas = 128      # replicas started from p_s (eq. p_stat)
+    stationary_replicas = 128      # replicas started from p_s (eq. (6))
     stationary_t_end = 100.0       # their length (model time)
     stationary_burn_in = 2.0       # discarded at the start of each
     stick_threshold = 0.1          # |v| below this many sqrt(tau_m/gamma) counts as stuck
     prehistory = [[2.0, 0.5, 3.0]] # (v0, v, t): paths from v0 (one of experiment.v0) reaching
                                    # (v, t); a pair (v, t) means v0 = experiment.v0[0]
     prehistory_window = 0.15       # half-width of the target window (velocity units)
-    work_paths = [[1.0, 5.0]]      # (w, tau): circuit windows of work rate ~ w vs eq. eqelk1
+    work_paths = [[1.0, 5.0]]      # (w, tau): circuit windows of work rate ~ w vs eq. (60)
     check_replicas = 64            # replicas re-run with tight tolerances (integration check)
 
 ``--quick`` divides replica counts by four (at least 32; the integration check: at least 16)

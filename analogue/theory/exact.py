@@ -3,13 +3,13 @@
 Public functions
 ----------------
 propagator(model, v, t, v0, t0=0.0, *, grid=None, h=None, method="auto")
-    Transition density ``f(v, t | v0, t0)`` (the paper's eqs. sol1/sol2/sol3 at finite gamma).
+    Transition density ``f(v, t | v0, t0)`` (the paper's eqs. (46)/(47)/(51) at finite gamma).
 stationary_moments(model, h=None) -> StationaryMoments
     Mean, variance, P(v > 0), P(v < 0), mean friction sign, Green-Kubo diffusion, drift.
 autocorrelation(model, lags, h=None)
     Connected stationary velocity autocorrelation.
 sample_stationary(model, size, seed=None)
-    Draws from ``p_s`` (eq. p_stat).
+    Draws from ``p_s`` (eq. (6)).
 scgf, rate_function, work_pdf
     Work statistics (re-exported from :mod:`analogue.theory.work_statistics`).
 
@@ -93,7 +93,7 @@ def propagator_atom(model: Model, t, v0: float, t0: float = 0.0, *, h: float | N
 
 def propagator(model: Model, v, t, v0: float, t0: float = 0.0, *, grid: Grid | None = None,
                h: float | None = None, method: str = "auto") -> np.ndarray:
-    """Transition density ``f(v, t | v0, t0)`` of eq. (bm) at finite gamma.
+    """Transition density ``f(v, t | v0, t0)`` of eq. (4) at finite gamma.
 
     Parameters
     ----------
@@ -122,7 +122,7 @@ def propagator(model: Model, v, t, v0: float, t0: float = 0.0, *, grid: Grid | N
     t - t0 >= 0.5 tau_m (measured against the Delta = 0 closed form: 1.3e-3 and 5e-4; the
     tests check the stated bounds); halving h changes the density by less than 3e-3 of its
     peak (measured <= 2.3e-3, at t - t0 = 0.1 tau_m); ``integral f dv = 1`` within 1e-3
-    (measured 2e-4); the t -> inf limit is the exact ``p_s`` (eq. p_stat) to ~1e-12.
+    (measured 2e-4); the t -> inf limit is the exact ``p_s`` (eq. (6)) to ~1e-12.
     """
     _check_model(model)
     if not model.is_paper:

@@ -8,7 +8,7 @@ a nearest-neighbour master equation with rates
 
 which satisfy detailed balance with respect to ``pi_i ~ exp(-gamma U_i)`` *exactly* (the drift
 enters only through differences of U at neighbouring nodes), so the discrete stationary state
-is the exact stationary law of the paper (eq. p_stat) sampled at the nodes, for the ``sgn``
+is the exact stationary law of the paper (eq. (6)) sampled at the nodes, for the ``sgn``
 law and for the smooth ``tanh`` law alike.  Reflecting ends.  The generator is tridiagonal and
 similar to the symmetric matrix ``S = Pi^{-1/2} L Pi^{1/2}`` (cf. Holubec, Kroy, Steffenoni,
 PRE 99, 032117 (2019)).

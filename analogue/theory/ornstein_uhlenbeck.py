@@ -1,6 +1,6 @@
 """Closed forms for the model without dry friction (Delta = 0): an Ornstein-Uhlenbeck process.
 
-With ``Delta = 0`` the reduced equation (paper, eqs. bm and U_pot) is linear,
+With ``Delta = 0`` the reduced equation (paper, eqs. (4) and (5)) is linear,
 
     dv = -(v - mu)/tau_m dt + sqrt(2/gamma) dW,      mu = a tau_m,
 
@@ -8,20 +8,20 @@ so everything is Gaussian.  Derivations (``s^2 = tau_m/gamma``, ``r = exp(-t/tau
 
 * Propagator: ``v(t) = mu + (v0 - mu) r + sqrt(2/gamma) int_0^t e^{-(t-s)/tau_m} dW_s``, a
   Gaussian of mean ``mu + (v0 - mu) r`` and variance ``(2/gamma)(tau_m/2)(1 - r^2) = s^2 (1 - r^2)``.
-* Stationary law (t -> inf): mean ``mu``, variance ``s^2`` (eq. p_stat with U quadratic).
+* Stationary law (t -> inf): mean ``mu``, variance ``s^2`` (eq. (6) with U quadratic).
 * Stationary autocovariance: ``C(t) = <dv(0) dv(t)> = s^2 exp(-|t|/tau_m)`` (from the propagator
   mean, linear in v0).
-* Work ``W_tau = F int_0^tau v ds`` (eq. work), ``F = m a``, in the stationary state: a linear
+* Work ``W_tau = F int_0^tau v ds`` (eq. (3)), ``F = m a``, in the stationary state: a linear
   functional of a Gaussian process, hence Gaussian at every tau, with
   ``<W> = F mu tau`` and
   ``Var W = F^2 int_0^tau int_0^tau C(s - s') ds ds' = 2 F^2 s^2 tau_m [tau - tau_m (1 - e^{-tau/tau_m})]``.
 * Finite-tau cumulant generating function ``ln E e^{k W} = k <W> + k^2 Var W / 2`` (Gaussian).
 * Scaled CGF ``lambda(k) = lim (1/tau) ln E e^{kW} = k F mu + k^2 F^2 s^2 tau_m``
   (``Var W / tau -> 2 F^2 s^2 tau_m``, the Green-Kubo integral of C).
-* Rate function in the paper's scaling ``P_tau(w) ~ exp(-tau gamma I(w))`` (eq. largeDev):
+* Rate function in the paper's scaling ``P_tau(w) ~ exp(-tau gamma I(w))`` (eq. (54)):
   ``gamma I(w) = sup_k [k w - lambda(k)] = (w - F mu)^2 / (4 F^2 s^2 tau_m)``, i.e.
   ``I(w) = (w - F a tau_m)^2 / (4 F^2 tau_m^2) = (1/4)(w/(m a tau_m) - a)^2`` -- the paper's
-  eq. Iw with Delta = 0.  Here the weak-noise formula is exact at every gamma.
+  eq. (64) with Delta = 0.  Here the weak-noise formula is exact at every gamma.
 
 All functions take an :class:`analogue.Model` with ``delta == 0`` (``epsilon`` is then irrelevant).
 """
@@ -67,7 +67,7 @@ def stationary_mean(model: Model) -> float:
 
 
 def stationary_variance(model: Model) -> float:
-    """Stationary velocity variance ``s^2 = tau_m/gamma`` (eq. p_stat, U quadratic)."""
+    """Stationary velocity variance ``s^2 = tau_m/gamma`` (eq. (6), U quadratic)."""
     return _check(model).tau_m / model.gamma
 
 
@@ -90,7 +90,7 @@ def propagator(model: Model, v: ArrayLike, t: ArrayLike, v0: float) -> np.ndarra
 
 
 def work_mean(model: Model, tau: ArrayLike) -> np.ndarray:
-    """Stationary ``<W_tau> = F a tau_m tau`` (eq. work)."""
+    """Stationary ``<W_tau> = F a tau_m tau`` (eq. (3))."""
     return model.force * stationary_mean(model) * _tau(tau)
 
 
@@ -125,7 +125,7 @@ def scgf(model: Model, k: ArrayLike) -> np.ndarray:
 
 def rate_function(model: Model, w: ArrayLike) -> np.ndarray:
     """``I(w) = (w - F a tau_m)^2 / (4 F^2 tau_m^2)`` in the scaling ``P ~ exp(-tau gamma I)``
-    (eq. Iw with Delta = 0; exact for every gamma)."""
+    (eq. (64) with Delta = 0; exact for every gamma)."""
     F = _force(model)
     w = np.asarray(w, dtype=float)
     tm = model.tau_m

@@ -1,6 +1,6 @@
 """Stationary observables of the stick-slip model at finite noise (exact, not weak-noise).
 
-The stationary law ``p_s = exp(-gamma U)/Z`` (eq. p_stat) has a kink at ``v = 0`` for the sgn
+The stationary law ``p_s = exp(-gamma U)/Z`` (eq. (6)) has a kink at ``v = 0`` for the sgn
 law, so every integral is split at 0 ("half lines"):
 
 * ``epsilon = 0``: on ``v > 0``, ``exp(-gamma U)`` is the Gaussian ``N(mu_+, s^2)`` with
@@ -369,7 +369,7 @@ def stationary_moments(model: Model, h: float | None = None) -> StationaryMoment
 
 # ------------------------------------------------------------------------------- sampling
 def sample_stationary(model: Model, size, seed=None) -> np.ndarray:
-    """Independent draws from ``p_s = exp(-gamma U)/Z`` (eq. p_stat).
+    """Independent draws from ``p_s = exp(-gamma U)/Z`` (eq. (6)).
 
     ``epsilon = 0``: choose the half line with probability P(v > 0), then invert the truncated
     Gaussian's survival function in log space (``ndtri_exp``: exact, stable far in the tails).

@@ -1,18 +1,18 @@
 """The paper's weak-noise theory: optimal paths and transition probability (sections III-IV).
 
 In the limit ``gamma -> infinity`` the propagator is ``f(v,t|v0,t0) ~ exp(-gamma A*)``
-(eq. sp_approx) with ``A*`` the minimal Onsager-Machlup action (eq. action, Lagrangian
-eq. lagrangian ``L = (v' + U'(v))^2 / 4``).  The minimum is taken over the paper's five kinds
+(eq. (12)) with ``A*`` the minimal Onsager-Machlup action (eq. (8), Lagrangian
+eq. (9) ``L = (v' + U'(v))^2 / 4``).  The minimum is taken over the paper's five kinds
 of admissible optimal paths:
 
-* ``direct``: one basic solution (eq. sol_basic) on one half plane, action ``Lambda_pm``
-  (eqs. Adir, lambda);
-* ``direct-crossing``: two basic solutions glued at ``v = 0`` at ``t_cross`` (eqs. dirx_par,
-  Adirx), ``t_cross`` the root of eq. tbar_eq;
+* ``direct``: one basic solution (eq. (16)) on one half plane, action ``Lambda_pm``
+  (eqs. (22), (20));
+* ``direct-crossing``: two basic solutions glued at ``v = 0`` at ``t_cross`` (eqs. (23),
+  (24)), ``t_cross`` the root of eq. (25);
 * ``indirect`` / ``indirect-crossing`` (``|a| <= Delta`` only): relax deterministically to
-  ``v = 0`` at ``t_a`` (eq. tbar1), stick, leave at ``t_b`` (eq. tbar2); valid iff
-  ``t_a <= t_b``; action ``U(v)`` with ``U(0) = 0`` (eqs. Aind2, Aind2b);
-* ``twice-crossing`` (``|a| > Delta``, v0 and v on the side opposite the attractor): eq. Adc,
+  ``v = 0`` at ``t_a`` (eq. (31)), stick, leave at ``t_b`` (eq. (32)); valid iff
+  ``t_a <= t_b``; action ``U(v)`` with ``U(0) = 0`` (eqs. (33), (34));
+* ``twice-crossing`` (``|a| > Delta``, v0 and v on the side opposite the attractor): eq. (36),
   the crossing times ``t_1 < t_2`` found numerically (see below).
 
 A path is *admissible* only if each basic piece stays on its own half plane; a basic solution
@@ -28,7 +28,7 @@ free but never reached from that side, ``t_a = inf``), ``a = 0`` and ``Delta = 0
 Ornstein-Uhlenbeck) come out of the same formulas.
 
 Twice-crossing times: with the conserved "energy" ``E = y'^2 - y^2/tau^2`` of each piece
-(``y = |v| + b tau_m``), stationarity of eq. Adc in ``t_1, t_2`` means the three pieces share
+(``y = |v| + b tau_m``), stationarity of eq. (36) in ``t_1, t_2`` means the three pieces share
 one ``E``; the durations are then closed-form (:func:`.weak_noise_pieces.monotone_time` for the
 monotone outer pieces, ``2 tau arccosh(|b|/sqrt(-E))`` for the bump), their sum increases
 strictly with ``E`` (so the root is unique), and one scalar root gives ``t_1, t_2``.
@@ -99,7 +99,7 @@ class _Frame:
         return cls(model.tau_m, model.delta, abs(model.a), flip)
 
     def b(self, sigma: float) -> float:
-        """``b_sigma = Delta - sigma a`` (eq. lambda: ``Delta -+ a`` on the upper/lower plane)."""
+        """``b_sigma = Delta - sigma a`` (eq. (20): ``Delta -+ a`` on the upper/lower plane)."""
         return self.delta - sigma * self.a
 
     def c(self, sigma: float) -> float:
@@ -110,7 +110,7 @@ class _Frame:
         return v * v / (2.0 * self.tau) + self.delta * np.abs(v) - self.a * v
 
     def stick_time(self, sigma: float, speed):
-        """Deterministic time to reach v = 0 from |v| = speed on side sigma (eqs. tbar1/tbar2);
+        """Deterministic time to reach v = 0 from |v| = speed on side sigma (eqs. (31)/(32));
         inf if that side never reaches v = 0 (b <= 0) unless speed == 0."""
         b = self.b(sigma)
         speed = np.asarray(speed, dtype=float)
@@ -158,7 +158,7 @@ class _Best:
 
 
 def _direct(fr: _Frame, sigma, v0, v, T):
-    """eq. Adir: Lambda_sigma, if the basic solution stays on side sigma."""
+    """eq. (22): Lambda_sigma, if the basic solution stays on side sigma."""
     c = fr.c(sigma)
     y0, y1 = abs(v0) + c, np.abs(v) + c
     ok = _admissible(y0, y1, T, c, fr.tau)
@@ -166,9 +166,9 @@ def _direct(fr: _Frame, sigma, v0, v, T):
 
 
 def _crossing(fr: _Frame, sigma0, v0, v, T):
-    """eqs. Adirx, tbar_eq: minimise Lambda_s0(0,tx;v0,0) + Lambda_-s0(v,T;0,tx) over tx.
+    """eqs. (24), (25): minimise Lambda_s0(0,tx;v0,0) + Lambda_-s0(v,T;0,tx) over tx.
 
-    Returns (action, tx); inf/NaN where eq. tbar_eq has no interior root or a piece leaves its
+    Returns (action, tx); inf/NaN where eq. (25) has no interior root or a piece leaves its
     half plane."""
     sigma1 = -sigma0
     c0, c1, tau = fr.c(sigma0), fr.c(sigma1), fr.tau
@@ -197,8 +197,8 @@ def _crossing(fr: _Frame, sigma0, v0, v, T):
 
 
 def _indirect(fr: _Frame, sigma0, sigma1, v0, v, T):
-    """eqs. Aind2/Aind2b: action U(v) when sticking is free (b >= 0 on both sides) and
-    t_a (eq. tbar1) <= t_b (eq. tbar2).  Returns (action, t_a, t_b)."""
+    """eqs. (33)/(34): action U(v) when sticking is free (b >= 0 on both sides) and
+    t_a (eq. (31)) <= t_b (eq. (32)).  Returns (action, t_a, t_b)."""
     if fr.a > fr.delta:  # sticking on v = 0 costs (a - Delta)^2/4 per unit time: no indirect paths
         return np.inf, np.nan, np.nan
     ta = fr.stick_time(sigma0, abs(v0))
@@ -209,7 +209,7 @@ def _indirect(fr: _Frame, sigma0, sigma1, v0, v, T):
 
 
 def _twice(fr: _Frame, sigma, v0, v, T):
-    """eq. Adc: v0 and v on side sigma, the attractor on the other side (b_-sigma < 0).
+    """eq. (36): v0 and v on side sigma, the attractor on the other side (b_-sigma < 0).
 
     The common energy ``E = -b_B^2 q`` (``0 < q <= 1``) of the three pieces is the unique root
     of ``T_A(E) + T_B(E) + T_C(E) = T`` (the sum is strictly increasing in E: ``|T_A'| +
@@ -292,7 +292,7 @@ def _solve(fr: _Frame, v, T, v0):
 # ----------------------------------------------------------------------------- public API
 def Lambda(sign, v, t, v0, t0, model: Model):
     """Action of the basic solution on the upper (``sign = +1``) or lower (``-1``) half plane,
-    eq. lambda: ``Lambda_pm(v,t;v0,t0)`` with ``Delta -+ a``; uses ``|v|, |v0|`` as the paper
+    eq. (20): ``Lambda_pm(v,t;v0,t0)`` with ``Delta -+ a``; uses ``|v|, |v0|`` as the paper
     does.  No admissibility check (that is the caller's business).  Vectorised in v."""
     if sign not in (1, -1):
         raise ValueError(f"sign must be +1 or -1, got {sign!r}")
@@ -304,7 +304,7 @@ def Lambda(sign, v, t, v0, t0, model: Model):
 
 
 def crossing_time(model: Model, v, t, v0, t0=0.0):
-    """Crossing time ``t_cross`` of the direct crossing path (root of eq. tbar_eq), absolute
+    """Crossing time ``t_cross`` of the direct crossing path (root of eq. (25)), absolute
     time; NaN where v and v0 are on the same side (or v0 = 0 / v = 0) or where the direct
     crossing path is not admissible.  Vectorised in v."""
     t, t0 = _times(t, t0)
@@ -322,9 +322,9 @@ def crossing_time(model: Model, v, t, v0, t0=0.0):
 
 
 def action(model: Model, v, t, v0, t0=0.0):
-    """Minimal Onsager-Machlup action ``A*(v, t | v0, t0)`` (eqs. action, lagrangian) over the
+    """Minimal Onsager-Machlup action ``A*(v, t | v0, t0)`` (eqs. (8), (9)) over the
     admissible direct, direct-crossing, indirect, indirect-crossing and twice-crossing paths
-    (eqs. Adir, Adirx, Aind2, Aind2b, Adc).  ``f ~ exp(-gamma A*)`` (eq. sp_approx).
+    (eqs. (22), (24), (33), (34), (36)).  ``f ~ exp(-gamma A*)`` (eq. (12)).
 
     ``v`` may be a scalar (returns float) or an array (same shape).  ``U(0) = 0`` convention.
     """
@@ -337,7 +337,7 @@ def action(model: Model, v, t, v0, t0=0.0):
 
 
 def lagrangian(model: Model, v, vdot):
-    """Onsager-Machlup Lagrangian eq. lagrangian ``(v' + U'(v))^2 / 4`` for the sgn law; on
+    """Onsager-Machlup Lagrangian eq. (9) ``(v' + U'(v))^2 / 4`` for the sgn law; on
     ``v = 0`` the set-valued ``sgn(0) in [-1, 1]`` is resolved to the cheapest value (Filippov),
     so sticking costs nothing when ``|a| <= Delta``."""
     v = np.asarray(v, float)
@@ -354,8 +354,8 @@ class OptimalPath:
 
     ``kind`` is one of :data:`KINDS`; ``s`` and ``v`` hold ``n + 1`` samples on ``[t0, t]``;
     switching times are absolute and NaN where they do not apply: ``t_cross`` (direct crossing,
-    eq. tbar_eq), ``t_a``/``t_b`` (indirect, eqs. tbar1/tbar2), ``t_1``/``t_2`` (twice crossing,
-    eq. Adc)."""
+    eq. (25)), ``t_a``/``t_b`` (indirect, eqs. (31)/(32)), ``t_1``/``t_2`` (twice crossing,
+    eq. (36))."""
 
     kind: str
     s: np.ndarray
@@ -369,7 +369,7 @@ class OptimalPath:
 
 
 def optimal_path(model: Model, v, t, v0, t0=0.0, n=400) -> OptimalPath:
-    """The optimal path (eqs. dir_par, dirx_par, id_par, idx_par, dc_par) and its action."""
+    """The optimal path (eqs. (21), (23), (26), (27), (35)) and its action."""
     t, t0 = _times(t, t0)
     v0 = _finite("v0", v0)
     v = _finite("v", v)
@@ -415,7 +415,7 @@ def optimal_path(model: Model, v, t, v0, t0=0.0, n=400) -> OptimalPath:
 
 
 def _w_cr(fr: _Frame, v0, T):
-    """eq. cond3: the v (on v0's side) where the direct and the twice-crossing actions are
+    """eq. (49): the v (on v0's side) where the direct and the twice-crossing actions are
     equal, by bisection in ``x = ln(1 + |v|/((Delta+a) tau))`` (canonical frame, v0 < 0).
 
     The twice-crossing path wins on ``(w_cr, 0)``; it is infeasible below the v at which even a
@@ -450,12 +450,12 @@ def boundaries(model: Model, t, v0, t0=0.0):
 
     Returns a dict of arrays (floats for scalar t):
 
-    * ``"w"``: eq. dpm, ``w^+`` for ``v0 > 0`` and ``w^-`` for ``v0 < 0``: indirect paths (action
+    * ``"w"``: eq. (41), ``w^+`` for ``v0 > 0`` and ``w^-`` for ``v0 < 0``: indirect paths (action
       ``U(v)``) beat direct ones between 0 and w.  Only for ``|a| <= Delta`` and ``t >= t_a``.
-    * ``"u"``: eq. vc_b (upper sign for ``v0 > 0``: the sign of v0 picks the branch), the limit ``t_b = t_a`` of
+    * ``"u"``: eq. (45) (upper sign for ``v0 > 0``: the sign of v0 picks the branch), the limit ``t_b = t_a`` of
       indirect crossing paths: between u and 0 the indirect crossing path wins.  Only for
       ``|a| <= Delta`` and ``t >= t_a``.
-    * ``"w_cr"``: eq. cond3 (numerical), for ``|a| > Delta`` and v0 on the side opposite to the
+    * ``"w_cr"``: eq. (49) (numerical), for ``|a| > Delta`` and v0 on the side opposite to the
       attractor: between w_cr and 0 the twice-crossing path beats the direct one.  It grows
       like ``e^{t/tau_m}``; once the two actions (~ v^2) agree to rounding the root is found
       to that precision, and beyond ``|v| ~ 1e150`` (t > ~340 tau_m) it is ``-inf``.
@@ -484,7 +484,7 @@ def boundaries(model: Model, t, v0, t0=0.0):
         if np.any(after):
             tt = np.minimum(T / fr.tau, 700.0)
             E, Ei = np.exp(tt), np.exp(-tt)
-            # eq. dpm, lower root, written without cancellation for large t
+            # eq. (41), lower root, written without cancellation for large t
             root = np.sqrt(np.maximum((y0 * y0 - c0 * c0) * -np.expm1(-2.0 * tt), 0.0))
             if y0 > 0:
                 w_mag = (y0 * y0 * Ei + c0 * c0 * (E - Ei)) / (y0 + root) - c0
@@ -492,7 +492,7 @@ def boundaries(model: Model, t, v0, t0=0.0):
                 w_mag = np.zeros(T.shape)
             w = np.where(after, s0 * fr.flip * w_mag, np.nan)
             ratio = c0 / y0 if y0 > 0 else 1.0
-            u_mag = c1 * (E * ratio - 1.0)  # eq. vc_b
+            u_mag = c1 * (E * ratio - 1.0)  # eq. (45)
             u = np.where(after, -s0 * fr.flip * u_mag, np.nan)
     elif s0 < 0:
         w_cr = fr.flip * _w_cr(fr, v0c, np.maximum(T, 0.0).astype(float))
@@ -503,9 +503,9 @@ def boundaries(model: Model, t, v0, t0=0.0):
 
 
 def propagator(model: Model, v, t, v0, t0=0.0):
-    """Saddle-point transition probability ``f(v,t|v0,t0) ~ exp(-gamma A*)`` (eq. sp_approx;
-    eqs. sol1, sol2, sol3 and their mirror images), normalised on the grid ``v`` by the
-    trapezoid rule, because the paper drops the Jacobian (eq. jacobian) and the fluctuation
+    """Saddle-point transition probability ``f(v,t|v0,t0) ~ exp(-gamma A*)`` (eq. (12);
+    eqs. (46), (47), (51) and their mirror images), normalised on the grid ``v`` by the
+    trapezoid rule, because the paper drops the Jacobian (eq. (10)) and the fluctuation
     factor.  The minimum action is subtracted before exponentiating (no underflow)."""
     t, t0 = _times(t, t0)
     v0 = _finite("v0", v0)

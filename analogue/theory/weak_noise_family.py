@@ -4,8 +4,8 @@ The paper's weak-noise results (sections III-IV) rest on three facts about
 ``dv = -U'(v) dt + sqrt(2/gamma) dW``: (i) one dimension with additive Gaussian noise, so
 ``p_s ~ exp(-gamma U)`` and the Onsager-Machlup action ``L = (v' + U'(v))^2/4`` governs
 ``f ~ exp(-gamma A*)``; (ii) U is piecewise quadratic, so the Euler-Lagrange equation
-``v'' = U'(v) U''(v)`` is linear on each half line and the basic solutions (eq. sol_basic),
-actions (eq. lambda) and gluing times (eqs. tbar1, tbar2, tbar_eq) are closed forms;
+``v'' = U'(v) U''(v)`` is linear on each half line and the basic solutions (eq. (16)),
+actions (eq. (20)) and gluing times (eqs. (31), (32), (25)) are closed forms;
 (iii) the kink of U at ``v = 0`` (Coulomb friction) makes sticking free when
 ``|a| <= Delta``.
 
@@ -26,7 +26,7 @@ What survives, member by member
   kinds (one or two crossings of v = 0 with gluing conditions) are not implemented for the
   family.  Stribeck's velocity weakening can make U double-welled (``U'' < 0`` near the
   slip state): then the weak-noise law is bimodal and the work rate function of the paper's
-  closed form (eq. Iw) does not apply.
+  closed form (eq. (64)) does not apply.
 * **Shot noise.** No Gaussian weak-noise limit: the kicks are not small Gaussian increments,
   the path weight is not ``exp(-gamma A)`` with a quadratic Lagrangian (a large-deviation
   theory of jump processes has a Legendre-type Lagrangian ``sup_p [p v' - H(v, p)]`` with
@@ -69,7 +69,7 @@ def _check(model) -> Model:
 
 def quasi_potential(model: Model, v):
     """``U(v) - min U``: ``p_s ~ exp(-gamma (U - U_min))`` exactly, so this is the stationary
-    quasi-potential of every 1-D Gaussian member (eq. p_stat with the generalised U)."""
+    quasi-potential of every 1-D Gaussian member (eq. (6) with the generalised U)."""
     _check(model)
     return model.potential(v) - float(model.potential(model.potential_minimum()))
 
@@ -154,7 +154,7 @@ def _time_to_zero(model: Model, v: float, sign_flow: float) -> float:
 
 
 def indirect_action(model: Model, v: float, t: float, v0: float) -> float:
-    """Indirect path (eqs. Aind2/Aind2b generalised): relax to 0 for free (time t_a), stick
+    """Indirect path (eqs. (33)/(34) generalised): relax to 0 for free (time t_a), stick
     (free iff ``|a| <= Delta(0)``), climb to v along the time-reversed flow (time t_b); action
     ``U(v) - U(0) = U(v)`` if ``t_a + t_b <= t``, else inf."""
     _check(model)

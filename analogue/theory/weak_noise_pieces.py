@@ -1,12 +1,12 @@
 """Optimal-path pieces on one half plane of the velocity-time plane (paper, section III).
 
 On the half plane ``sigma v > 0`` (``sigma = +1`` upper, ``-1`` lower) the Euler-Lagrange
-equations EL1/EL2 are linear.  With the shifted coordinate
+equations (15a)/(15b) are linear.  With the shifted coordinate
 
     y = |v| + b tau_m,     b = b_sigma = Delta - sigma a,
 
 both half planes become the same Ornstein-Uhlenbeck problem ``L = (y' + y/tau_m)^2 / 4`` and
-the basic solutions (eq. sol_basic) are ``y(s) = P e^{s/tau} + Q e^{-s/tau}``.  ``v = 0`` is
+the basic solutions (eq. (16)) are ``y(s) = P e^{s/tau} + Q e^{-s/tau}``.  ``v = 0`` is
 ``y = b tau_m``; a piece is *admissible* if ``y(s) >= b tau_m`` all along it (it stays on its
 own half plane).  ``b > 0`` means v = 0 attracts from that side, ``b < 0`` that the side holds
 the slip attractor ``|v| = -b tau_m`` (``y = 0``).
@@ -14,7 +14,7 @@ the slip attractor ``|v| = -b tau_m`` (``y = 0``).
 Along a piece the "energy" ``E = y'^2 - y^2/tau_m^2`` is conserved (``E = 4 H`` with the
 Hamiltonian ``H = p^2 - p U'``), and ``dLambda/dT = -E/4``.  Optimal switching times at a
 crossing of ``v = 0`` are the times at which the energies of the adjoining pieces agree
-(the stationarity conditions eq. tbar_eq and the minimisation behind eq. Adc).
+(the stationarity conditions eq. (25) and the minimisation behind eq. (36)).
 
 Everything here is pure, vectorised numpy on broadcastable arrays; times are durations
 ``T > 0`` of a piece.
@@ -31,9 +31,9 @@ def _e(T, tau):
 
 
 def ou_action(y0, y1, T, tau):
-    """Action of the basic solution from ``y0`` to ``y1`` in time ``T`` (eq. lambda):
+    """Action of the basic solution from ``y0`` to ``y1`` in time ``T`` (eq. (20)):
 
-    ``Lambda = (y1 - y0 e^{-T/tau})^2 / (2 tau (1 - e^{-2T/tau}))``, i.e. eq. lambda divided
+    ``Lambda = (y1 - y0 e^{-T/tau})^2 / (2 tau (1 - e^{-2T/tau}))``, i.e. eq. (20) divided
     through by ``e^{2t/tau}``, which never overflows.  ``Lambda_pm(v,t;v0,t0)`` is this with
     ``y = |v| + (Delta -+ a) tau_m``.
     """
@@ -45,7 +45,7 @@ def ou_action(y0, y1, T, tau):
 
 def ou_action_rate(y0, y1, T, tau):
     """``dLambda/dT = (y1 - y0 e)(y0 - y1 e) e / (tau^2 (1 - e^2)^2)`` with ``e = e^{-T/tau}``
-    (minus the Hamiltonian of the piece); used for the stationarity condition eq. tbar_eq."""
+    (minus the Hamiltonian of the piece); used for the stationarity condition eq. (25)."""
     T = np.asarray(T, dtype=float)
     e = _e(T, tau)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -53,7 +53,7 @@ def ou_action_rate(y0, y1, T, tau):
 
 
 def bridge(y0, y1, T, tau, s):
-    """The basic solution (eq. sol_basic with eqs. B+, C+) at times ``0 <= s <= T``:
+    """The basic solution (eq. (16) with eqs. (18), (19)) at times ``0 <= s <= T``:
 
     ``y(s) = [y0 sinh((T - s)/tau) + y1 sinh(s/tau)] / sinh(T/tau)``, written with decaying
     exponentials only.

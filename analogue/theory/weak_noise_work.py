@@ -1,26 +1,26 @@
 """Weak-noise large deviations of the work done by the external force (paper, section V).
 
-The work over ``[0, tau]`` is ``W_tau = F * integral v ds`` with ``F = m a`` (eq. work) and the
-work rate ``w = W_tau / tau`` (eq. work_power).  In the joint limit ``tau, gamma -> infinity``
-the paper writes ``P_tau(w) ~ exp(-tau gamma I(w))`` (eq. largeDev) with
+The work over ``[0, tau]`` is ``W_tau = F * integral v ds`` with ``F = m a`` (eq. (3)) and the
+work rate ``w = W_tau / tau`` (eq. (52)).  In the joint limit ``tau, gamma -> infinity``
+the paper writes ``P_tau(w) ~ exp(-tau gamma I(w))`` (eq. (54)) with
 
-    I(w) = (1/4) (w/(m a tau_m) + sgn(w/(m a)) Delta - a)^2          (eq. Iw),
+    I(w) = (1/4) (w/(m a tau_m) + sgn(w/(m a)) Delta - a)^2          (eq. (64)),
 
 the Onsager-Machlup Lagrangian evaluated on the constant path ``v = tilde v_w = w/(m a)``
-(eqs. vw, wF), and the fluctuation relation ``I(-w) - I(w) = w/(m tau_m) + a Delta`` for
-``a, w > 0`` (eq. ftexp).
+(eqs. (61), (63)), and the fluctuation relation ``I(-w) - I(w) = w/(m tau_m) + a Delta`` for
+``a, w > 0`` (eq. (67)).
 
-:func:`work_optimal_path` solves the finite-``tau`` problem behind eq. Iw: minimise the action
+:func:`work_optimal_path` solves the finite-``tau`` problem behind eq. (64): minimise the action
 ``A`` subject to ``W_tau = w tau`` with fixed endpoints, through the modified action
-``K = A - beta W`` (eqs. Keq, modLag, eqelk1).
+``K = A - beta W`` (eqs. (57), (58), (60)).
 
 Like the rest of the paper's weak-noise theory this module uses the exact ``sgn`` law and
 ignores ``model.epsilon``; ``gamma`` does not enter (it is factored out of the action).
 
-Note on the paper's open question: eq. Iw jumps at ``w = 0``.  A long path may also *share
+Note on the paper's open question: eq. (64) jumps at ``w = 0``.  A long path may also *share
 time* between sticking at ``v = 0`` (free when ``|a| <= Delta``) and sliding, at an O(1) cost
 for the switches; the true ``tau -> infinity`` limit of ``min A / tau`` is therefore the lower
-convex envelope of eq. Iw (continuous, linear near ``w = 0``).  That limit is implemented in
+convex envelope of eq. (64) (continuous, linear near ``w = 0``).  That limit is implemented in
 :mod:`analogue.theory.work_statistics` (``weak_noise_limit_rate_function``); the functions here
 are the paper's formulas.
 """
@@ -52,10 +52,10 @@ def _require_force(model: Model) -> None:
 # ------------------------------------------------------------------------ rate function
 def _hold_cost(model: Model, v):
     """Cost per unit time ``U'(v)^2 / 4`` of holding the velocity at ``v`` (the Lagrangian
-    ``L(0, v)`` of eq. lagrangian).  At ``v = 0`` the sgn law is set-valued (Filippov): friction
+    ``L(0, v)`` of eq. (9)).  At ``v = 0`` the sgn law is set-valued (Filippov): friction
     can supply any value in ``[-Delta, Delta]``, so holding ``v = 0`` costs
     ``max(|a| - Delta, 0)^2 / 4`` - zero when the object can stick, as the paper itself assigns
-    zero action to paths that stay on ``v = 0`` (eqs. Aind2, Aind2b)."""
+    zero action to paths that stay on ``v = 0`` (eqs. (33), (34))."""
     v = np.asarray(v, dtype=float)
     moving = v / model.tau_m + np.sign(v) * model.delta - model.a
     stuck = max(abs(model.a) - model.delta, 0.0)
@@ -63,11 +63,11 @@ def _hold_cost(model: Model, v):
 
 
 def rate_function(model: Model, w):
-    """The paper's work rate function ``I(w)`` (eq. Iw), vectorised over ``w``.
+    """The paper's work rate function ``I(w)`` (eq. (64)), vectorised over ``w``.
 
     ``I(w) = L(0, tilde v_w) = (1/4) (w/(m a tau_m) + sgn(w/(m a)) Delta - a)^2`` with
-    ``tilde v_w = w/(m a)`` (eq. wF), in the scaling ``P_tau(w) ~ exp(-tau gamma I(w))``
-    (eq. largeDev).  Valid for either sign of ``a``; ``a = 0`` raises ValueError (the work is
+    ``tilde v_w = w/(m a)`` (eq. (63)), in the scaling ``P_tau(w) ~ exp(-tau gamma I(w))``
+    (eq. (54)).  Valid for either sign of ``a``; ``a = 0`` raises ValueError (the work is
     then identically zero).
 
     At exactly ``w = 0`` (``v = 0``) the formula's ``sgn(0)`` is ambiguous.  Read literally with
@@ -86,11 +86,11 @@ def rate_function(model: Model, w):
 
 
 def fluctuation_relation(model: Model, w):
-    """``I(-w) - I(w)`` from eq. Iw (eq. ftexp), vectorised over ``w``, any sign of ``a``.
+    """``I(-w) - I(w)`` from eq. (64) (eq. (67)), vectorised over ``w``, any sign of ``a``.
 
-    For ``a > 0`` and ``w > 0`` this is ``w/(m tau_m) + a Delta`` (eq. ftexp); in general it is
+    For ``a > 0`` and ``w > 0`` this is ``w/(m tau_m) + a Delta`` (eq. (67)); in general it is
     ``w/(m tau_m) + |a| Delta sgn(w)`` (odd in ``w``), with the value 0 at ``w = 0``.  The
-    ratio ``P_tau(w)/P_tau(-w) ~ exp(tau gamma [I(-w) - I(w)])`` (eq. dryft).
+    ratio ``P_tau(w)/P_tau(-w) ~ exp(tau gamma [I(-w) - I(w)])`` (eq. (68)).
     """
     _require_force(model)
     w = _finite_array("w", w)
@@ -102,19 +102,19 @@ def fluctuation_relation(model: Model, w):
 # ------------------------------------------------------------------ work-optimal paths
 @dataclass(frozen=True, eq=False)
 class WorkOptimalPath:
-    """Minimiser of the action at fixed work (eqs. Keq, modLag, eqelk1).
+    """Minimiser of the action at fixed work (eqs. (57), (58), (60)).
 
     Attributes
     ----------
     s, v : ndarray
         Times on ``[0, tau]`` and the optimal velocity path ``v*_w(s)`` (n + 1 samples).
     beta : float
-        Lagrange multiplier of ``W_tau = w tau`` in ``K = A - beta W`` (eq. Keq);
+        Lagrange multiplier of ``W_tau = w tau`` in ``K = A - beta W`` (eq. (57));
         ``beta = dA_min/dW`` (envelope theorem).
     v_w : float
-        Attractor of the constrained motion ``tilde v_w = w/(m a)`` (eq. wF).
+        Attractor of the constrained motion ``tilde v_w = w/(m a)`` (eq. (63)).
     action : float
-        Onsager-Machlup action ``A`` (eqs. action, lagrangian) of the path.
+        Onsager-Machlup action ``A`` (eqs. (8), (9)) of the path.
     work : float
         ``F * integral v ds`` along the path (equals ``w tau``).
     kind : str
@@ -137,7 +137,7 @@ class WorkOptimalPath:
 class _Segments:
     """Closed-form pieces of the constrained optimal path for given node times.
 
-    On a half plane ``sigma = sgn v`` the modified E-L equation (eq. eqelk1) reads
+    On a half plane ``sigma = sgn v`` the modified E-L equation (eq. (60)) reads
     ``v'' = U'(v) U''(v) - 2 beta m a = (v/tau_m + c)/tau_m - 2 beta m a`` with
     ``c = sigma Delta - a``.  (From ``K = (v' + U')^2/4 - beta m a v``:
     ``d/ds[(v' + U')/2] = (v' + U') U''/2 - beta m a``.)  Its solution with endpoint values
@@ -321,7 +321,7 @@ def _best_durations(seg: _Segments, tau: float, target: float, rng):
 
 
 def work_optimal_path(model: Model, w, tau, v0, v, n: int = 400) -> WorkOptimalPath:
-    """Optimal path at fixed work rate (eqs. Keq, modLag, eqelk1; Fig. 7 of the paper).
+    """Optimal path at fixed work rate (eqs. (57), (58), (60); Fig. 7 of the paper).
 
     Minimises the Onsager-Machlup action ``A`` over paths on ``[0, tau]`` with ``v(0) = v0``,
     ``v(tau) = v`` and work ``F * integral v ds = w tau`` via ``K = A - beta W``.  On each half
@@ -333,8 +333,8 @@ def work_optimal_path(model: Model, w, tau, v0, v, n: int = 400) -> WorkOptimalP
     ``H = (v'^2 - U'^2)/4 + beta m a v``, across the kink).  Candidates: one half plane, one or
     two crossings, and stuck stretches on ``v = 0``; each piece must stay on its half plane.
 
-    For long ``tau`` the path sits on ``tilde v_w = w/(m a)`` (eq. wF) in the middle, where
-    ``beta -> U'(tilde v_w)/(2 m a tau_m)`` and ``A/tau -> I(w)`` of eq. Iw (when the optimal
+    For long ``tau`` the path sits on ``tilde v_w = w/(m a)`` (eq. (63)) in the middle, where
+    ``beta -> U'(tilde v_w)/(2 m a tau_m)`` and ``A/tau -> I(w)`` of eq. (64) (when the optimal
     path is not a time-sharing one).
     """
     _require_force(model)

@@ -1,4 +1,4 @@
-"""Exact finite-noise statistics of the work ``W_tau = F int_0^tau v ds`` (eq. work) in the
+"""Exact finite-noise statistics of the work ``W_tau = F int_0^tau v ds`` (eq. (3)) in the
 stationary state: scaled cumulant generating function, rate function, finite-tau density, and
 the weak-noise limit that settles the paper's open question about the jump of I(w) at w = 0.
 
@@ -32,7 +32,7 @@ step exactly: holding v = 0 (sticking) then costs nothing; for ``|a| > Delta`` i
 ``(|a| - Delta)^2/4`` (the limit of U'^2/4 at v = 0 on the downhill side).  Hence
 
     lim gamma^-1 lambda(gamma beta) = Lambda(beta) = sup_v [beta F v - I_0(F v)],
-    I_0(w) = L(0, w/F) = (1/4) U'(w/F)^2 for w != 0 (the paper's eq. Iw),
+    I_0(w) = L(0, w/F) = (1/4) U'(w/F)^2 for w != 0 (the paper's eq. (64)),
     I_0(0) = max(|a| - Delta, 0)^2 / 4,
 
 and, by Legendre duality, the gamma -> infinity limit of the exact rate function is the lower
@@ -45,7 +45,7 @@ The limit is continuous; for |a| <= Delta it is piecewise linear near 0 (slopes
 ``(Delta - a)/(F tau_m)`` and ``-(Delta + a)/(F tau_m)`` up to ``v = tau_m (Delta -+ a)``);
 for |a| > Delta it has a kink at w = 0 but no jump.  The fluctuation relation ``I(-w) - I(w)``
 is continuous too: it equals ``2 w/(m tau_m)`` near w = 0 when |a| < Delta and joins the
-paper's eq. ftexp ``w/(m tau_m) + a Delta`` once both sides are on their parabolas.
+paper's eq. (67) ``w/(m tau_m) + a Delta`` once both sides are on their parabolas.
 """
 from __future__ import annotations
 
@@ -142,7 +142,7 @@ def tilted_operator(model: Model, grid: Grid, k: float = 0.0):
     ``gamma h |U'| << 1``, prohibitive for large tilts).  Within ``|v| <= tau_m (Delta + |a|)``
     V is the exact discrete ground-state transform of ``exp(-gamma U/2)``,
     ``V_i = (1/(gamma h^2)) sum_{+-} (exp(-gamma (U_{i+-1} - U_i)/2) - 1)``, which carries the
-    delta function of ``U''`` at the kink of the sgn law (eq. U_pot) exactly: the stationary
+    delta function of ``U''`` at the kink of the sgn law (eq. (5)) exactly: the stationary
     state and the stuck state are exact there.
     """
     v = grid.v
@@ -381,7 +381,7 @@ def scgf(model: Model, k, *, h: float | None = None, mesh: str = "auto"):
     """Scaled cumulant generating function ``lambda(k) = lim (1/tau) ln E exp(k W_tau)``.
 
     Principal eigenvalue of the symmetrised tilted generator ``S_0 + k F diag(v)`` (Touchette,
-    Prellberg & Just 2012; the Legendre dual of the paper's eq. largeDev rate function, with
+    Prellberg & Just 2012; the Legendre dual of the paper's eq. (54) rate function, with
     ``gamma I(w) = sup_k [k w - lambda(k)]``).  Vectorised over k.  The grid covers every
     place the tilted eigenvector can sit, its spacing comes from :func:`tilted_grid_spacing`
     (or ``h``), and values on h and h/2 are Richardson-extrapolated; a RuntimeWarning flags an
@@ -418,7 +418,7 @@ def _scgf_and_derivative(model, k, h, mesh="auto"):
 
 # ---------------------------------------------------------------------- rate function
 def work_rate_mean(model: Model) -> float:
-    """``<w> = F <v>`` with ``<v>`` by quadrature of the exact stationary law (eq. p_stat)."""
+    """``<w> = F <v>`` with ``<v>`` by quadrature of the exact stationary law (eq. (6))."""
     model = _check_model(model)
     c = model.potential_minimum()
     r = _reach(model)
@@ -515,7 +515,7 @@ def _legendre_sweep(model: Model, w: np.ndarray, h: float, mesh: str,
 
 def rate_function(model: Model, w, *, h: float | None = None, mesh: str = "auto"):
     """Exact rate function ``I(w) = (1/gamma) sup_k [k w - lambda(k)]`` in the paper's scaling
-    ``P_tau(w) ~ exp(-tau gamma I(w))`` (eqs. largeDev, eqi1).
+    ``P_tau(w) ~ exp(-tau gamma I(w))`` (eqs. (54), (55)).
 
     For each w the maximiser solves ``lambda'(k) = w`` (Hellmann-Feynman derivative) with a
     bracketing root finder (Brent), so the transform is accurate to the eigenvalue's accuracy.
@@ -602,7 +602,7 @@ def work_variance(model: Model, taus: ArrayLike, *, n: int = 801,
 
 # --------------------------------------------------------------- weak-noise objects
 def paper_rate_function(model: Model, w):
-    """The paper's eq. Iw, ``I(w) = (1/4)(w/(m a tau_m) + sgn(w) Delta - a)^2`` (at w = 0 the
+    """The paper's eq. (64), ``I(w) = (1/4)(w/(m a tau_m) + sgn(w) Delta - a)^2`` (at w = 0 the
     formula is ambiguous; sgn(0) = 0 is used)."""
     model = _check_model(model)
     F = _force(model)
@@ -628,7 +628,7 @@ def weak_noise_limit_rate_function(model: Model, w):
     """``lim_{gamma -> inf} I_gamma(w)``: the lower convex envelope of the cost of holding the
     velocity at ``v = w/F`` (see the module docstring for the derivation).
 
-    ``I_0(w) = (1/4)(v/tau_m + Delta sgn v - a)^2`` for v != 0 (the paper's eq. Iw) and
+    ``I_0(w) = (1/4)(v/tau_m + Delta sgn v - a)^2`` for v != 0 (the paper's eq. (64)) and
     ``I_0(0) = max(|a| - Delta, 0)^2/4``.  Two parabolas of equal curvature have a common
     tangent only with slope 0 at both minima, which cannot lie on opposite half lines when
     Delta > 0, so the envelope passes through (0, I_0(0)) and is built on each half line from

@@ -12,7 +12,7 @@ from analogue.theory import weak_noise_family as wf
 @pytest.mark.parametrize("v,t,v0", [(0.5, 1.0, 1.0), (1.5, 1.0, 0.5), (-0.8, 2.0, -0.3), (-0.2, 0.7, -1.1)])
 @pytest.mark.parametrize("a", [0.2, 1.3])
 def test_direct_path_bvp_reproduces_the_papers_closed_form(v, t, v0, a):
-    """Paper's model: the numerical EL solution equals the basic-solution action eq. lambda."""
+    """Paper's model: the numerical EL solution equals the basic-solution action eq. (20)."""
     m = Model(1.0, 0.7, a, 10.0)
     got = wf.direct_action(m, v, t, v0)
     if math.isnan(got):  # left the half line: then the paper's direct candidate is not admissible

@@ -73,7 +73,7 @@ def test_sweep_equals_independent_roots_at_gamma_10():
 
 def test_fluctuation_relation_exact_at_delta_zero_only():
     """Gallavotti-Cohen symmetry lambda(k) = lambda(-k - gamma/(m tau_m)) of the OU work
-    (paper eq. ftexp at Delta = 0: I(-w) - I(w) = w/(m tau_m)); broken for Delta > 0."""
+    (paper eq. (67) at Delta = 0: I(-w) - I(w) = w/(m tau_m)); broken for Delta > 0."""
     ou_model = Model(tau_m=0.8, delta=0.0, a=0.5, gamma=10.0, mass=1.3)
     k = np.linspace(-4.0, 4.0, 9)
     c = ou_model.gamma / (ou_model.mass * ou_model.tau_m)
@@ -159,7 +159,7 @@ def test_work_variance_all_windows_from_one_autocorrelation():
 def test_sweep_past_the_stick_slide_jump_reaches_the_sliding_parabola():
     """gamma = 100, a = 0.5 (the open-question grid): beyond the tangent point |v| = tau_m
     (Delta + a) the ground state is the sliding state of the v < 0 branch, an OU process with
-    force a + Delta, whose rate function is exactly eq. Iw (up to the kink's exp(-gamma ...)
+    force a + Delta, whose rate function is exactly eq. (64) (up to the kink's exp(-gamma ...)
     tail).  A Legendre root that started from a Richardson pair mixing the two states at the
     jump once stayed on the time-sharing line there (0.01 and 0.05 too low)."""
     m = _m(0.5, 100.0)
