@@ -41,6 +41,7 @@ from ..ensemble import Ensemble
 from ..model import Model
 from .budget import SE_MULTIPLIER, held_noise_pair
 from .metrics import Budget, Comparison, compare
+from ..estimators import transport, work_rate_samples
 from .observables import jackknife_difference, sname, subset, tname
 
 __all__ = [
@@ -60,6 +61,9 @@ MEMBERS = ("cubic", "stribeck", "spring", "shot")
 # object at v = epsilon atanh(a/Delta) (shot: 0.01 atanh(0.4) = 0.0042), never at 0: the window
 # must contain that; the theory counts the atom plus the continuous mass inside the window.
 STICK_THRESHOLD = 0.05
+# work window of the circuit's finite-tau rate-function estimate (figure only: at quick sizes
+# its windows overlap strongly and its error is not a clean jackknife)
+WORK_TAU = 4.0
 
 
 @dataclass(frozen=True)
@@ -206,6 +210,14 @@ def _stationary_specs(exp: Experiment, burn_in: float) -> list[ObservableSpec]:
             ObservableSpec(sname("stick fraction"),
                            lambda e: float(np.mean(np.abs(_after(e, burn_in)) < thr)), window, el,
                            f"|v| < {thr:g}")]
+    if m.a != 0 and not shot:
+        # the work rate function's curvature at <w>: I''(<w>) = 1/(2 gamma F^2 D_x)
+        specs.append(ObservableSpec(
+            sname("diffusion D_x"),
+            lambda e: float(transport(e, burn_in=burn_in).diffusion),
+            lambda model: mom(model).diffusion, el,
+            "Green-Kubo D_x of the exact generator; fixes the curvature of the work rate "
+            "function at <w>"))
     return specs
 
 
@@ -484,10 +496,13 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
             else:
                 th_eff = float(s.theory(m_eff))
                 stat_smoothing[kind] = th_eff - th
-            if s.label.startswith("P(") or "fraction" in s.label:
+            if (s.label.startswith("P(") or "fraction" in s.label) and (
+                    " at t=" in s.label or c in (0.0, 1.0)):
+                # one sample per replica (transition): binomial; a time average estimated
+                # as 0 or 1 still has an error ~ 1/n
                 n = ens.replicas
                 p = (c * n + 1) / (n + 2)
-                se = max(se, math.sqrt(p * (1 - p) / n))   # estimated 0 or 1: still ~1/n
+                se = max(se, math.sqrt(p * (1 - p) / n))
             b = _budget(s, th, th_eff - th, band)
             note = s.note
             if pure_shot and " at t=" in s.label:
@@ -524,6 +539,15 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
         from ..theory.exact import rate_function as _rf
         rf["paper"] = _rf(base, w)
         rf["paper_label"] = "paper's model, same Delta"
+        # the circuit's finite-tau estimate -ln P_tau(w)/(tau gamma), shifted to min 0
+        tau = WORK_TAU
+        ws = work_rate_samples(stat, tau, m.force, burn_in=burn).ravel()
+        cnt, edges = np.histogram(ws, bins=25)
+        keep = cnt >= 10
+        dens = cnt / (ws.size * np.diff(edges))
+        est = -np.log(dens[keep]) / (tau * m.gamma)
+        rf.update(w_circuit=0.5 * (edges[1:] + edges[:-1])[keep], rate_circuit=est - est.min(),
+                  tau=tau)
         res.figures["rate_function"] = rf
     sm = family.stationary_moments(m)
     res.facts.update(mean=sm.mean, variance=sm.variance, p_zero=sm.p_zero,
