@@ -76,6 +76,7 @@ def test_errors_are_one_clear_line_with_nonzero_exit(cli, args, needle):
     assert "Traceback" not in r.output
 
 
+@pytest.mark.slow  # > 5 s (make test-fast skips it)
 def test_console_script_exit_code_and_no_traceback():
     exe = Path(sys.executable).with_name("analogue")
     assert exe.exists(), "the analogue console script is installed with the package"

@@ -310,6 +310,7 @@ def test_stationary_prehistory_is_the_gaussian_conditional_mean(long_ou):
                          - target) < half)
 
 
+@pytest.mark.slow  # > 5 s (make test-fast skips it)
 def test_stationary_prehistory_entries_and_honest_errors():
     seeds, reps, n_t = 60, 20, 2000
     big = exact_ou(seeds * reps, n_t, seed=8)

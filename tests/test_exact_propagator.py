@@ -66,6 +66,7 @@ def test_fp_stationary_state_is_model_stationary_pdf(a, eps):
 
 @pytest.mark.parametrize("a,v0,eps", [(0.3, 1.0, 0.0), (0.3, -1.0, 0.0), (1.2, -1.0, 0.0),
                                       (1.2, 1.0, 0.05)])
+@pytest.mark.slow  # > 5 s (make test-fast skips it)
 def test_normalised_positive_and_grid_converged(a, v0, eps):
     """Docstring claims: halving h changes the density by < 3e-3 of its peak (t >= 0.1 tau_m);
     the interpolated density integrates to 1 within 1e-3 (O(h^2))."""
@@ -84,6 +85,7 @@ def test_normalised_positive_and_grid_converged(a, v0, eps):
     assert p.sum(axis=1) == pytest.approx(np.ones(TIMES.size), abs=1e-10)
 
 
+@pytest.mark.slow  # > 5 s (make test-fast skips it)
 def test_routes_agree():
     """eigen, expm_multiply and hybrid propagation of the same grid problem."""
     m = Model(1.0, 0.7, 0.3, 10.0)
@@ -120,6 +122,7 @@ def test_reflection_symmetry_and_shapes():
     assert exact.propagator(m, 0.0, [0.5, 1.0], 0.2).shape == (2,)
 
 
+@pytest.mark.slow  # > 5 s (make test-fast skips it)
 def test_large_gamma_tail_start_is_accurate():
     """Start deep in the tail (eigen route would lose digits): hybrid route, vs expm."""
     m = Model(1.0, 0.7, 0.2, 100.0)

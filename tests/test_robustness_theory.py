@@ -116,6 +116,7 @@ EXACT_SETS = _random_sets(10, seed=11, g_max_exp=2.0) + [
 
 
 @pytest.mark.parametrize("model,v0,t", EXACT_SETS)
+@pytest.mark.slow  # > 5 s (make test-fast skips it)
 def test_exact_propagator_and_stationary_are_sane(model, v0, t):
     r = 14.0 * model.velocity_scale + abs(v0) + abs(model.attractor) + 1.0 / model.gamma
     v = np.linspace(-r, r, 20001)

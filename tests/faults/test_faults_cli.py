@@ -126,6 +126,7 @@ def test_usage_errors_are_one_line(cli, args):
     assert err_line(r).startswith("analogue: error:")
 
 
+@pytest.mark.slow  # > 5 s (make test-fast skips it)
 def test_console_script_one_line_for_a_bad_file(tmp_path):
     exe = Path(sys.executable).with_name("analogue")
     bad = tmp_path / "bad.toml"

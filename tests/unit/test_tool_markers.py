@@ -6,10 +6,13 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 TESTS = Path(__file__).resolve().parents[1]
 ROOT = TESTS.parent
 
 
+@pytest.mark.slow  # > 5 s (make test-fast skips it)
 def test_markers_skip_with_reason_when_tools_are_missing(tmp_path: Path) -> None:
     (tmp_path / "test_tools.py").write_text(
         "import pytest\n\n"
