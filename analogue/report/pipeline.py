@@ -232,7 +232,7 @@ def _open_question_section(out: Path, opts: RunOptions) -> Section:
         "between sticking and sliding, which makes the limit linear there: the jump is an "
         "artefact of restricting the paths to one constant velocity, and the fluctuation "
         "relation of eq. (68) has no jump either. The tests check the convergence "
-        "(tests/test_open_question.py)."]
+        "(tests/unit/test_open_question.py)."]
     gs = ", ".join(f"{g:g}" for g in gammas)
     caps = [f"Exact I_gamma(w) for gamma = {gs} against the paper's I(w) (eq. (64)) and the "
             "gamma -> infinity limit (convex envelope).",

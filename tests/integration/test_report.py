@@ -15,7 +15,7 @@ from analogue.report.metrics import Budget, compare, validate_metrics
 from analogue.report.plan import ReportSettings, RunOptions
 from conftest import chromium
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 ARTIFACTS = ROOT / "test-artifacts"
 
 

@@ -10,7 +10,7 @@ from analogue import Model
 from analogue.cli import main
 from analogue.theory import exact, weak_noise
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 COMMANDS = ["netlist", "run", "report", "paper", "theory", "figures"]
 
 
