@@ -33,7 +33,7 @@ import math
 import numpy as np
 from scipy import integrate, optimize, sparse
 from scipy.linalg import eigh_tridiagonal
-from scipy.sparse.linalg import splu, spsolve
+from scipy.sparse.linalg import splu
 
 from ..model import Model
 from .kolmogorov_feller import ShotGrid, default_spacing, shot_generator
