@@ -116,7 +116,10 @@ def test_spring_stationary_identities_gaussian():
 
 @pytest.mark.slow
 def test_spring_stationary_identities_shot_noise():
-    _spring_identity(Model(1.0, 0.7, 0.2, INF, spring=1.0, stribeck=(1.0, 0.3),
+    # x0 = 1.3 near the stationary <x> (measured 1.35): from x0 = 0 the position relaxes
+    # slowly through the stuck phases (12 % of the time) and a window starting at t = 10 still
+    # drifts (z<v> = 3.3 measured); from 1.3: z<v> = -0.6, identity z = 0.58
+    _spring_identity(Model(1.0, 0.7, 0.2, INF, spring=1.0, x0=1.3, stribeck=(1.0, 0.3),
                            shot=ShotNoise(2.0, 0.3)), seed=5, reps=32, t_end=60.0, burn=10.0)
 
 
