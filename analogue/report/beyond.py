@@ -30,6 +30,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
+from typing import SupportsFloat
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -263,22 +264,26 @@ def _transition_specs(exp: Experiment, v0: float, times) -> list[ObservableSpec]
             return (a + integrate.trapezoid(np.where(inside, fi, 0.0), v)) / tot
         return integrate.trapezoid(np.where(v < 0, fi, 0.0), v) / tot  # P(v<0)
 
+    def at_time(t: float, reduce: Callable[[np.ndarray], SupportsFloat]
+                ) -> Callable[[Ensemble], float]:
+        return lambda e: float(reduce(e.at(t)))
+
+    def theory_at(i: int, what: str) -> Callable[[Model], float]:
+        return lambda model: float(moment(model, i, what))
+
     out = []
     for i, t in enumerate(times):
-        at = lambda e, t=t: e.at(t)
-        out += [ObservableSpec(tname("mean v", t, v0), lambda e, at=at: float(np.mean(at(e))),
-                               lambda model, i=i: moment(model, i, "mean")),
-                ObservableSpec(tname("var v", t, v0), lambda e, at=at: float(np.var(at(e), ddof=1)),
-                               lambda model, i=i: moment(model, i, "var"))]
+        out += [ObservableSpec(tname("mean v", t, v0), at_time(t, np.mean), theory_at(i, "mean")),
+                ObservableSpec(tname("var v", t, v0), at_time(t, lambda x: np.var(x, ddof=1)),
+                               theory_at(i, "var"))]
         if shot:
             out.append(ObservableSpec(
                 tname("P(v=0)", t, v0),
-                lambda e, at=at: float(np.mean(np.abs(at(e)) < STICK_THRESHOLD)),
-                lambda model, i=i: moment(model, i, "stuck"), note=f"|v| < {STICK_THRESHOLD:g}"))
+                at_time(t, lambda x: np.mean(np.abs(x) < STICK_THRESHOLD)),
+                theory_at(i, "stuck"), note=f"|v| < {STICK_THRESHOLD:g}"))
         else:
-            out.append(ObservableSpec(tname("P(v<0)", t, v0),
-                                      lambda e, at=at: float(np.mean(at(e) < 0)),
-                                      lambda model, i=i: moment(model, i, "neg")))
+            out.append(ObservableSpec(tname("P(v<0)", t, v0), at_time(t, lambda x: np.mean(x < 0)),
+                                      theory_at(i, "neg")))
     return out
 
 
@@ -486,16 +491,17 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
         band = _band(exp, specs, v0_band, T, 128 if np.ndim(v0_band) else 256, seed + 5)
         for s in specs:
             c, se = _jk(s.estimator, ens)
-            th = float(s.theory(m))
+            assert s.theory is not None  # stationary and transition specs have exact theory
+            th_model = float(s.theory(m))
             kind = s.label.split(" at t=")[0]
             if pure_shot and " at t=" in s.label:
                 # the propagator at epsilon > 0 does not finish for pure shot noise (the KF
                 # grid resolving the tanh: > 10 min); the smoothing acts where the object is
                 # stuck, near v = 0: its effect on the stationary law stands in (noted)
-                th_eff = th + stat_smoothing.get(kind, 0.0)
+                th_eff = th_model + stat_smoothing.get(kind, 0.0)
             else:
                 th_eff = float(s.theory(m_eff))
-                stat_smoothing[kind] = th_eff - th
+                stat_smoothing[kind] = th_eff - th_model
             if (s.label.startswith("P(") or "fraction" in s.label) and (
                     " at t=" in s.label or c in (0.0, 1.0)):
                 # one sample per replica (transition): binomial; a time average estimated
@@ -503,12 +509,12 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
                 n = ens.replicas
                 p = (c * n + 1) / (n + 2)
                 se = max(se, math.sqrt(p * (1 - p) / n))
-            b = _budget(s, th, th_eff - th, band)
+            b = _budget(s, th_model, th_eff - th_model, band)
             note = s.note
             if pure_shot and " at t=" in s.label:
                 note = (note + "; " if note else "") + ("smoothing term: the stationary law's "
                                                         "change at the circuit's epsilon")
-            res.comparisons.append(compare(name, s.label, c, se, th, "exact", b, note))
+            res.comparisons.append(compare(name, s.label, c, se, th_model, "exact", b, note))
 
     # figure data: histograms and exact laws (computed here: the figures only draw)
     v, dens, atom = family.stationary_law(m, h=_h(exp) / 2)
