@@ -6,6 +6,7 @@ Monte Carlo data go through exactly the same code.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -31,6 +32,11 @@ class Ensemble:
         The standard normal numbers that drove each replica, one per noise hold time
         ``meta["noise_dt"]``, when the producer recorded them (:func:`analogue.simulate`
         attaches them whenever the circuit's decks record their noise).
+    records : dict or None
+        Per-replica extras of a circuit run, when it has any: ``"x_spring"`` (replicas, n_t) the
+        spring position read back from the inductor, ``"kicks"`` the shot-noise kicks per
+        replica (see :func:`analogue.simulate`).  Not compared, not written to files, and not
+        carried over by :meth:`window` / :meth:`concatenate`.
 
     ``to_xarray()`` / ``to_netcdf(path)`` give labelled data (dims ``replica``, ``time``);
     :func:`analogue.open_ensemble` reads such a file back, exactly.
@@ -41,6 +47,7 @@ class Ensemble:
     x: np.ndarray
     meta: dict = field(default_factory=dict)
     noise: np.ndarray | None = None
+    records: dict[str, Any] | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self):
         t = np.asarray(self.t, dtype=float)

@@ -742,7 +742,8 @@ def simulate(model: Model, *, v0: float | ArrayLike | Literal["stationary"], t_e
         Deprecated (DeprecationWarning): the noise is ``ensemble.noise``.  True returns
         ``(ensemble, ensemble.noise)`` as before.
     return_records : bool
-        True returns ``(ensemble, records)`` (see Returns).
+        Deprecated (DeprecationWarning): the records are ``ensemble.records``.  True returns
+        ``(ensemble, ensemble.records)`` as before.
 
     A request whose arrays or stored bytes cannot fit is refused before anything runs
     (ValueError naming the parameters and the limit; see :mod:`analogue.circuit.limits`).
@@ -760,11 +761,10 @@ def simulate(model: Model, *, v0: float | ArrayLike | Literal["stationary"], t_e
     one per noise hold time ``h = meta["noise_dt"]``: the velocity-noise increment over hold k
     is ``sqrt(2 h/gamma) z[:, k]`` (the convention of
     ``analogue.montecarlo.simulate_sde(..., dt=h, noise=z)``, so an SDE integrator can be
-    driven by the very same noise); None otherwise.
-    With ``return_records=True``: ``(ensemble, records)``, a dict with ``"x_spring"`` (replicas,
-    n_t) the spring's position read back from the inductor current (spring models; it differs
-    from ``x0 + x`` by the inductor's leak, see the mapping's budget) and ``"kicks"`` (shot
-    noise): per replica ``(times, jumps)`` of the kicks that drove it (model units; times are
+    driven by the very same noise); None otherwise.  ``records`` (None when empty): a dict
+    with ``"x_spring"`` (replicas, n_t) the spring's position read back from the inductor
+    current (spring models; it differs from ``x0 + x`` by the inductor's leak, see the
+    mapping's budget) and ``"kicks"`` (shot noise): per replica ``(times, jumps)`` of the kicks that drove it (model units; times are
     the pulse centres), so a Monte Carlo can be driven by the same realisation.
     """
     if not isinstance(model, Model):
@@ -883,10 +883,12 @@ def simulate(model: Model, *, v0: float | ArrayLike | Literal["stationary"], t_e
     if noise is not None and math.isfinite(model.gamma):
         # The noise node holds the velocity noise, std sqrt(2/(gamma h)) (mapping): standardise.
         z = noise * math.sqrt(model.gamma * mapping.noise_dt / 2.0)
-    ens = Ensemble(times, v, x, _jsonable(meta), z)
+    if mapping.model.shot is not None:
+        records["kicks"] = [k for d in decks for k in d.kicks]
+    ens = Ensemble(times, v, x, _jsonable(meta), z, records or None)
     if return_records:
-        if mapping.model.shot is not None:
-            records["kicks"] = [k for d in decks for k in d.kicks]
+        warnings.warn("simulate(return_records=True) is deprecated: the records are "
+                      "ensemble.records", DeprecationWarning, stacklevel=2)
         return ens, records
     if not return_noise:
         return ens

@@ -365,8 +365,9 @@ def _circuit(exp: Experiment, *, v0, t_end: float, replicas: int, seed: int, siz
              opts) -> Ensemble:
     from ..circuit.simulate import simulate
     kw = opts.simulate_kwargs() if opts is not None else {"progress": False}
-    ens, rec = simulate(exp.model, v0=v0, t_end=t_end, replicas=replicas, seed=seed,
-                        sample_dt=sizes.sample_dt, circuit=exp.spec, return_records=True, **kw)
+    ens = simulate(exp.model, v0=v0, t_end=t_end, replicas=replicas, seed=seed,
+                   sample_dt=sizes.sample_dt, circuit=exp.spec, **kw)
+    rec = ens.records or {}
     meta = dict(ens.meta)
     meta["_model_eff"] = exp.mapping().model_effective
     if "x_spring" in rec:

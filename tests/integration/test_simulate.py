@@ -412,3 +412,19 @@ def test_missing_ngspice_through_simulate(monkeypatch, tmp_path):
     monkeypatch.setenv("PATH", str(tmp_path))
     with pytest.raises(ng.NgspiceNotFoundError, match="apt-get install ngspice"):
         analogue.simulate(STICK_A02, store=False, progress=False, **BASE)
+
+
+def test_records_are_attached_to_the_ensemble():
+    """ensemble.records carries the spring readback (x_spring, same grid as v); the deprecated
+    return_records=True still returns the same dict beside the ensemble."""
+    from analogue.circuit import CircuitSpec
+    model = Model(tau_m=3.0, delta=0.0, a=0.3, gamma=1e12, spring=1.0, x0=1.0)
+    kw = dict(v0=0.0, t_end=2.0, replicas=2, seed=3, sample_dt=0.05, workers=1,
+              circuit=CircuitSpec(allow_bias=True))
+    ens = run(model, **kw)
+    assert ens.records is not None and ens.records["x_spring"].shape == ens.v.shape
+    np.testing.assert_allclose(ens.records["x_spring"][:, 0], 1.0, atol=1e-6)  # x(0) = x0
+    with pytest.warns(DeprecationWarning, match="ensemble.records"):
+        old, rec = run(model, return_records=True, **kw)
+    np.testing.assert_array_equal(rec["x_spring"], ens.records["x_spring"])
+    assert run(STICK_A02, v0=0.0, t_end=0.5, replicas=2, seed=1).records is None
