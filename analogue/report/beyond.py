@@ -65,6 +65,9 @@ STICK_THRESHOLD = 0.05
 # work window of the circuit's finite-tau rate-function estimate (figure only: at quick sizes
 # its windows overlap strongly and its error is not a clean jackknife)
 WORK_TAU = 4.0
+# replicas of the integration check (the first deck of the nominal run, re-run with 100x
+# tighter tolerances on the same noise: Experiment.check_spec)
+CHECK_REPLICAS = 8
 
 
 @dataclass(frozen=True)
@@ -362,11 +365,16 @@ def _spring_identities(exp: Experiment, burn_in: float) -> list[ObservableSpec]:
 
 # ------------------------------------------------------------------------------ runs
 def _circuit(exp: Experiment, *, v0, t_end: float, replicas: int, seed: int, sizes: MemberSizes,
-             opts) -> Ensemble:
+             opts, spec=None, per_deck: int | None = None) -> Ensemble:
+    """One circuit run through :func:`analogue.simulate` (seeded, stored).  ``per_deck``
+    fixes the deck size, so that a re-run of the first deck with ``spec`` (the integration
+    check) sees the same noise: a deck's noise depends on (seed, deck index, deck size)."""
     from ..circuit.simulate import simulate
     kw = opts.simulate_kwargs() if opts is not None else {"progress": False}
+    if per_deck is not None:
+        kw["replicas_per_deck"] = per_deck
     ens = simulate(exp.model, v0=v0, t_end=t_end, replicas=replicas, seed=seed,
-                   sample_dt=sizes.sample_dt, circuit=exp.spec, **kw)
+                   sample_dt=sizes.sample_dt, circuit=exp.spec if spec is None else spec, **kw)
     rec = ens.records or {}
     meta = dict(ens.meta)
     meta["_model_eff"] = exp.mapping().model_effective
@@ -377,10 +385,39 @@ def _circuit(exp: Experiment, *, v0, t_end: float, replicas: int, seed: int, siz
     return Ensemble(ens.t, ens.v, ens.x, meta)
 
 
-def _budget(spec: ObservableSpec, theory: float, smoothing: float, band: dict) -> Budget:
-    d, se = band.get(spec.label, (0.0, 0.0))
-    return Budget(smoothing=smoothing, bandwidth=abs(d) + SE_MULTIPLIER * se if spec.label in band
-                  else 0.0, element=spec.element * abs(theory))
+def _measured(pairs: dict, label: str) -> float:
+    d, se = pairs.get(label, (0.0, 0.0))
+    return abs(d) + SE_MULTIPLIER * se if label in pairs else 0.0
+
+
+def _budget(spec: ObservableSpec, theory: float, smoothing: float, band: dict,
+            integ: dict | None = None) -> Budget:
+    return Budget(smoothing=smoothing, bandwidth=_measured(band, spec.label),
+                  integration=_measured(integ or {}, spec.label),
+                  element=spec.element * abs(theory))
+
+
+def _paired(specs, a: Ensemble, b: Ensemble) -> dict:
+    """``{label: (estimator(a) - estimator(b), jackknife se)}`` for paired ensembles (row i of
+    a and b share their noise), e.g. the integration check against the nominal run.  Refused
+    unless a retraces b (same noise): otherwise the difference would be noise, not a bias."""
+    d = np.abs(a.v - b.v)
+    if not np.isfinite(d).all() or float(np.median(d)) > 0.1 * float(np.std(b.v)):
+        raise RuntimeError("integration check: the tight-tolerance re-run does not retrace the "
+                           "nominal paths (noise not reproduced?); integration budget unavailable")
+    n = a.replicas
+    g = max(2, min(8, n // 2))
+    labels = np.arange(n) % g
+    out = {}
+    for s in specs:
+        full = s.estimator(a) - s.estimator(b)
+        reps = []
+        for j in range(g):
+            keep = np.flatnonzero(labels != j)
+            reps.append(s.estimator(_xs_subset(a, keep)) - s.estimator(_xs_subset(b, keep)))
+        reps = np.asarray(reps)
+        out[s.label] = (float(full), float(np.sqrt((g - 1) / g * np.sum((reps - reps.mean()) ** 2))))
+    return out
 
 
 def _band(exp: Experiment, specs, v0, t_end: float, replicas: int, seed: int) -> dict:
@@ -422,7 +459,12 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
     if m.spring > 0:
         tick(f"{name}: circuit run from x0 = {m.x0:g} ({sizes.transition_replicas} replicas)")
         circ = _circuit(exp, v0=0.0, t_end=sizes.stationary_t_end, replicas=sizes.transition_replicas,
-                        seed=seed, sizes=sizes, opts=opts)
+                        seed=seed, sizes=sizes, opts=opts, per_deck=CHECK_REPLICAS)
+        tick(f"{name}: integration check (first {CHECK_REPLICAS} replicas, 100x tighter)")
+        chk = _circuit(exp, v0=0.0, t_end=sizes.stationary_t_end, replicas=CHECK_REPLICAS,
+                       seed=seed, sizes=sizes, opts=opts, spec=exp.check_spec(),
+                       per_deck=CHECK_REPLICAS)
+        first = _xs_subset(circ, np.arange(CHECK_REPLICAS))
         tick(f"{name}: Monte Carlo reference ({sizes.mc_replicas} replicas)")
         from ..montecarlo import simulate_sde
         mc = simulate_sde(m, v0=0.0, t_end=sizes.stationary_t_end, replicas=sizes.mc_replicas,
@@ -432,12 +474,14 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
                               replicas=sizes.mc_replicas, seed=seed + 1, sample_dt=sizes.sample_dt)
         mc_eff.meta["_x0"], mc_eff.meta["_model_eff"] = m.x0, m_eff
         specs = _spring_specs(exp, burn)
+        integ = _paired(specs + _spring_identities(exp, burn), chk, first)
         for s in specs:
             c, se = _jk(s.estimator, circ)
             r, se_r = _jk(s.estimator, mc)
             smooth = s.estimator(mc_eff) - r   # same noise: epsilon's effect, paired
             se_tot = math.hypot(se, se_r)
-            b = Budget(smoothing=smooth, element=s.element * abs(r))
+            b = Budget(smoothing=smooth, element=s.element * abs(r),
+                       integration=_measured(integ, s.label))
             res.comparisons.append(compare(name, s.label, c, se_tot, r, "exact", b,
                                            f"reference: Monte Carlo ({sizes.mc_replicas} "
                                            "replicas, same release); SE = circuit and Monte "
@@ -445,7 +489,7 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
         for s in _spring_identities(exp, burn):
             c, se = _jk(s.estimator, circ)
             mc_val = s.estimator(mc_eff)  # the Monte Carlo's own departure (finite time)
-            b = Budget(sampling=abs(mc_val),
+            b = Budget(sampling=abs(mc_val), integration=_measured(integ, s.label),
                        element=exp.mapping().bias.get("spring_creep", 0.0) * m.velocity_scale)
             res.comparisons.append(compare(name, s.label, c, se, 0.0, "exact", b,
                                            "sampling = the same average on the Monte Carlo "
@@ -476,17 +520,22 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
     tick(f"{name}: stationary circuit run ({sizes.stationary_replicas} x "
          f"{sizes.stationary_t_end:g})")
     stat = _circuit(exp, v0=v0_stat, t_end=sizes.stationary_t_end,
-                    replicas=sizes.stationary_replicas, seed=seed, sizes=sizes, opts=opts)
+                    replicas=sizes.stationary_replicas, seed=seed, sizes=sizes, opts=opts,
+                    per_deck=CHECK_REPLICAS)
     v00 = float(exp.v0[0])
     times = [float(t) for t in exp.histogram_times]
     tick(f"{name}: transition circuit run from v0 = {v00:g} ({sizes.transition_replicas} replicas)")
     trans = _circuit(exp, v0=v00, t_end=max(times), replicas=sizes.transition_replicas,
                      seed=seed + 3, sizes=sizes, opts=opts)
     tick(f"{name}: exact theory")
-    pure_shot = m.shot is not None and not math.isfinite(m.gamma)
-    stat_smoothing: dict = {}
+    stat_specs = _stationary_specs(exp, burn)
+    tick(f"{name}: integration check (first {CHECK_REPLICAS} stationary replicas, 100x tighter)")
+    chk = _circuit(exp, v0=v0_stat[:CHECK_REPLICAS], t_end=sizes.stationary_t_end,
+                   replicas=CHECK_REPLICAS, seed=seed, sizes=sizes, opts=opts,
+                   spec=exp.check_spec(), per_deck=CHECK_REPLICAS)
+    integ = _paired(stat_specs, chk, _xs_subset(stat, np.arange(CHECK_REPLICAS)))
     for specs, ens, v0_band, T in (
-            (_stationary_specs(exp, burn), stat, family.sample_stationary(m, 128, seed + 4),
+            (stat_specs, stat, family.sample_stationary(m, 128, seed + 4),
              sizes.stationary_t_end),
             (_transition_specs(exp, v00, times), trans, v00, max(times))):
         band = _band(exp, specs, v0_band, T, 128 if np.ndim(v0_band) else 256, seed + 5)
@@ -494,15 +543,7 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
             c, se = _jk(s.estimator, ens)
             assert s.theory is not None  # stationary and transition specs have exact theory
             th_model = float(s.theory(m))
-            kind = s.label.split(" at t=")[0]
-            if pure_shot and " at t=" in s.label:
-                # the propagator at epsilon > 0 does not finish for pure shot noise (the KF
-                # grid resolving the tanh: > 10 min); the smoothing acts where the object is
-                # stuck, near v = 0: its effect on the stationary law stands in (noted)
-                th_eff = th_model + stat_smoothing.get(kind, 0.0)
-            else:
-                th_eff = float(s.theory(m_eff))
-                stat_smoothing[kind] = th_eff - th_model
+            th_eff = float(s.theory(m_eff))
             if (s.label.startswith("P(") or "fraction" in s.label) and (
                     " at t=" in s.label or c in (0.0, 1.0)):
                 # one sample per replica (transition): binomial; a time average estimated
@@ -510,11 +551,9 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
                 n = ens.replicas
                 p = (c * n + 1) / (n + 2)
                 se = max(se, math.sqrt(p * (1 - p) / n))
-            b = _budget(s, th_model, th_eff - th_model, band)
-            note = s.note
-            if pure_shot and " at t=" in s.label:
-                note = (note + "; " if note else "") + ("smoothing term: the stationary law's "
-                                                        "change at the circuit's epsilon")
+            b = _budget(s, th_model, th_eff - th_model, band, integ if ens is stat else {})
+            note = s.note if ens is stat else (s.note + "; " if s.note else "") + (
+                "integration checked on the stationary run only")
             res.comparisons.append(compare(name, s.label, c, se, th_model, "exact", b, note))
 
     # figure data: histograms and exact laws (computed here: the figures only draw)
