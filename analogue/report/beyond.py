@@ -411,11 +411,9 @@ def _paired(specs, a: Ensemble, b: Ensemble) -> dict:
     out = {}
     for s in specs:
         full = s.estimator(a) - s.estimator(b)
-        reps = []
-        for j in range(g):
-            keep = np.flatnonzero(labels != j)
-            reps.append(s.estimator(_xs_subset(a, keep)) - s.estimator(_xs_subset(b, keep)))
-        reps = np.asarray(reps)
+        reps = np.array([s.estimator(_xs_subset(a, np.flatnonzero(labels != j)))
+                         - s.estimator(_xs_subset(b, np.flatnonzero(labels != j)))
+                         for j in range(g)])
         out[s.label] = (float(full), float(np.sqrt((g - 1) / g * np.sum((reps - reps.mean()) ** 2))))
     return out
 
