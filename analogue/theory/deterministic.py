@@ -9,21 +9,25 @@ object sticks for good (without noise) if the net static force obeys
 """
 from __future__ import annotations
 
-from typing import Any
-
 import math
+from collections.abc import Callable, Iterator
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy import integrate
+
+if TYPE_CHECKING:
+    from ..model import Model
 
 __all__ = ["flow", "stick_time"]
 
 _RTOL = 1e-11
 
 
-def _branch_rhs(model, s):
+def _branch_rhs(model: Model, s: float) -> Callable[[float, np.ndarray], list[float]]:
     """Right-hand side of (v, x) with the friction sign fixed to ``s`` (or tanh if smooth)."""
-    def rhs(_t, y):
+    def rhs(_t: float, y: np.ndarray) -> list[float]:
         v, x = y
         if s == 0:  # smooth law
             fr = float(model.coulomb(v))
@@ -33,13 +37,14 @@ def _branch_rhs(model, s):
     return rhs
 
 
-def _leave_direction(model, x) -> float:
+def _leave_direction(model: Model, x: float) -> float:
     """Sign in which a resting object at position x starts to move (0: stays stuck)."""
     f0 = model.a - model.spring * x
     return 0.0 if abs(f0) <= model.static_friction else math.copysign(1.0, f0)
 
 
-def _segments(model, v0: float, x0: float, t_end: float):
+def _segments(model: Model, v0: float, x0: float, t_end: float
+              ) -> Iterator[tuple[float, float, tuple[str, Any]]]:
     """Yield (t_start, t_stop, dense(t) -> (v, x) or None for rest at x) up to t_end."""
     t0, v, x = 0.0, float(v0), float(x0)
     smooth = model.epsilon > 0
@@ -56,8 +61,8 @@ def _segments(model, v0: float, x0: float, t_end: float):
                 return
         ev: Any = None  # solve_ivp's event: a function carrying terminal/direction attributes
         if not smooth:
-            def ev(_t, y, s=s):
-                return y[0]
+            def ev(_t: float, y: np.ndarray, s: float = s) -> float:
+                return float(y[0])
             ev.terminal = True
             ev.direction = -s
         sol = integrate.solve_ivp(_branch_rhs(model, s), (t0, t_end), [v, x], method="DOP853",
@@ -71,7 +76,7 @@ def _segments(model, v0: float, x0: float, t_end: float):
     raise RuntimeError("too many crossings of v = 0 in the noise-free flow")
 
 
-def flow(model, v0: float, x0: float, t) -> tuple[np.ndarray, np.ndarray]:
+def flow(model: Model, v0: float, x0: float, t: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Noise-free ``(v(t), x(t))`` from ``(v0, x0)`` at the times ``t >= 0`` (any shape)."""
     t = np.asarray(t, dtype=float)
     v_out = np.empty(t.shape)
@@ -94,7 +99,7 @@ def flow(model, v0: float, x0: float, t) -> tuple[np.ndarray, np.ndarray]:
     return v_out, x_out
 
 
-def stick_time(model, v0: float) -> float:
+def stick_time(model: Model, v0: float) -> float:
     """First time the noise-free motion from ``v0`` (and ``x0``) reaches ``v = 0``; inf if it
     does not within ``10^4 tau_m`` (it has then settled on a slip state)."""
     if v0 == 0:

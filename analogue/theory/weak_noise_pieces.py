@@ -23,14 +23,17 @@ from __future__ import annotations
 
 import numpy as np
 
+# the pieces are vectorised: every argument is a float or an array (broadcast together)
+FloatOrArray = float | np.ndarray
+
 __all__ = ["ou_action", "ou_action_rate", "bridge", "bridge_min", "monotone_time"]
 
 
-def _e(T, tau):
+def _e(T: FloatOrArray, tau: float) -> np.ndarray:
     return np.exp(-np.asarray(T, dtype=float) / tau)
 
 
-def ou_action(y0, y1, T, tau):
+def ou_action(y0: FloatOrArray, y1: FloatOrArray, T: FloatOrArray, tau: float) -> np.ndarray:
     """Action of the basic solution from ``y0`` to ``y1`` in time ``T`` (eq. (20)):
 
     ``Lambda = (y1 - y0 e^{-T/tau})^2 / (2 tau (1 - e^{-2T/tau}))``, i.e. eq. (20) divided
@@ -43,16 +46,17 @@ def ou_action(y0, y1, T, tau):
         return (y1 - y0 * e) ** 2 / (2.0 * tau * -np.expm1(-2.0 * T / tau))
 
 
-def ou_action_rate(y0, y1, T, tau):
+def ou_action_rate(y0: FloatOrArray, y1: FloatOrArray, T: FloatOrArray, tau: float) -> np.ndarray:
     """``dLambda/dT = (y1 - y0 e)(y0 - y1 e) e / (tau^2 (1 - e^2)^2)`` with ``e = e^{-T/tau}``
     (minus the Hamiltonian of the piece); used for the stationarity condition eq. (25)."""
     T = np.asarray(T, dtype=float)
     e = _e(T, tau)
     with np.errstate(divide="ignore", invalid="ignore"):
-        return (y1 - y0 * e) * (y0 - y1 * e) * e / (tau**2 * np.expm1(-2.0 * T / tau) ** 2)
+        return np.asarray((y1 - y0 * e) * (y0 - y1 * e) * e
+                          / (tau**2 * np.expm1(-2.0 * T / tau) ** 2))
 
 
-def bridge(y0, y1, T, tau, s):
+def bridge(y0: FloatOrArray, y1: FloatOrArray, T: FloatOrArray, tau: float, s: FloatOrArray) -> np.ndarray:
     """The basic solution (eq. (16) with eqs. (18), (19)) at times ``0 <= s <= T``:
 
     ``y(s) = [y0 sinh((T - s)/tau) + y1 sinh(s/tau)] / sinh(T/tau)``, written with decaying
@@ -65,7 +69,7 @@ def bridge(y0, y1, T, tau, s):
     return left + right
 
 
-def bridge_min(y0, y1, T, tau):
+def bridge_min(y0: FloatOrArray, y1: FloatOrArray, T: FloatOrArray, tau: float) -> np.ndarray:
     """Minimum of the basic solution over ``[0, T]`` (vectorised).
 
     ``y = P e^{s/tau} + Q e^{-s/tau}`` with ``P = (y1 - y0 e) e/(1 - e^2)`` and
@@ -88,7 +92,7 @@ def bridge_min(y0, y1, T, tau):
     return np.where(interior, np.minimum(inner, ends), ends)
 
 
-def monotone_time(y_start, y_end, E, tau):
+def monotone_time(y_start: FloatOrArray, y_end: FloatOrArray, E: FloatOrArray, tau: float) -> np.ndarray:
     """Duration of a piece that runs *monotonically* from ``y_start`` to ``y_end`` (same sign)
     on the orbit ``y'^2 - y^2/tau^2 = E``:
 
@@ -96,7 +100,7 @@ def monotone_time(y_start, y_end, E, tau):
 
     (arcsinh for ``E > 0``, arccosh for ``E < 0``, ``ln`` for ``E = 0`` in one formula).
     """
-    def g(y):
-        y = np.abs(y)
-        return np.log(y + np.sqrt(np.maximum(y * y + E * tau * tau, 0.0)))
-    return tau * np.abs(g(y_end) - g(y_start))
+    def g(y: FloatOrArray) -> np.ndarray:
+        ay = np.abs(y)
+        return np.asarray(np.log(ay + np.sqrt(np.maximum(ay * ay + E * tau * tau, 0.0))))
+    return np.asarray(tau * np.abs(g(y_end) - g(y_start)))
