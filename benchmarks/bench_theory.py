@@ -1,6 +1,6 @@
 """Before/after timings of the report's exact theory (issue 10, "theory computed once").
 
-Run: ``.venv/bin/python benchmarks/bench_theory.py [--quick]``.  Each row prints the time of
+Run: ``.venv/bin/python benchmarks/bench_theory.py [--quick] [--only=15]``.  Each row prints the time of
 the old algorithm (still callable: ``mesh="uniform"``, per-w Legendre roots bracketed from
 k = 0, ``work_pdf(..., share=False)``), the new one, their ratio and the largest difference.
 
@@ -11,6 +11,9 @@ k = 0, ``work_pdf(..., share=False)``), the new one, their ratio and the largest
 3. work_pdf on 30 w over +-4 sd per window tau (Fig. 8 and OU, gamma = 10; the report's
    range): per-w contours -> shared contours; for OU also the error against the closed form.
 4. The theory cache: cold call, warm call (read from disk).
+5. work_pdf's contour generating function: eigen-decomposition (``propagator="eig"``) vs
+   batched Pade matrix exponential (``"expm"``, default) on the report's range, with the
+   load average printed (2 cores shared by other jobs: times are comparable only side by side).
 
 Differences at gamma >= 100 on the negative-w side are errors of the *old* uniform grid (its
 ground-state transform zone |v| <= tau_m (Delta + |a|) holds sliding states with
@@ -20,6 +23,7 @@ alone carries them: see tests/unit/test_theory_fast_paths.py.
 """
 from __future__ import annotations
 
+import os
 import sys
 import tempfile
 import time
@@ -121,12 +125,38 @@ def bench_cache():
     print(f"cold {cold:.2f} s, warm {warm * 1e3:.1f} ms")
 
 
-def main(quick=False):
-    bench_rate(quick)
-    bench_gamma(quick)
-    bench_pdf(quick)
-    bench_cache()
+def bench_propagator(quick):
+    print("\n5. work_pdf, 30 w over +-4 sd: contour G by eig + solve vs batched expm")
+    print(f"{'case':<18} {'eig [s]':>8} {'expm [s]':>8} {'eig/expm':>8} {'max rel diff':>12} "
+          f"{'err vs OU eig/expm':>18} {'load':>5}")
+    taus = (1.0,) if quick else (1.0, 2.0, 5.0, 10.0)
+    for name, m in (("Fig. 8", Model(1.0, 1.0, 0.5, 10.0)), ("OU", Model(1.0, 0.0, 0.5, 10.0))):
+        centre = float(ws.scgf_derivative(m, 0.0))
+        for tau in taus:
+            sd = float(np.sqrt(ws.work_variance(m, [tau])[0]))
+            w = np.linspace(centre - 4 * sd, centre + 4 * sd, 30)
+            load = os.getloadavg()[0]
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                old, t_old = _timed(ws.work_pdf, m, w, tau, propagator="eig")
+                new, t_new = _timed(ws.work_pdf, m, w, tau)
+            err = ""
+            if m.delta == 0:
+                ex = ou.work_pdf(m, w, tau)
+                err = f"{np.max(np.abs(old / ex - 1)):.1e}/{np.max(np.abs(new / ex - 1)):.1e}"
+            print(f"{name + f' tau={tau:g}':<18} {t_old:8.1f} {t_new:8.1f} {t_old / t_new:8.1f} "
+                  f"{np.max(np.abs(new / old - 1)):12.1e} {err:>18} {load:5.1f}")
+
+
+def main(quick=False, only=None):
+    sections = {"1": bench_rate, "2": bench_gamma, "3": bench_pdf, "4": lambda q: bench_cache(),
+                "5": bench_propagator}
+    for key, run in sections.items():
+        if only is None or key in only:
+            run(quick)
 
 
 if __name__ == "__main__":
-    main(quick="--quick" in sys.argv)
+    # --only=5 (or --only=35, ...) runs the listed sections
+    only = next((a.split("=", 1)[1] for a in sys.argv if a.startswith("--only=")), None)
+    main(quick="--quick" in sys.argv, only=only)

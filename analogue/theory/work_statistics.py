@@ -679,9 +679,10 @@ def work_pdf(model: Model, w, tau, *, h: float | None = None, modes: int = 48,
     for finite inputs; the (w, tau) of fallbacks are listed by :func:`recorded_fallbacks`, and a
     RuntimeWarning is issued when a fallback density exceeds 1e-8.
     Cost: per w, a Legendre root of the SCGF, two tridiagonal eigen-solves of ``modes``
-    vectors and 12-120 dense complex ``modes x modes`` eigen-decompositions per grid
-    (the y range adapts to the slowly decaying characteristic function of the stick regime);
-    BLAS is limited to one thread meanwhile.
+    vectors and 12-120 dense complex ``modes x modes`` matrix exponentials (or, with
+    ``propagator="eig"``, eigen-decompositions) per grid (the y range adapts to the slowly
+    decaying characteristic function of the stick regime); BLAS is limited to one thread
+    meanwhile.
 
     ``share=True`` (default) shares the expensive part across w: the contour abscissa k need
     not be each W's own saddle (any real k gives the same integral), so one contour ``k_c +
