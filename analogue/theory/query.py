@@ -10,9 +10,12 @@ that does not cross) are NaN in :attr:`TheoryTable.rows` with a reason in
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..model import Model
 
@@ -32,10 +35,10 @@ KINDS = ("exact", "weak-noise", "limit")
 @dataclass(frozen=True)
 class Quantity:
     name: str
-    options: tuple          # the options it needs, e.g. ("t", "v", "v0")
-    kinds: tuple            # the theories it offers (first = default); () = no choice
+    options: tuple[str, ...]   # the options it needs, e.g. ("t", "v", "v0")
+    kinds: tuple[str, ...]     # the theories it offers (first = default); () = no choice
     summary: str
-    optional: tuple = ()    # options it may use
+    optional: tuple[str, ...] = ()    # options it may use
 
     def default_kind(self) -> str | None:
         return self.kinds[0] if self.kinds else None
@@ -70,11 +73,12 @@ class TheoryTable:
 
     quantity: str
     kind: str | None
-    header: list
-    rows: list
-    reasons: dict = field(default_factory=dict)   # column -> why it can be NaN
+    header: list[str]
+    rows: list[list[Any]]
+    # column -> why it can be NaN (a text, or a function of the value giving one)
+    reasons: dict[str, str | Callable[[float], str]] = field(default_factory=dict)
 
-    def reason(self, column: str, value) -> str | None:
+    def reason(self, column: str, value: object) -> str | None:
         """Why ``value`` in ``column`` is missing (None when it is a finite number or text)."""
         if not isinstance(value, float) or math.isfinite(value):
             return None
@@ -83,13 +87,13 @@ class TheoryTable:
             return r(value) if callable(r) else r
         return "infinite" if math.isinf(value) else "undefined (not a number)"
 
-    def as_json(self, model: Model) -> dict:
+    def as_json(self, model: Model) -> dict[str, Any]:
         """Strict JSON data: every non-finite value becomes null, with its reason in the row's
         ``"null_reasons"``."""
         out = []
         for row in self.rows:
-            rec: dict = {}
-            why: dict = {}
+            rec: dict[str, Any] = {}
+            why: dict[str, str | None] = {}
             for col, val in zip(self.header, row):
                 if isinstance(val, float) and not math.isfinite(val):
                     rec[col] = None
@@ -105,8 +109,8 @@ class TheoryTable:
     def as_text(self) -> str:
         """Aligned columns (numbers right-aligned, text left-aligned); missing values are
         ``n/a`` with the reasons listed under the table."""
-        cells: list = []
-        notes: dict = {}
+        cells: list[list[str]] = []
+        notes: dict[str, None] = {}
         for row in self.rows:
             line = []
             for col, val in zip(self.header, row):
@@ -124,7 +128,7 @@ class TheoryTable:
         widths = [max([len(str(h))] + [len(c[j]) for c in cells])
                   for j, h in enumerate(self.header)]
 
-        def fmt(items):
+        def fmt(items: list[str]) -> str:
             return "  ".join(s.ljust(wd) if j in text_cols else s.rjust(wd)
                              for j, (s, wd) in enumerate(zip(items, widths))).rstrip()
 
@@ -134,7 +138,7 @@ class TheoryTable:
 
 
 # ------------------------------------------------------------------------- validation
-def _check(q: Quantity, kind, given: dict) -> str | None:
+def _check(q: Quantity, kind: str | None, given: dict[str, object]) -> str | None:
     if kind is None:
         kind = q.default_kind()
     elif not q.kinds:
@@ -153,7 +157,7 @@ def _check(q: Quantity, kind, given: dict) -> str | None:
     return kind
 
 
-def _floats(name, values) -> np.ndarray:
+def _floats(name: str, values: object) -> np.ndarray:
     arr = np.atleast_1d(np.asarray(values, dtype=float))
     if arr.ndim != 1 or arr.size == 0 or not np.all(np.isfinite(arr)):
         raise ValueError(f"{_OPTION_NAMES[name]} must be one or more finite numbers")
@@ -161,7 +165,7 @@ def _floats(name, values) -> np.ndarray:
 
 
 # ----------------------------------------------------------------------- weak noise
-def weak_noise_density(model: Model, v, t: float, v0: float) -> np.ndarray:
+def weak_noise_density(model: Model, v: ArrayLike, t: float, v0: float) -> np.ndarray:
     """The paper's saddle-point propagator ``exp(-gamma A(v, t | v0))`` (eq. (12)) at any
     velocities ``v`` (one is enough), normalised on an internal grid wide enough that the
     density at its edges is below 1e-12 of its peak (:func:`weak_noise.propagator` normalises
@@ -188,7 +192,7 @@ def weak_noise_density(model: Model, v, t: float, v0: float) -> np.ndarray:
 
 
 # ------------------------------------------------------------------------------ query
-def _boundary_reasons(model: Model, v0: float) -> dict:
+def _boundary_reasons(model: Model, v0: float) -> dict[str, str | Callable[[float], str]]:
     if abs(model.a) > model.delta:
         stick = (f"does not exist for |a| > Delta (slip regime: a = {model.a:g}, "
                  f"Delta = {model.delta:g}); the object never sticks")
@@ -201,25 +205,30 @@ def _boundary_reasons(model: Model, v0: float) -> dict:
             "w_cr": "exists only for |a| > Delta (slip regime) with v0 opposite the attractor"}
 
 
-def _path_reasons() -> dict:
+def _path_reasons() -> dict[str, str | Callable[[float], str]]:
     return {"t_cross": "this kind of path does not cross v = 0 once",
             "t_a": "this kind of path does not stick", "t_b": "this kind of path does not stick",
             "t_1": "this kind of path does not cross twice",
             "t_2": "this kind of path does not cross twice"}
 
 
-def theory_table(model: Model, quantity: str, *, v=None, t=None, v0=None, w=None, k=None,
-                 tau=None, points=None, kind=None) -> TheoryTable:
+def theory_table(model: Model, quantity: str, *, v: ArrayLike | None = None,
+                 t: ArrayLike | None = None, v0: float | None = None, w: ArrayLike | None = None,
+                 k: ArrayLike | None = None, tau: ArrayLike | None = None,
+                 points: int | None = None, kind: str | None = None) -> TheoryTable:
     """Answer one query (see :data:`QUANTITIES`); ``None`` means "not given"."""
     if not isinstance(model, Model):
         raise TypeError(f"model must be an analogue.Model, got {type(model).__name__}")
     if quantity not in QUANTITIES:
         raise ValueError(f"quantity must be one of {', '.join(QUANTITIES)}, got {quantity!r}")
     q = QUANTITIES[quantity]
-    given = {"v": v, "t": t, "v0": v0, "w": w, "k": k, "tau": tau, "points": points}
+    given: dict[str, object] = {"v": v, "t": t, "v0": v0, "w": w, "k": k, "tau": tau,
+                                "points": points}
     kind = _check(q, kind, given)
+    start = math.nan if v0 is None else v0  # _check refused a missing v0 where it is needed
 
-    def table(header, rows, reasons=None) -> TheoryTable:
+    def table(header: list[str], rows: list[list[Any]],
+              reasons: dict[str, str | Callable[[float], str]] | None = None) -> TheoryTable:
         return TheoryTable(quantity, kind, header, rows, reasons or {})
 
     if quantity == "stationary":
@@ -228,7 +237,7 @@ def theory_table(model: Model, quantity: str, *, v=None, t=None, v0=None, w=None
         return table(["quantity", "value"], [[key, float(val)] for key, val in d.items()])
     if quantity == "deterministic":
         times = _floats("t", t)
-        vals = np.atleast_1d(model.deterministic(v0, times))
+        vals = np.atleast_1d(model.deterministic(start, times))
         return table(["t", "v"], [[float(a), float(b)] for a, b in zip(times, vals)])
     if quantity in ("action", "path"):
         from . import weak_noise
@@ -255,16 +264,16 @@ def theory_table(model: Model, quantity: str, *, v=None, t=None, v0=None, w=None
         for tt in _floats("t", t):
             b = weak_noise.boundaries(model, tt, v0)
             rows.append([float(tt), float(b["w"]), float(b["u"]), float(b["w_cr"])])
-        return table(["t", "w", "u", "w_cr"], rows, _boundary_reasons(model, v0))
+        return table(["t", "w", "u", "w_cr"], rows, _boundary_reasons(model, start))
     if quantity == "propagator":
         grid = _floats("v", v)
         rows = []
         for tt in _floats("t", t):
             if kind == "weak-noise":
-                f = weak_noise_density(model, grid, tt, v0)
+                f = weak_noise_density(model, grid, tt, start)
             else:
                 from . import exact
-                f = exact.propagator(model, grid, tt, v0)
+                f = exact.propagator(model, grid, tt, start)
             rows += [[float(tt), float(a), float(b)] for a, b in zip(grid, np.ravel(f))]
         return table(["t", "v", f"f_{kind}"], rows)
     if quantity in ("rate-function", "fluctuation-relation"):
@@ -302,8 +311,10 @@ def theory_table(model: Model, quantity: str, *, v=None, t=None, v0=None, w=None
     return table(["w", "P_tau(w)"], [[float(a), float(b)] for a, b in zip(ws, vals)])
 
 
-def theory_rows(model: Model, quantity: str, *, v=None, t=None, v0=None, w=None, k=None,
-                tau=None, kind=None):
+def theory_rows(model: Model, quantity: str, *, v: ArrayLike | None = None,
+                t: ArrayLike | None = None, v0: float | None = None, w: ArrayLike | None = None,
+                k: ArrayLike | None = None, tau: ArrayLike | None = None,
+                kind: str | None = None) -> tuple[list[str], list[list[Any]]]:
     """``(header, rows)`` of :func:`theory_table` (kept for callers of the first version)."""
     tab = theory_table(model, quantity, v=v, t=t, v0=v0, w=w, k=k, tau=tau, kind=kind)
     return tab.header, tab.rows
