@@ -215,13 +215,16 @@ def test_paper_runs_the_paper_experiments_only(cli, monkeypatch, tmp_path):
     monkeypatch.chdir(tmp_path)
     seen = {}
 
-    def capture(names, out, opts, title):
-        seen["names"] = [Path(n).stem if isinstance(n, Path) else n for n in names]
+    def capture(names, out, opts, title, chapter=()):
+        stem = lambda n: Path(n).stem if isinstance(n, Path) else getattr(n, "name", n)
+        seen["names"] = [stem(n) for n in names]
+        seen["chapter"] = [stem(n) for n in chapter]
         return out / "index.html"
     monkeypatch.setattr(P, "build_report", capture)
     r = cli.invoke(main, ["paper", "--out", str(tmp_path / "o")])
     assert r.exit_code == 0, r.output
     assert seen["names"] == list(E.PAPER_EXPERIMENTS)
+    assert "mine" not in seen["chapter"]  # the user's circuits/ file is in neither part
 
 
 def test_report_default_out_for_a_path_is_report_name(cli, monkeypatch, tmp_path):
