@@ -68,7 +68,8 @@ from .netlist import Deck, build_deck
 
 __all__ = ["Experiment", "load_experiment", "experiment_from_dict", "regenerate_netlists",
            "netlist_path", "experiment_names", "standard_circuit", "resolve_experiment",
-           "model_keys", "circuit_keys", "PAPER_EXPERIMENTS", "CIRCUITS_DIR",
+           "model_keys", "circuit_keys", "PAPER_EXPERIMENTS", "PAPER_FIGURE_TAGS",
+           "FIG1_EXPERIMENTS", "OPEN_QUESTION_EXPERIMENTS", "CIRCUITS_DIR",
            "PACKAGE_CIRCUITS_DIR", "NETLISTS_DIR"]
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
@@ -83,6 +84,13 @@ PACKAGE_CIRCUITS_DIR = Path(__file__).resolve().parents[1] / "circuits"
 # model-family experiments (issue 9: cubic, stribeck, spring, shot) join here once the report
 # supports them ("Beyond the paper").
 PAPER_EXPERIMENTS = ("stick", "slip", "work")
+# Which of the paper's figures an experiment reproduces, where that is not read off its model:
+# the figure number in the file name of its prehistory figure (Fig. 2: stick, Figs. 3-4:
+# slip), the experiments whose noise-free motion makes up Fig. 1, and the experiment whose
+# work statistics open the paper's open question (Section V) in any report.
+PAPER_FIGURE_TAGS = {"stick": "2", "slip": "3-4"}
+FIG1_EXPERIMENTS = ("stick", "slip")
+OPEN_QUESTION_EXPERIMENTS = ("work",)
 
 _TOP_KEYS = {"name", "description", "model", "circuit", "experiment", "netlist", "report"}
 _EXPERIMENT_KEYS = {"v0", "replicas", "t_end", "sample_dt", "seed", "burn_in",

@@ -80,9 +80,12 @@ from typing import Any
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from scipy import optimize, special
+from scipy import optimize
 
 from ..model import Model
+# the stationary closed forms live with the stationary law (theory); re-exported here for
+# the mapping's callers (board, tests)
+from ..theory.stationary import CENTRAL_BIN, central_bin_bias, stationary_std  # noqa: F401
 from . import validation
 from .parts import IDEAL_IS, DiodePart, get_part, ideal_diode, thermal_voltage, PARTS
 from . import nonlinear as nl
@@ -840,45 +843,6 @@ def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
     return mapping
 
 
-CENTRAL_BIN = 0.1  # width of the reference histogram bin, in stationary standard deviations
-
-
-def _positive_part_moments(mu: float, s: float) -> tuple[float, float]:
-    """Mean and variance of N(mu, s^2) conditioned on > 0.  With alpha = -mu/s and the Mills
-    ratio lam = phi(alpha)/Phi(-alpha): mean = mu + s lam, var = s^2 (1 + alpha lam - lam^2);
-    for alpha > 40 that difference loses more than 6 digits and the asymptotic series
-    lam - alpha = 1/alpha - 2/alpha^3 + 10/alpha^5, var/s^2 = 1/alpha^2 - 6/alpha^4 + 50/alpha^6
-    is used instead (relative error < 2e-7)."""
-    alpha = -mu / s
-    if alpha > 40.0:
-        a2 = alpha * alpha
-        excess = (1.0 - 2.0 / a2 + 10.0 / a2**2) / alpha
-        return s * excess, s * s * (1.0 - 6.0 / a2 + 50.0 / a2**2) / a2
-    lam = math.sqrt(2.0 / math.pi) / float(special.erfcx(alpha / math.sqrt(2.0)))
-    return mu + s * lam, s * s * (1.0 + alpha * lam - lam * lam)
-
-
-def stationary_std(model: Model) -> float:
-    """Standard deviation of the exact (sgn-law) stationary law p_s ~ exp(-gamma U) (eq.
-    (6)), in closed form: on each half line p_s is a truncated Gaussian of variance
-    tau_m/gamma centred at (a - Delta) tau_m (v > 0) or (a + Delta) tau_m (v < 0).  In the stick
-    regime at weak noise it is ~ 1/(gamma (Delta - |a|)), far below sqrt(tau_m/gamma): the
-    scale the smoothing must be small against."""
-    tau, g, s = model.tau_m, model.gamma, model.velocity_scale
-    means, variances, logw = [], [], []
-    for sign, centre in ((1.0, (model.a - model.delta) * tau), (-1.0, (model.a + model.delta) * tau)):
-        mu = sign * centre  # the piece in y = sign * v > 0 is N(mu, s^2) truncated to y > 0
-        m, v = _positive_part_moments(mu, s)
-        means.append(sign * float(m))
-        variances.append(float(v))
-        logw.append(g * mu * mu / (2 * tau) + float(special.log_ndtr(mu / s)))
-    w = np.exp(np.array(logw) - max(logw))
-    w /= w.sum()
-    mean = float(np.dot(w, means))
-    second = float(np.dot(w, np.array(variances) + np.array(means) ** 2))
-    return math.sqrt(max(second - mean * mean, 0.0))
-
-
 def stationary_range(model: Model, level: float = SWING_LEVEL) -> tuple[float, float]:
     """The interval where the stationary density (eq. (6)) is within ``exp(-level)`` of its
     peak: ``gamma (U(v) - U_min) <= level``.  U is convex with ``U'' >= 1/tau_m``, so the ends
@@ -903,38 +867,6 @@ def stationary_range(model: Model, level: float = SWING_LEVEL) -> tuple[float, f
             # only when U - U_min is lost to rounding (gamma ~ 1e16 and more): the bound itself
             ends.append(a if fa >= 0 else b)
     return ends[0], ends[1]
-
-
-def central_bin_bias(model: Model, epsilon: float, std: float | None = None) -> float:
-    """``|P_eps(B) / P_0(B) - 1|`` for the central bin ``B = {|v| < b/2}``, ``b = 0.1``
-    stationary standard deviations, under the stationary law p_s ~ exp(-gamma U) (eq. (6))
-    with the smoothed (width ``epsilon``) and the exact sgn friction law: the bias of a
-    histogram at the finest resolution the experiments use, at v = 0 where smoothing acts.
-
-    ``U_eps - U_0 = Delta eps (ln(1 + e^{-2|v|/eps}) - ln 2)``: a constant (absorbed by the
-    normaliser) beyond ~20 eps, so only integrals over |v| < 20 eps are needed."""
-    if epsilon == 0 or model.delta == 0:
-        return 0.0
-    std = stationary_std(model) if std is None else std
-    exact = model.replace(epsilon=0.0)
-    gde = model.gamma * model.delta * epsilon
-
-    def h(v):  # exp(-gamma (U_eps - U_0) - gamma Delta eps ln 2)
-        return np.exp(-gde * np.log1p(np.exp(-2.0 * np.abs(v) / epsilon)))
-
-    # Normaliser ratio Z_eps/(Z_0 e^{gamma Delta eps ln2}) = 1 + R, R = E_0[h - 1]
-    span = 20.0 * epsilon
-    v = np.linspace(-span, span, 8001)
-    p0 = np.exp(-model.gamma * exact.potential(v) - exact.log_normaliser())
-    R = float(np.trapezoid(p0 * (h(v) - 1.0), v))
-    half = 0.5 * CENTRAL_BIN * std
-    v = np.linspace(-half, half, 4001)  # v = 0 is a node, so the kink of p_0 is on the grid
-    u0 = exact.potential(v)
-    # shifted by the bin's lowest U: in the slip regime at weak noise gamma U_0 is far below 0
-    # on the bin and exp(-gamma U_0) overflows; the ratio of integrals is unchanged.
-    g0 = np.exp(-model.gamma * (u0 - u0.min()))
-    ratio = float(np.trapezoid(g0 * h(v), v) / np.trapezoid(g0, v)) / (1.0 + R)
-    return abs(ratio - 1.0)
 
 
 def _check_part(m: CircuitMapping) -> None:

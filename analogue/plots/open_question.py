@@ -47,14 +47,21 @@ def open_question_data(a: float, half_range: float, gammas=GAMMAS, points=None, 
     return out
 
 
-def draw_open_question(outdir, points=None, gammas=GAMMAS, cache=None) -> list[Path]:
+def draw_open_question(outdir, points=None, gammas=GAMMAS, cache=None,
+                       data=None) -> list[Path]:
     """Write ``open_question_rate.png`` and ``open_question_fluctuation.png`` into outdir.
 
     ``gammas``: noise strengths of the exact curves (default 10, 100, 1000; the gamma = 1000
     curve no longer costs more than the others, so a quick report need not drop it).
     ``points``: optional
-    {gamma: number of w points}.  ``cache``: see :func:`open_question_data`.
+    {gamma: number of w points}.  ``cache``: see :func:`open_question_data`.  ``data``:
+    optional ``{(a, half_range): open_question_data(...)}`` for :data:`CASES`, computed
+    beforehand (the report computes it while ngspice runs); the figure then only draws.
+
+    The paper's I(w) is drawn with the report's one convention at w = 0, the Filippov value
+    (:func:`analogue.theory.weak_noise.rate_function`), as in Fig. 8.
     """
+    from ..theory import weak_noise
     outdir = Path(outdir)
     gammas = tuple(float(g) for g in gammas)
     if not gammas or any(not (g > 0 and np.isfinite(g)) for g in gammas):
@@ -66,14 +73,15 @@ def draw_open_question(outdir, points=None, gammas=GAMMAS, cache=None) -> list[P
         fine = np.linspace(-half, half, 2001)
         fine = fine[fine != 0]
         pos = fine[fine > 0]
-        data = open_question_data(a, half, gammas=gammas, points=points, cache=cache)
-        for g, (w, I) in data.items():
+        curves = (data[(a, half)] if data is not None
+                  else open_question_data(a, half, gammas=gammas, points=points, cache=cache))
+        for g, (w, I) in curves.items():
             ax_i.plot(w, I, "o-", ms=2.5, lw=1, color=_COLOURS.get(g), label=f"exact, gamma = {g:g}")
             # w grids are symmetric: I(-w) is the reversed array.
             m = w > 0
             ax_f.plot(w[m], I[::-1][m] - I[m], "o-", ms=2.5, lw=1, color=_COLOURS.get(g),
                       label=f"exact, gamma = {g:g}")
-        paper = ws.paper_rate_function(model, fine)
+        paper = np.asarray(weak_noise.rate_function(model, fine))
         lim = ws.weak_noise_limit_rate_function(model, fine)
         ax_i.plot(fine[fine < 0], paper[fine < 0], "k--", lw=1.2, label="paper eq. (64)")
         ax_i.plot(fine[fine > 0], paper[fine > 0], "k--", lw=1.2)

@@ -16,9 +16,11 @@ from ..circuit.mapping import map_model
 from ..theory.exact import sample_stationary
 from .budget import SE_MULTIPLIER, held_noise_pair
 from .metrics import Budget, compare
-from .observables import (exact_stationary, exact_transition, histogram_chi2, tname, jackknife, jackknife_difference,
-                          stationary_values, subset, transition_values, weak_noise_transition)
+from ..estimators.resampling import jackknife, jackknife_difference, subset
+from ..study.seeds import SeedPlan
+from ..study.catalogue import Kind, stationary_values, transition_observables, transition_values
 from .runs import ExperimentRuns
+from .theory_curves import ExperimentTheory, FigureCurves, experiment_theory
 
 __all__ = ["ExperimentAnalysis", "analyse", "MC_REPLICAS", "MC_STATIONARY_REPLICAS"]
 
@@ -36,6 +38,9 @@ class ExperimentAnalysis:
     circuit: dict = field(default_factory=dict)   # observable -> (value, se)
     exact: dict = field(default_factory=dict)     # observable -> exact value (ideal model)
     exact_eff: dict = field(default_factory=dict)  # ... at the circuit's epsilon
+    # every theory value and curve, computed once (report.theory_curves): the figures draw them
+    theory: ExperimentTheory | None = None
+    curves: FigureCurves | None = None
 
     def summary(self) -> dict:
         n = len(self.comparisons)
@@ -44,9 +49,9 @@ class ExperimentAnalysis:
         return {"comparisons": n, "within_budget": ok, "abs_z_below_3": z_ok}
 
 
-def _prob_floor(name: str, value: float, se: float, n: int) -> float:
+def _prob_floor(kind: Kind, value: float, se: float, n: int) -> float:
     """A probability estimated as 0 or 1 from n samples still has an error ~ 1/n."""
-    if name.startswith("P(") and n > 0:
+    if kind.probability and n > 0:
         p = (value * n + 1) / (n + 2)
         return max(se, math.sqrt(p * (1 - p) / n))
     return se
@@ -57,39 +62,41 @@ def _bias(pair_diffs: dict, name: str) -> float:
     return abs(d) + SE_MULTIPLIER * se
 
 
-def analyse(runs: ExperimentRuns, *, progress=None) -> ExperimentAnalysis:
+def analyse(runs: ExperimentRuns, *, theory: ExperimentTheory | None = None, progress=None,
+            cache=None) -> ExperimentAnalysis:
+    """Every comparison of one experiment.  ``theory``: its circuit-free theory
+    (:func:`~analogue.report.theory_curves.experiment_theory`, computed here if not given;
+    the pipeline computes it while ngspice runs)."""
     exp, st = runs.exp, runs.settings
     model = exp.model
     mapping = map_model(model, exp.spec)
     model_eff = mapping.model_effective
     noise_dt = mapping.noise_dt
-    res = ExperimentAnalysis(runs)
-    # one Fokker-Planck spacing for the ideal and the smoothed model (see exact_transition)
-    h = model_eff.epsilon / 2 if model_eff.epsilon > 0 else None
     tick = progress or (lambda *_: None)
+    if theory is None:
+        theory = experiment_theory(exp, st, cache=cache, progress=progress)
+    res = ExperimentAnalysis(runs, theory=theory)
+    seeds = SeedPlan(exp.seed)
 
     # ---------------------------------------------------------------- transition runs
     times = [t for t in exp.histogram_times]
-    weak = {}
     for i, (v0, ens) in enumerate(runs.transition.items()):
         tick(f"{exp.name}: transition from v0={v0:g}")
         fn = lambda e, v0=v0: transition_values(e, v0, times)
         circ = jackknife(fn, ens)
         n = ens.replicas
-        circ = {k: (v, _prob_floor(k, v, se, n)) for k, (v, se) in circ.items()}
-        ex = exact_transition(model, v0, times, h=h)
-        dens: dict = {}
-        ex_eff = exact_transition(model_eff, v0, times, h=h, densities=dens)
+        th = theory.transition[v0]
+        entries = {o.label: o.entry for o in transition_observables(v0, times)}
+        circ = {k: (v, _prob_floor(entries[k], v, se, n)) for k, (v, se) in circ.items()}
+        ex, ex_eff, weak = th.exact, th.exact_eff, th.weak
         held, white = held_noise_pair(model_eff, v0=v0, t_end=max(times), replicas=MC_REPLICAS,
-                                      seed=1000 * exp.seed + 600 + i, noise_dt=noise_dt,
+                                      seed=seeds.mc_transition(i), noise_dt=noise_dt,
                                       sample_dt=exp.sample_dt)
         band = jackknife_difference(fn, held, white)
         integ = {}
         if i == 0:
             chk = runs.check_transition
             integ = jackknife_difference(fn, chk, subset(ens, np.arange(chk.replicas)))
-        if model.delta > 0:
-            weak.update(weak_noise_transition(model, v0, times))
         for k, (val, se) in circ.items():
             b = Budget(smoothing=ex_eff[k] - ex[k], bandwidth=_bias(band, k),
                        integration=_bias(integ, k) if integ else 0.0)
@@ -97,7 +104,7 @@ def analyse(runs: ExperimentRuns, *, progress=None) -> ExperimentAnalysis:
             res.circuit[k], res.exact[k], res.exact_eff[k] = (val, se), ex[k], ex_eff[k]
             note = "" if integ else "integration checked on the first v0 only"
             res.comparisons.append(compare(exp.name, k, val, se, ex[k], "exact", b, note))
-            if k in weak and k.startswith("mean v"):
+            if k in weak and entries[k].compare_weak_noise:
                 bw = Budget(smoothing=b.smoothing, bandwidth=b.bandwidth, integration=b.integration,
                             finite_noise=ex[k] - weak[k])
                 res.comparisons.append(compare(
@@ -105,29 +112,27 @@ def analyse(runs: ExperimentRuns, *, progress=None) -> ExperimentAnalysis:
                     "saddle-point propagator (eqs. (46)-(51)) normalised on a grid; "
                     "finite_noise = exact(gamma) - weak-noise"))
 
-        for t, f in zip(times, dens["f"]):
-            chi2, dof = histogram_chi2(ens.at(t), dens["v"], f)
+        for o, f in zip(transition_observables(v0, times, fit_tests=True), th.f_exact_eff):
+            value, se = o.entry.estimator(ens.at(o.t), th.v_eff, f)
+            dof = round(2.0 / se ** 2)
             res.comparisons.append(compare(
-                exp.name, tname("histogram chi2/dof", t, v0), chi2 / dof, math.sqrt(2.0 / dof),
-                1.0, "exact", Budget(),
+                exp.name, o.label, value, se, o.entry.exact(), "exact", Budget(),
                 f"Pearson chi^2 of the {ens.replicas} circuit velocities against the exact "
                 f"f(v, t | v0) at the circuit's epsilon, {dof + 1} equal-probability bins"))
 
     # ---------------------------------------------------------------- stationary run
     tick(f"{exp.name}: stationary observables")
     ens = runs.stationary
-    thr = st.stick_threshold * model.velocity_scale
-    taus = [tau for tau in exp.work_taus
-            if tau <= st.stationary_t_end - st.stationary_burn_in - 1e-9]
+    thr = theory.threshold
+    taus = list(theory.taus)
     stationary_fn = lambda e: stationary_values(e, burn_in=st.stationary_burn_in, threshold=thr,
                                                 force=model.force, taus=taus)
     circ = jackknife(stationary_fn, ens)
-    ex = exact_stationary(model, threshold=thr, taus=taus, h=h)
-    ex_eff = exact_stationary(model_eff, threshold=thr, taus=taus, h=h)
-    v0_mc = sample_stationary(model_eff, MC_STATIONARY_REPLICAS, 1000 * exp.seed + 701)
+    ex, ex_eff = theory.stationary, theory.stationary_eff
+    v0_mc = sample_stationary(model_eff, MC_STATIONARY_REPLICAS, seeds.mc_stationary_v0)
     tick(f"{exp.name}: held-noise Monte Carlo pair")
     held, white = held_noise_pair(model_eff, v0=v0_mc, t_end=st.stationary_t_end,
-                                  replicas=v0_mc.size, seed=1000 * exp.seed + 700, noise_dt=noise_dt,
+                                  replicas=v0_mc.size, seed=seeds.mc_stationary, noise_dt=noise_dt,
                                   sample_dt=exp.sample_dt)
     band = jackknife_difference(stationary_fn, held, white)
     chk = runs.check_stationary

@@ -1,8 +1,11 @@
 """The paper's figures with circuit data on them (and the figures only a circuit can add).
 
-Each function takes the runs / analysis of one experiment, draws theory with the functions of
-:mod:`analogue.plots.paper_theory` and the theory modules, overlays circuit estimates with
-their error bands, and writes one PNG; it returns ``(path, caption)``.
+Each function takes the analysis of one experiment (:class:`~analogue.report.comparisons.
+ExperimentAnalysis`), draws the theory curves computed once with it
+(:mod:`analogue.report.theory_curves`: no theory is computed here), overlays circuit estimates
+with their error bands, and writes one PNG; it returns ``(path, caption)``.  The paper's
+I(w) is drawn with one convention at w = 0 everywhere: the Filippov value
+``max(|a| - Delta, 0)^2/4`` (:func:`analogue.theory.weak_noise.rate_function`).
 """
 from __future__ import annotations
 
@@ -11,12 +14,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ..estimators import (empirical_rate_function, fluctuation_ratio, prehistory,
-                          stationary_density, transition_density, work_distribution)
+from ..estimators import empirical_rate_function, fluctuation_ratio, prehistory, transition_density
 from ..model import Model
 from ..plots.style import KIND_COLOURS, TIME, VELOCITY, new_figure, save
 from .comparisons import ExperimentAnalysis
 from .runs import ExperimentRuns
+from .theory_curves import propagator_times
 
 __all__ = ["fig_deterministic", "fig_prehistory", "fig_propagator", "fig_stationary",
            "fig_work_paths", "fig_rate_function", "fig_budget",
@@ -67,26 +70,20 @@ def fig_deterministic(all_runs: list, out: Path):
 
 
 # ------------------------------------------------------------------------- Figs. 2-5
-def fig_prehistory(runs: ExperimentRuns, out: Path, tag: str):
+def fig_prehistory(analysis: ExperimentAnalysis, out: Path, tag: str):
     """Optimal paths (eqs. (16) ... (36)) against the circuit's prehistory: the paths of
     the transition run from v0[0] that end in a window around (v, t)."""
-    from ..theory import weak_noise
-
-    targets = [p if len(p) == 3 else (runs.exp.v0[0],) + tuple(p) for p in runs.settings.prehistory]
-    if not targets:
+    runs = analysis.runs
+    paths = analysis.curves.get("prehistory")
+    if not paths:
         return None
-    m = runs.exp.model
-    n = len(targets)
+    n = len(paths)
     ncols = 2 if n == 4 else min(n, 3)
     nrows = -(-n // ncols)
     fig, axes = new_figure(nrows, ncols, squeeze=False)
     lines = []
-    for ax, (v0, v, t) in zip(axes.ravel(), targets):
-        if v0 not in runs.transition:
-            raise ValueError(f"{runs.exp.name}: report.prehistory starts at v0={v0:g}, which is "
-                             f"not one of experiment.v0 = {list(runs.transition)}")
+    for ax, ((v0, v, t), p) in zip(axes.ravel(), paths):
         ens = runs.transition[v0]
-        p = weak_noise.optimal_path(m, v, t, v0, n=600)
         colour = KIND_COLOURS.get(p.kind, "k")
         try:
             ph = prehistory(ens, v, t, runs.settings.prehistory_window, v_bins=60,
@@ -141,29 +138,26 @@ def fig_boundaries(runs: ExperimentRuns, out: Path):
 
 
 # ------------------------------------------------------------------------------ Fig. 6
-def fig_propagator(runs: ExperimentRuns, out: Path, v0: float | None = None):
-    """Paper Fig. 6: f(v, t | v0) at four times: weak-noise, exact, circuit histogram."""
-    from ..theory import exact, weak_noise
-
+def fig_propagator(analysis: ExperimentAnalysis, out: Path, v0: float | None = None):
+    """Paper Fig. 6: f(v, t | v0) at four times: weak-noise, exact, circuit histogram.  The
+    exact and weak-noise densities are those the comparisons used (one computation)."""
+    runs = analysis.runs
     m = runs.exp.model
     v0 = runs.exp.v0[0] if v0 is None else v0
     ens = runs.transition[v0]
-    times = list(runs.exp.histogram_times)
-    if len(times) > 4:
-        times = [times[0], times[len(times) // 3], times[2 * len(times) // 3], times[-1]]
+    th = analysis.theory.transition[v0]
+    times = propagator_times(th.times)
+    rows = [th.times.index(t) for t in times]
+    v = th.v
+    f_exact = th.f_exact[rows]
     fig, axes = new_figure(2, len(times), squeeze=False, width=4.0, height=3.2)
-    grid_lo = min(v0, m.potential_minimum()) - 6 * m.velocity_scale
-    grid_hi = max(v0, m.potential_minimum()) + 6 * m.velocity_scale
-    v = np.linspace(grid_lo, grid_hi, 1201)
-    v = np.unique(np.concatenate([v, [0.0]]))
-    f_exact = np.atleast_2d(exact.propagator(m, v, np.array(times), v0))
     for j, t in enumerate(times):
         sample = ens.at(t)
         pad = 0.5 * m.velocity_scale
         lo, hi = float(sample.min()) - pad, float(sample.max()) + pad
         d = transition_density(ens, t, bins=30, range=(lo, hi))
         occupied = d.counts > 0
-        f_weak = np.asarray(weak_noise.propagator(m, v, t, v0)) if m.delta > 0 else None
+        f_weak = th.f_weak[rows[j]] if th.f_weak is not None else None
         for row, log in enumerate((False, True)):
             ax = axes[row, j]
             band_lo = np.where(occupied | (row == 0), d.lower, np.nan)
@@ -196,17 +190,14 @@ def fig_propagator(runs: ExperimentRuns, out: Path, v0: float | None = None):
                   "Wilson band.")
 
 
-def fig_stationary(runs: ExperimentRuns, out: Path):
-    m = runs.exp.model
-    st = runs.settings
-    d = stationary_density(runs.stationary, burn_in=st.stationary_burn_in, bins=50)
-    v = np.unique(np.concatenate([np.linspace(d.edges[0], d.edges[-1], 800), [0.0]]))
-    v = v[(v >= d.edges[0]) & (v <= d.edges[-1])]
+def fig_stationary(analysis: ExperimentAnalysis, out: Path):
+    runs = analysis.runs
+    d, v, p_s = analysis.curves.get("stationary law")
     fig, axes = new_figure(1, 2, squeeze=False)
     for ax, log in zip(axes.ravel(), (False, True)):
         ax.fill_between(d.centres, d.lower, d.upper, step="mid", color=CIRCUIT, alpha=0.25)
         ax.step(d.centres, d.density, where="mid", color=CIRCUIT, label="circuit (95 % band)")
-        ax.plot(v, m.stationary_pdf(v), color=EXACT, label="$p_s \\propto e^{-\\gamma U}$ (eq. (6))")
+        ax.plot(v, p_s, color=EXACT, label="$p_s \\propto e^{-\\gamma U}$ (eq. (6))")
         if log:
             ax.set_yscale("log")
         ax.set_xlabel(VELOCITY)
@@ -220,44 +211,21 @@ def fig_stationary(runs: ExperimentRuns, out: Path):
 
 
 # ------------------------------------------------------------------------------ Fig. 7
-def _windows_with_rate(ens, tau, force, w_target, half_width, burn_in):
-    """Velocity segments of the windows [s, s + tau] whose work rate is within half_width of
-    w_target (one segment per replica at most, the first, so the segments are independent)."""
-    dt = ens.dt
-    k = int(round(tau / dt))
-    i0 = int(round(burn_in / dt))
-    starts = np.arange(i0, ens.t.size - k)
-    w = force * (ens.x[:, starts + k] - ens.x[:, starts]) / (k * dt)
-    hit = np.abs(w - w_target) < half_width
-    rows = np.flatnonzero(hit.any(axis=1))
-    first = starts[np.argmax(hit[rows], axis=1)]
-    idx = first[:, None] + np.arange(k + 1)[None, :]
-    return np.arange(k + 1) * dt, ens.v[rows[:, None], idx]
-
-
-def fig_work_paths(runs: ExperimentRuns, out: Path):
+def fig_work_paths(analysis: ExperimentAnalysis, out: Path):
     """Paper Fig. 7: work-optimal paths against circuit windows of the same work rate."""
-    from ..theory.weak_noise_work import work_optimal_path
-
-    targets = runs.settings.work_paths
-    if not targets:
+    runs = analysis.runs
+    items = analysis.curves.get("work paths")
+    if not items:
         return None
     m = runs.exp.model
-    fig, axes = new_figure(1, len(targets), squeeze=False)
+    fig, axes = new_figure(1, len(items), squeeze=False)
     notes = []
-    for ax, (w, tau) in zip(axes.ravel(), targets):
-        half = 0.1 * max(abs(w), m.force * m.velocity_scale)
-        s, seg = _windows_with_rate(runs.stationary, tau, m.force, w, half,
-                                    runs.settings.stationary_burn_in)
+    for ax, ((w, tau), s, seg, p) in zip(axes.ravel(), items):
         if seg.shape[0] >= 5:
             lo, hi = np.quantile(seg, [0.1, 0.9], axis=0)
             ax.fill_between(s, lo, hi, color=CIRCUIT, alpha=0.2, label="circuit 10-90 %")
             ax.plot(s, seg.mean(axis=0), color=CIRCUIT, lw=1.5,
                     label=f"circuit mean ({seg.shape[0]} windows)")
-            v0, v1 = float(np.median(seg[:, 0])), float(np.median(seg[:, -1]))
-        else:
-            v0 = v1 = w / m.force
-        p = work_optimal_path(m, w, tau, v0, v1, n=600)
         ax.plot(p.s, p.v, color=EXACT, lw=2, label="work-optimal path (eq. (60))")
         ax.axhline(w / m.force, color="0.3", ls="--", lw=1, label="$\\tilde v_w$ = w/(m a) (eq. (63))")
         ax.axhline(0, color="0.7", lw=0.7)
@@ -279,62 +247,26 @@ def fig_work_paths(runs: ExperimentRuns, out: Path):
 
 
 # ------------------------------------------------------------------------------ Figs. 8-9
-def _work_dists(runs: ExperimentRuns):
-    m = runs.exp.model
-    st = runs.settings
-    out = {}
-    for tau in runs.exp.work_taus:
-        if tau > st.stationary_t_end - st.stationary_burn_in - 1e-9:
-            continue
-        out[tau] = work_distribution(runs.stationary, tau, m.force, bins=41,
-                                     burn_in=st.stationary_burn_in)
-    return out
-
-
-def _finite_tau_pdfs(model, dists, min_replicas=10):
-    """Exact finite-tau work densities on the bin centres the circuit estimates use, one call
-    per tau: {tau: {w: density}}.  The fluctuation ratio pairs bins that both have data, so
-    its -w are among these centres too (the bins are symmetric about 0)."""
-    import warnings
-    from ..theory import exact
-    out = {}
-    for tau, d in dists.items():
-        w = d.centres[d.contributing >= min_replicas]
-        with warnings.catch_warnings():
-            # work_pdf warns where it falls back to the large-deviation form (far tails, ln p
-            # right to O(1)); only bins the circuit reaches are evaluated here
-            warnings.simplefilter("ignore", RuntimeWarning)
-            p = np.asarray(exact.work_pdf(model, w, tau))
-        out[tau] = dict(zip(np.round(w, 12), p))
-    return out
-
-
 def _lookup(table, w):
     return np.array([table.get(x, np.nan) for x in np.round(np.asarray(w), 12)])
 
 
-def fig_rate_function(runs: ExperimentRuns, out: Path):
+def fig_rate_function(analysis: ExperimentAnalysis, out: Path):
     """Paper Fig. 8 with circuit data: I(w) of eq. (64), the exact I_gamma(w), the weak-noise
     limit, the finite-tau exact -ln P_tau(w)/(tau gamma) and the circuit's estimate."""
-    from ..theory import exact, weak_noise
-    from ..theory.work_statistics import weak_noise_limit_rate_function
-
-    m = runs.exp.model
-    dists = _work_dists(runs)
-    if not dists or m.a == 0:
+    runs = analysis.runs
+    rc = analysis.curves.get("rate function")
+    if rc is None:
         return None
-    finite = _finite_tau_pdfs(m, dists)
-    w_all = np.concatenate([d.centres for d in dists.values()])
-    wmax = float(np.max(np.abs(w_all)))
-    w = np.linspace(-wmax, wmax, 61)
+    m = runs.exp.model
+    w, paper, dists, finite = rc.w, rc.paper, rc.dists, rc.finite
     fig, axes = new_figure(1, 2, squeeze=False, width=5.5)
     ax = axes[0, 0]
-    paper = np.asarray(weak_noise.rate_function(m, w))
     ax.plot(w[w < 0], paper[w < 0], color=WEAK, ls="--", lw=1.5, label="paper I(w) (eq. (64))")
     ax.plot(w[w > 0], paper[w > 0], color=WEAK, ls="--", lw=1.5)
-    ax.plot(w, weak_noise_limit_rate_function(m, w), color="tab:purple", lw=1.2, ls="-.",
+    ax.plot(w, rc.limit, color="tab:purple", lw=1.2, ls="-.",
             label="$\\gamma\\to\\infty$ limit (convex hull)")
-    ax.plot(w, exact.rate_function(m, w), color=EXACT, lw=1.8,
+    ax.plot(w, rc.exact, color=EXACT, lw=1.8,
             label=f"exact $I_\\gamma$ ($\\tau\\to\\infty$, $\\gamma$={m.gamma:g})")
     colours = ["tab:red", "tab:orange", "tab:green", "tab:brown", "tab:pink"]
     for (tau, d), c in zip(dists.items(), colours):
@@ -350,10 +282,9 @@ def fig_rate_function(runs: ExperimentRuns, out: Path):
     ax.legend(fontsize=7)
     ax = axes[0, 1]
     wp = w[w > 0]
-    ax.plot(wp, np.asarray(weak_noise.fluctuation_relation(m, wp)), color=WEAK, ls="--",
+    ax.plot(wp, rc.paper_fr, color=WEAK, ls="--",
             label="paper (eq. (67))")
-    ax.plot(wp, np.asarray(exact.rate_function(m, -wp)) - np.asarray(exact.rate_function(m, wp)),
-            color=EXACT, label="exact $I_\\gamma(-w)-I_\\gamma(w)$")
+    ax.plot(wp, rc.exact_fr, color=EXACT, label="exact $I_\\gamma(-w)-I_\\gamma(w)$")
     for (tau, d), c in zip(dists.items(), colours):
         fr = fluctuation_ratio(d, tau, m.gamma)
         ax.errorbar(fr.w, fr.ratio, yerr=fr.stderr, fmt="o", ms=3, color=c, capsize=2,
@@ -368,7 +299,8 @@ def fig_rate_function(runs: ExperimentRuns, out: Path):
     path = save(fig, out / f"fig8_9_work_{runs.exp.name}.png")
     return path, ("Rate function and fluctuation relation of the work rate (paper Figs. 8 and 9). "
                   "Blue dashed: the paper's weak-noise formulas (eqs. (64), (67)) with the jump "
-                  "at w = 0; purple: the gamma -> infinity limit of the exact rate function "
+                  "at w = 0 (where eq. (64) is ambiguous, this report uses the Filippov value "
+                  "I(0) = max(|a| - Delta, 0)^2/4, the cheapest way of holding v = 0); purple: the gamma -> infinity limit of the exact rate function "
                   "(the convex hull, continuous at w = 0); black: exact I_gamma at this gamma "
                   "(tilted generator, Legendre transform); thin coloured lines: exact finite-tau "
                   "densities (-ln P_tau(w)/(tau gamma), shifted); points: circuit, errors from the "
@@ -377,8 +309,10 @@ def fig_rate_function(runs: ExperimentRuns, out: Path):
 
 # ------------------------------------------------------------------------- error budget
 def fig_budget(analysis: ExperimentAnalysis, out: Path):
+    from ..study.catalogue import find
     comps = [c for c in analysis.comparisons
-             if c.theory_kind == "exact" and not c.observable.startswith("histogram chi2")]
+             if c.theory_kind == "exact"
+             and not ((o := find(c.observable)) is not None and o.entry.fit_test)]
     if not comps:
         return None
     names = [c.observable for c in comps]

@@ -18,18 +18,22 @@ import json
 import logging
 import os
 import platform
-import sys
 import time
 import traceback
+from concurrent.futures import Future
+from contextlib import contextmanager
 from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
 
 import numpy as np
 
-from ..circuit.experiments import PAPER_EXPERIMENTS, Experiment, load_experiment, standard_circuit
+from ..circuit.experiments import (FIG1_EXPERIMENTS, OPEN_QUESTION_EXPERIMENTS,
+                                   PAPER_EXPERIMENTS, PAPER_FIGURE_TAGS, Experiment,
+                                   load_experiment, standard_circuit)
 from . import figures as F
 from .comparisons import ExperimentAnalysis, analyse
+from .theory_curves import ExperimentTheory, experiment_theory, figure_curves
 from .html import Figure, Section, Table, write_page
 from .metrics import validate_metrics
 from .plan import RunOptions
@@ -83,6 +87,34 @@ def _log(msg: str) -> None:
     """Progress of the report job, on the ``analogue.report.pipeline`` logger (the command line
     shows it on stderr with the time since the command started: see analogue.cli)."""
     log.info(msg)
+
+
+class _Phases:
+    """Wall time per phase of a report (logged, and recorded in the provenance).  Phases in
+    the theory thread overlap with the circuit runs, so the phases sum to more than the wall
+    time when the overlap works."""
+
+    def __init__(self, origin: float | None = None):
+        self.items: list[dict] = []
+        self.origin = time.perf_counter() if origin is None else origin
+
+    @contextmanager
+    def __call__(self, phase: str, experiment: str | None = None, thread: str = "main"):
+        t0 = time.perf_counter()
+        try:
+            yield
+        finally:
+            dt = time.perf_counter() - t0
+            self.items.append({"phase": phase, "experiment": experiment, "thread": thread,
+                               "start_s": round(t0 - self.origin, 3), "seconds": round(dt, 3)})
+            _log(f"phase done: {phase}{f' ({experiment})' if experiment else ''} "
+                 f"[{thread}]: {dt:.1f} s")
+
+    def totals(self) -> dict:
+        out: dict = {}
+        for it in self.items:
+            out[it["phase"]] = round(out.get(it["phase"], 0.0) + it["seconds"], 3)
+        return out
 
 
 @dataclass
@@ -195,19 +227,21 @@ def _software() -> dict:
 def _figures_for(runs: ExperimentRuns, analysis: ExperimentAnalysis, out: Path,
                  fails: _Failures, section: str) -> tuple[list, list]:
     """The experiment's figures; one that fails is recorded and the others are kept.
+    They only draw: every theory curve is in ``analysis`` (computed once).
     Returns (figures, errors)."""
     items, errors = [], []
-    tag = {"stick": "2", "slip": "3-4"}.get(runs.exp.name, "paths")
+    a = analysis
+    tag = PAPER_FIGURE_TAGS.get(runs.exp.name, "paths")
     for what, fn in (
-            ("prehistory", lambda: F.fig_prehistory(runs, out, tag)),
+            ("prehistory", lambda: F.fig_prehistory(a, out, tag)),
             ("boundaries", lambda: F.fig_boundaries(runs, out)),
-            ("propagator", lambda: F.fig_propagator(runs, out)),
-            ("propagator", lambda: F.fig_propagator(runs, out, runs.exp.v0[-1])
+            ("propagator", lambda: F.fig_propagator(a, out)),
+            ("propagator", lambda: F.fig_propagator(a, out, runs.exp.v0[-1])
              if len(runs.exp.v0) > 1 else None),
-            ("stationary law", lambda: F.fig_stationary(runs, out)),
-            ("work paths", lambda: F.fig_work_paths(runs, out)),
-            ("rate function", lambda: F.fig_rate_function(runs, out)),
-            ("error budget", lambda: F.fig_budget(analysis, out))):
+            ("stationary law", lambda: F.fig_stationary(a, out)),
+            ("work paths", lambda: F.fig_work_paths(a, out)),
+            ("rate function", lambda: F.fig_rate_function(a, out)),
+            ("error budget", lambda: F.fig_budget(a, out))):
         _log(f"{runs.exp.name}: figure: {what}")
         r, err = fails.attempt(section, f"figure: {what}", fn, runs.exp.name)
         if err is not None:
@@ -217,10 +251,25 @@ def _figures_for(runs: ExperimentRuns, analysis: ExperimentAnalysis, out: Path,
     return items, errors
 
 
-def _open_question_section(out: Path, opts: RunOptions) -> Section:
+def _open_question_gammas(opts: RunOptions) -> tuple:
+    return (10.0, 100.0) if opts.quick else (10.0, 100.0, 1000.0)
+
+
+def _open_question_data(opts: RunOptions) -> dict:
+    """The exact curves of the open question (no circuit data: computed while ngspice runs)."""
+    from ..plots.open_question import CASES, open_question_data
+    return {(a, half): open_question_data(a, half, gammas=_open_question_gammas(opts))
+            for a, half in CASES}
+
+
+def _open_question_section(out: Path, opts: RunOptions, data=None) -> Section:
+    """``data``: the exact curves (:func:`_open_question_data`), or a Future of them (computed
+    while ngspice ran), or None (computed here)."""
     from ..plots.open_question import draw_open_question
-    gammas = (10.0, 100.0) if opts.quick else (10.0, 100.0, 1000.0)
-    paths = draw_open_question(out, gammas=gammas)
+    gammas = _open_question_gammas(opts)
+    if isinstance(data, Future):
+        data = data.result()
+    paths = draw_open_question(out, gammas=gammas, data=data)
     text = [
         "The paper finds a jump of the rate function I(w) at w = 0 (eq. (64)) and cannot tell "
         "whether it is real. The exact rate function at finite noise, I_gamma(w) = "
@@ -242,6 +291,59 @@ def _open_question_section(out: Path, opts: RunOptions) -> Section:
                    figures=[Figure(p, caps[i] if i < len(caps) else "") for i, p in enumerate(paths)])
 
 
+class _TheoryThread:
+    """One background thread for the theory, which needs no circuit data (issue 10, item 4).
+
+    ngspice runs as subprocesses and the main thread mostly waits for them, so the theory
+    runs beside them; BLAS/LAPACK are limited to one thread meanwhile (threadpoolctl), so the
+    theory adds one runnable thread, not one per core.  The thread is a daemon: an interrupt
+    does not wait for the theory step under way."""
+
+    def __init__(self, phases: _Phases):
+        import queue
+        import threading
+        self.phases = phases
+        self.queue: queue.Queue = queue.Queue()
+        self.thread = threading.Thread(target=self._run, name="analogue-theory", daemon=True)
+        self.thread.start()
+
+    def _run(self):
+        from threadpoolctl import threadpool_limits
+        with threadpool_limits(1):
+            while True:
+                item = self.queue.get()
+                if item is None:
+                    return
+                fut, phase, experiment, fn = item
+                if not fut.set_running_or_notify_cancel():
+                    continue
+                try:
+                    with self.phases(phase, experiment, thread="theory"):
+                        fut.set_result(fn())
+                except BaseException as exc:  # handed to whoever waits for the result
+                    fut.set_exception(exc)
+
+    def submit(self, phase: str, experiment: str | None, fn) -> Future:
+        fut: Future = Future()
+        self.queue.put((fut, phase, experiment, fn))
+        return fut
+
+    def close(self) -> None:
+        import queue
+        while True:               # whatever has not started is cancelled
+            try:
+                item = self.queue.get_nowait()
+            except queue.Empty:
+                break
+            if item is not None:
+                item[0].cancel()
+        self.queue.put(None)
+
+
+def _wants_open_question(experiments) -> bool:
+    return any(e.name in OPEN_QUESTION_EXPERIMENTS for e in experiments) or len(experiments) > 1
+
+
 def build_report(names, out: Path, opts: RunOptions, title: str, chapter=()) -> Path:
     """Run and analyse the experiments ``names`` (names, TOML paths or Experiment objects) and
     write the report into ``out``.  Family members among them (and the experiments of
@@ -250,6 +352,7 @@ def build_report(names, out: Path, opts: RunOptions, title: str, chapter=()) -> 
     when some section failed."""
     from . import beyond
     t0 = time.perf_counter()
+    load0 = os.getloadavg()
     out = Path(out)
     # every experiment is validated before anything runs (bad input: nothing started yet)
     experiments = [_load(n) for n in names]
@@ -257,34 +360,66 @@ def build_report(names, out: Path, opts: RunOptions, title: str, chapter=()) -> 
     experiments = [e for e in experiments if not beyond.is_member_experiment(e)]
     out.mkdir(parents=True, exist_ok=True)
     fails = _Failures()
-    all_runs, analyses, exp_sections = [], [], {}
-    for exp in experiments:
+    phases = _Phases(origin=t0)
+    pool = _TheoryThread(phases)
+    try:
+        return _build(experiments, members, out, opts, title, fails, phases, pool, t0, load0)
+    finally:
+        pool.close()
+
+
+def _build(experiments, members, out, opts, title, fails, phases, pool, t0, load0) -> Path:
+    from . import beyond
+    # theory first, in the background: it needs no circuit data
+    theory_f = [pool.submit("exact theory", exp.name,
+                            lambda exp=exp: experiment_theory(exp, exp.report.for_options(opts),
+                                                              progress=_log))
+                for exp in experiments]
+    oq_f = (pool.submit("open question (exact rate functions)", None,
+                        lambda: _open_question_data(opts))
+            if _wants_open_question(experiments) else None)
+    all_runs, analyses, exp_sections, curves_f = [], [], {}, []
+    for exp, th_f in zip(experiments, theory_f):
         section = f"Experiment '{exp.name}'"
         _log(f"{exp.name}: circuit runs ({'quick' if opts.quick else 'full'} size; stored runs are reused)")
-        runs, err = fails.attempt(section, "circuit runs", lambda exp=exp: run_experiment_runs(exp, opts),
-                                  exp.name)
+        with phases("circuit runs", exp.name):
+            runs, err = fails.attempt(section, "circuit runs",
+                                      lambda exp=exp: run_experiment_runs(exp, opts), exp.name)
         if runs is None:
+            th_f.cancel()
             exp_sections[exp.name] = Section(f"{section}: failed", experiment_section_text(exp),
                                              error=err)
             continue
+        # the data-dependent theory curves (work densities on the circuit's bins...) run in the
+        # background while this experiment's comparisons and the next one's circuit run
+        cf = pool.submit("theory curves", exp.name,
+                         lambda runs=runs: figure_curves(runs, progress=_log))
         _log(f"{exp.name}: comparing with theory")
-        analysis, err = fails.attempt(section, "comparison with theory",
-                                      lambda runs=runs: analyse(runs, progress=_log), exp.name)
+
+        def compare_(runs=runs, th_f=th_f):
+            with phases("waiting for theory", runs.exp.name):
+                theory: ExperimentTheory = th_f.result()
+            with phases("comparisons", runs.exp.name):
+                return analyse(runs, theory=theory, progress=_log)
+        analysis, err = fails.attempt(section, "comparison with theory", compare_, exp.name)
         if analysis is None:
+            cf.cancel()
             exp_sections[exp.name] = Section(f"{section}: failed", experiment_section_text(exp),
                                              error=err)
             continue
         all_runs.append(runs)
         analyses.append(analysis)
+        curves_f.append(cf)
 
     t_members = time.perf_counter()
     member_analyses = []
     for exp in members:
         section = f"{beyond.CHAPTER_TITLE}: {exp.name}"
         _log(f"{exp.name}: family member: circuit against theory")
-        ma, err = fails.attempt(section, "member analysis",
-                                lambda exp=exp: beyond.analyse_member(exp, opts, progress=_log),
-                                exp.name)
+        with phases("family member (circuit and theory)", exp.name):
+            ma, err = fails.attempt(section, "member analysis",
+                                    lambda exp=exp: beyond.analyse_member(exp, opts, progress=_log),
+                                    exp.name)
         if ma is None:
             exp_sections[exp.name] = Section(f"{section}: failed", experiment_section_text(exp),
                                              error=err)
@@ -292,7 +427,18 @@ def build_report(names, out: Path, opts: RunOptions, title: str, chapter=()) -> 
             member_analyses.append(ma)
     member_wall = time.perf_counter() - t_members
 
+    with phases("waiting for theory curves"):
+        for a, f in zip(analyses, curves_f):
+            try:
+                a.curves = f.result()
+            except Exception as exc:  # figure_curves keeps its failures; this is a safety net
+                from .theory_curves import CURVE_GROUPS, FigureCurves
+                a.curves = FigureCurves()
+                for g in CURVE_GROUPS:
+                    a.curves.fail(g, exc)
+
     _log("drawing figures")
+    draw0 = time.perf_counter()
     sections = []
     comps = [c for a in analyses + member_analyses for c in a.comparisons]
     n_ok = sum(c.within_budget for c in comps)
@@ -334,7 +480,7 @@ def build_report(names, out: Path, opts: RunOptions, title: str, chapter=()) -> 
     sections.append(Section("The circuit and its component values", circuit_par, tables=tables))
 
     if all_runs:
-        fig1_runs = [r for r in all_runs if r.exp.name in ("stick", "slip")] or all_runs
+        fig1_runs = [r for r in all_runs if r.exp.name in FIG1_EXPERIMENTS] or all_runs
         fig, err = fails.attempt("Paper Fig. 1: deterministic motion", "figure",
                                  lambda: Figure(*F.fig_deterministic(fig1_runs, out)))
         sections.append(Section("Paper Fig. 1: deterministic motion",
@@ -350,11 +496,11 @@ def build_report(names, out: Path, opts: RunOptions, title: str, chapter=()) -> 
         sections.append(Section(title_, experiment_section_text(exp), figures=figs,
                                 error="; ".join(errs) if errs else None))
 
-    if any(r.exp.name == "work" for r in all_runs) or len(experiments) > 1:
+    if oq_f is not None:
         _log("the paper's open question: exact rate functions at several gamma")
         title_ = "The paper's open question: is the jump of I(w) at w = 0 real?"
         sec, err = fails.attempt(title_, "exact rate functions",
-                                 lambda: _open_question_section(out, opts))
+                                 lambda: _open_question_section(out, opts, oq_f))
         sections.append(sec if sec is not None else Section(title_, error=err))
 
     if members:
@@ -381,6 +527,9 @@ def build_report(names, out: Path, opts: RunOptions, title: str, chapter=()) -> 
         "tighter tolerances on the same noise (|difference| + 2 SE); finite noise (weak-noise "
         "rows) = exact(gamma) - weak-noise."], tables=[_comparison_table(comps, "Comparisons")]))
 
+    phases.items.append({"phase": "figures and page", "experiment": None, "thread": "main",
+                         "start_s": round(draw0 - t0, 3),
+                         "seconds": round(time.perf_counter() - draw0, 3)})
     wall = time.perf_counter() - t0
     provs = {r.exp.name: r.provenance() for r in all_runs}
     provs.update({a.exp.name: a.provenance for a in member_analyses})
@@ -401,9 +550,16 @@ def build_report(names, out: Path, opts: RunOptions, title: str, chapter=()) -> 
         "quick": opts.quick,
         "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
         "software": software,
+        # wall time per phase (the theory thread's phases overlap the circuit runs) and the
+        # machine's load average (1, 5, 15 min) at the start and the end: times on a shared
+        # machine mean little without it
+        "phases": phases.items,
+        "phase_totals_s": phases.totals(),
+        "load_average": {"start": [round(x, 2) for x in load0],
+                         "end": [round(x, 2) for x in os.getloadavg()]},
     }
     prov_rows = [[k, json.dumps(v, default=str)[:400]] for k, v in provenance.items()
-                 if k not in ("deck_hashes",)]
+                 if k not in ("deck_hashes", "phases")]
     sections.append(Section("Provenance", [
         "Everything needed to reproduce this report: model parameters, seeds, ngspice version, "
         "the sha256 of every deck (full list in metrics.json), software versions, wall time."],

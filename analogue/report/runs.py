@@ -30,6 +30,7 @@ from ..circuit.simulate import DEFAULT_REPLICAS_PER_DECK
 from ..circuit.store_index import indexing_runs
 from ..ensemble import Ensemble
 from ..model import Model
+from ..study.seeds import SeedPlan
 from .plan import ReportSettings, RunOptions
 
 __all__ = ["ExperimentRuns", "run_experiment_runs", "first_deck_size", "check_plan"]
@@ -160,8 +161,8 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
     replicas = opts.scaled(exp.replicas)
     # Each run gets its own seed, derived from the experiment's: distinct experiments (whose
     # seeds differ) never share a noise realisation, so their comparisons are independent.
-    base = 1000 * exp.seed
-    seeds = {"stationary": base + 500, "noise_free": base + 900}
+    plan = SeedPlan(exp.seed)       # every seed of the report (analogue.study.seeds)
+    seeds = {"stationary": plan.stationary, "noise_free": plan.noise_free}
 
     # Tolerances and deck sizes chosen here (not inside simulate) so that the integration
     # checks below integrate the very decks of the nominal runs 100x more tightly: each run
@@ -175,9 +176,9 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
 
     transition = {}
     for i, v0 in enumerate(exp.v0):
-        seeds[f"transition v0={v0:g}"] = base + i
+        seeds[f"transition v0={v0:g}"] = plan.transition(i)
         transition[v0] = simulate(model, v0=v0, t_end=exp.t_end, replicas=replicas,
-                                  seed=base + i, sample_dt=exp.sample_dt, circuit=trans_spec,
+                                  seed=plan.transition(i), sample_dt=exp.sample_dt, circuit=trans_spec,
                                   replicas_per_deck=trans_deck, **kw)
         transition[v0].meta.update(trans_why)  # simulate saw them as given: say why
 
@@ -191,7 +192,7 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
 
     v00 = exp.v0[0]
     decks, size = check_plan(replicas, settings.check_replicas, trans_deck)
-    check_transition = simulate(model, v0=v00, t_end=exp.t_end, replicas=decks * size, seed=base,
+    check_transition = simulate(model, v0=v00, t_end=exp.t_end, replicas=decks * size, seed=plan.transition(0),
                                 sample_dt=exp.sample_dt, circuit=exp.check_spec(trans_spec),
                                 replicas_per_deck=size, **kw)
     _check_coupled(transition[v00], check_transition, "transition check")

@@ -76,7 +76,7 @@ def test_failing_experiments_keep_finished_work_and_are_recorded(tmp_path, monke
         raise RuntimeError(f"ngspice failed for {exp.name} <b>")
     monkeypatch.setattr(P, "run_experiment_runs", boom)
     monkeypatch.setattr(P, "_open_question_section",
-                        lambda out, opts: Section("The paper's open question", ["kept"]))
+                        lambda out, opts, data=None: Section("The paper's open question", ["kept"]))
     with pytest.raises(P.ReportIncomplete) as exc:
         P.build_report(["stick", "slip"], tmp_path, RunOptions(quick=True, progress=False),
                        title="t")

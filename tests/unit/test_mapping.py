@@ -137,7 +137,7 @@ def test_bias_from_smoothing_is_refused_unless_allowed():
 def test_bias_measures_against_brute_force_grids(model):
     """stationary_std (closed form) and central_bin_bias (shifted integrals near 0) against
     plain grid integration of the normalised stationary densities (eq. (6))."""
-    from analogue.circuit.mapping import central_bin_bias, stationary_std
+    from analogue.theory.stationary import central_bin_bias, stationary_std
     eps = 0.02 * model.velocity_scale
     v = np.linspace(-4.0, 4.0, 2_000_001)
     p0 = model.stationary_pdf(v)
@@ -216,7 +216,7 @@ def test_noise_bias_estimate_matches_exact_held_noise_ou():
 def test_positive_part_moments_by_quadrature(alpha):
     """Y ~ N(-alpha, 1) conditioned on Y > 0 has density ~ exp(-y^2/2 - alpha y) on y > 0:
     its mean and variance by quadrature against the closed form / asymptotic series."""
-    from analogue.circuit.mapping import _positive_part_moments
+    from analogue.theory.stationary import _positive_part_moments
     top = 60.0 / max(alpha, 1.0) + max(-alpha, 0.0) + 10.0
     mom = [integrate.quad(lambda y: y**k * math.exp(-y * y / 2 - alpha * y), 0.0, top,
                           epsabs=0, epsrel=1e-13, limit=400)[0] for k in range(3)]
