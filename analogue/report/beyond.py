@@ -40,6 +40,7 @@ from scipy import integrate
 from ..circuit.experiments import Experiment, load_experiment, standard_circuit
 from ..ensemble import Ensemble
 from ..model import Model
+from ..study.seeds import SeedPlan
 from .budget import SE_MULTIPLIER, held_noise_pair
 from .metrics import Budget, Comparison, compare
 from ..estimators import transport, work_rate_samples
@@ -451,7 +452,7 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
     m_eff = exp.mapping().model_effective
     res = MemberAnalysis(exp, sizes)
     burn = exp.burn_in
-    seed = 1000 * exp.seed + 800
+    seed = SeedPlan(exp.seed).member      # member + 0..5 (analogue.study.seeds)
     name = exp.name
 
     if m.spring > 0:

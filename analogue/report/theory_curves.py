@@ -30,7 +30,7 @@ import numpy as np
 from ..circuit.experiments import Experiment
 from ..model import Model
 from ..theory.cache import cached_call
-from .observables import (exact_stationary, exact_transition, weak_noise_transition)
+from .observables import exact_stationary, exact_transition, weak_noise_transition
 from .plan import ReportSettings
 
 __all__ = ["TransitionTheory", "ExperimentTheory", "FigureCurves", "experiment_theory",

@@ -14,8 +14,8 @@ holds them against the labels of a quick paper report.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 from collections.abc import Callable
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import integrate

@@ -20,7 +20,9 @@ __all__ = ["SeedPlan"]
 
 _STRIDE = 1000
 _OFFSETS = {"stationary": 500, "noise_free": 900, "mc_stationary": 700,
-            "mc_stationary_v0": 701}
+            "mc_stationary_v0": 701,
+            # the family members' chapter (report.beyond): its runs use member + 0..5
+            "member": 800}
 _MC_TRANSITION = 600          # + index of v0
 _MAX_V0 = 100                 # transition runs use offsets 0..99, their Monte Carlo 600..699
 
@@ -53,7 +55,7 @@ class SeedPlan:
         return self.base + _MC_TRANSITION + self._index(i)
 
     def __getattr__(self, name: str) -> int:
-        # stationary, noise_free, mc_stationary, mc_stationary_v0
+        # stationary, noise_free, mc_stationary, mc_stationary_v0, member
         if name in _OFFSETS:
             return self.base + _OFFSETS[name]
         raise AttributeError(name)
