@@ -154,8 +154,13 @@ class _Group(click.Group):
                 formatter.write_dl(rows)
 
     def invoke(self, ctx):
+        # The guard covers the whole command, not only the ngspice calls: a SIGTERM while a
+        # report is plotting (between simulate calls) is then a one-line exit 143 too, not a
+        # silent death by signal.  Nested guards (simulate's own) are re-entrant.
+        from .circuit.ngspice import interrupt_guard
         try:
-            return super().invoke(ctx)
+            with interrupt_guard():
+                return super().invoke(ctx)
         except (click.exceptions.Exit, click.ClickException, click.Abort):
             raise
         except KeyboardInterrupt as exc:

@@ -341,3 +341,29 @@ def test_run_deck_called_directly_is_guarded_too(tmp_path, sig):
         time.sleep(0.05)
     assert not any(_alive(p) for p in pids)
     assert list(tmp.glob("analogue-ngspice-*")) == []
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
+def test_cli_interrupted_outside_ngspice_is_one_line(tmp_path, sig):
+    """A signal while a command computes or plots (no ngspice running, e.g. between the
+    simulate calls of a report) is the same one line and 128 + signal, never a silent death
+    by signal (returncode -15) or a traceback."""
+    exe = Path(sys.executable).with_name("analogue")
+    env = dict(os.environ, PYTHONPATH=str(ROOT), ANALOGUE_THEORY_CACHE="off", PYTHONUNBUFFERED="1")
+    proc = subprocess.Popen([str(exe), "figures", "--out", str(tmp_path / "figs")], env=env,
+                            cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+    # the first figure on disk means the command runs (a signal during Python's start-up
+    # imports, before any of analogue's code, cannot be turned into one line); the rest of
+    # the nine figures (the uncached rate functions) take seconds more
+    deadline = time.monotonic() + 120
+    while not list((tmp_path / "figs").glob("*.png")) and time.monotonic() < deadline:
+        assert proc.poll() is None, proc.communicate()
+        time.sleep(0.05)
+    assert proc.poll() is None, "the figures command finished before the signal"
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 128 + sig, (proc.returncode, err)
+    assert "Traceback" not in err
+    last = [ln for ln in err.splitlines() if ln.strip()][-1]
+    assert last.startswith("analogue: error:") and signal.Signals(sig).name in last, err
