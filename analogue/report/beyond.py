@@ -697,12 +697,14 @@ def member_table(a: MemberAnalysis):
     for c in a.comparisons:
         b = c.budget
         rows.append([c.observable, c.circuit, c.circuit_stderr, c.theory, c.z, abs(b.smoothing),
-                     abs(b.bandwidth), abs(b.element), abs(b.sampling), c.within_budget, c.note])
+                     abs(b.bandwidth), abs(b.integration), abs(b.element), abs(b.sampling),
+                     c.within_budget, c.note])
         classes.append("ok" if c.within_budget else "fail")
     ref = "Monte Carlo" if a.exp.model.spring > 0 else "exact"
     return Table(f"{a.exp.name}: circuit against {ref}",
                  ["observable", "circuit", "SE", ref, "z", "smoothing", "bandwidth",
-                  "circuit element", "sampling", "within budget", "note"], rows, classes)
+                  "integration", "circuit element", "sampling", "within budget", "note"], rows,
+                 classes)
 
 
 def member_section(a: MemberAnalysis, out: Path, attempt=None):

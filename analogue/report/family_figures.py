@@ -184,6 +184,7 @@ def fig_member_budget(a, out: Path):
     terms = [("statistical (3 SE)", lambda c: 3 * c.circuit_stderr, "0.75"),
              ("smoothing", lambda c: abs(c.budget.smoothing), "tab:blue"),
              ("bandwidth", lambda c: abs(c.budget.bandwidth), "tab:green"),
+             ("integration", lambda c: abs(c.budget.integration), "tab:purple"),
              ("circuit element", lambda c: abs(c.budget.element), "tab:red"),
              ("sampling", lambda c: abs(c.budget.sampling), "tab:brown")]
     left = np.zeros(len(comps))
