@@ -29,10 +29,11 @@ Dynamics (autocorrelation, Green-Kubo diffusion) use the Scharfetter-Gummel grid
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import asdict, dataclass, fields
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy import integrate, special
 from scipy.linalg import eigh_tridiagonal
 from scipy.sparse.linalg import expm_multiply
@@ -53,7 +54,7 @@ _CF_TERMS = 400
 
 
 @dataclass(frozen=True)
-class StationaryMoments(Mapping):
+class StationaryMoments(Mapping[str, float]):
     """Stationary observables (exact at the given gamma).  Also a read-only mapping.
 
     mean, drift : <v> (drift is the same number: the mean sliding velocity, dx/dt on average)
@@ -74,37 +75,37 @@ class StationaryMoments(Mapping):
     drift: float
     p_zero: float = 0.0
 
-    def as_dict(self) -> dict:
+    def as_dict(self) -> dict[str, float]:
         return asdict(self)
 
-    def __getitem__(self, key):
+    def __getitem__(self, key: str) -> float:
         if key not in self._names():
             raise KeyError(key)
-        return getattr(self, key)
+        return float(getattr(self, key))
 
-    def __iter__(self):
+    def __iter__(self) -> Iterator[str]:
         return iter(self._names())
 
-    def __len__(self):
+    def __len__(self) -> int:
         return len(self._names())
 
     @classmethod
-    def _names(cls):
+    def _names(cls) -> tuple[str, ...]:
         return tuple(f.name for f in fields(cls))
 
 
-def _check_model(model) -> None:
+def _check_model(model: object) -> None:
     if not isinstance(model, Model):
         raise ValueError(f"model must be an analogue.Model, got {type(model).__name__}")
 
 
-def _check_h(h) -> None:
+def _check_h(h: object) -> None:
     if h is not None and not (isinstance(h, (int, float, np.floating)) and math.isfinite(h) and h > 0):
         raise ValueError(f"h must be None or a finite number > 0, got {h!r}")
 
 
 # ---------------------------------------------------------------- truncated Gaussians (eps = 0)
-def _upper_truncated_standard(z):
+def _upper_truncated_standard(z: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Mean and variance of ``Y = X | X > 0`` for ``X ~ N(z, 1)`` (vectorised in z).
 
     Direct: ``E = z + l``, ``Var = 1 - l (z + l)`` with ``l = phi(z)/Phi(z)``.  For ``z < -5``,
@@ -200,7 +201,7 @@ def _halves_quad(model: Model) -> _Halves:
         breaks = sorted(p for p in pts if lo < p < hi)
         ur = float(model.potential(r))
 
-        def integrand(v, r=r, ur=ur):
+        def integrand(v: float, r: float = r, ur: float = ur) -> np.ndarray:
             w = math.exp(-g * (float(model.potential(v)) - ur))
             d = v - r
             fr = math.tanh(v / eps) if eps > 0 else math.copysign(1.0, v) if v != 0 else 0.0
@@ -235,7 +236,8 @@ def half_line_moments(model: Model, method: str = "auto") -> _Halves:
 
 
 # -------------------------------------------------------------------------- grid dynamics
-def _grid_pieces(model: Model, grid: Grid):
+def _grid_pieces(model: Model, grid: Grid
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     diag, off, log_pi = symmetric_generator(model, grid)
     lp = log_pi - log_pi.max()
     lp -= math.log(np.sum(np.exp(lp)))
@@ -263,7 +265,8 @@ def _diffusion_on_grid(model: Model, grid: Grid) -> float:
     return float(np.sum(terms[flux != 0.0]))
 
 
-def _refined_grids(model: Model, h: float | None, extra=()):
+def _refined_grids(model: Model, h: float | None, extra: Iterable[float] = ()
+                   ) -> tuple[Grid, Grid]:
     coarse = resolved_grid(model, extra=extra, h=h)
     fine = Grid(coarse.h / 2.0, 2 * coarse.i_min, 2 * coarse.i_max)
     return coarse, fine
@@ -276,7 +279,7 @@ def diffusion_coefficient(model: Model, h: float | None = None, richardson: bool
     _check_h(h)
     if not model.is_paper:
         from .family import stationary_moments as family_moments
-        return family_moments(model, h=h).diffusion
+        return float(family_moments(model, h=h).diffusion)
     coarse, fine = _refined_grids(model, h)
     d_fine = _diffusion_on_grid(model, fine)
     if not richardson:
@@ -297,7 +300,7 @@ def _autocorrelation_on_grid(model: Model, grid: Grid, lags: np.ndarray) -> np.n
         lam, q = eigh_tridiagonal(diag, off)
         lam = np.minimum(lam, 0.0)
         w = (q.T @ y) ** 2
-        return np.exp(np.outer(lags, lam)) @ w
+        return np.asarray(np.exp(np.outer(lags, lam)) @ w)
     # Large grids (small epsilon): only the slowest modes.  The weights are >= 0 and sum to
     # C(0), so the omitted modes contribute between 0 and rest * e^{lambda_cut t}; take the
     # midpoint, and fall back to expm_multiply where that bound is not negligible.
@@ -316,10 +319,11 @@ def _autocorrelation_on_grid(model: Model, grid: Grid, lags: np.ndarray) -> np.n
         dv = v - np.dot(v, pi)
         for i in todo:
             out[i] = float(dv @ expm_multiply(gen * lags[i], dv * pi))
-    return out
+    return np.asarray(out)
 
 
-def autocorrelation(model: Model, lags, h: float | None = None, richardson: bool = True) -> np.ndarray:
+def autocorrelation(model: Model, lags: ArrayLike, h: float | None = None,
+                    richardson: bool = True) -> np.ndarray:
     """Connected stationary velocity autocorrelation ``C(t) = <v(0) v(t)> - <v>^2`` at ``|lags|``
     (C is even in the lag; C(0) is the variance).  Spectral sum on the FP grid, Richardson
     extrapolated over (h, h/2) unless ``richardson=False``.  Accuracy at the default grid:
@@ -369,7 +373,9 @@ def stationary_moments(model: Model, h: float | None = None) -> StationaryMoment
 
 
 # ------------------------------------------------------------------------------- sampling
-def sample_stationary(model: Model, size, seed=None) -> np.ndarray:
+def sample_stationary(model: Model, size: int | tuple[int, ...],
+                      seed: int | np.random.SeedSequence | np.random.Generator | None = None
+                      ) -> np.ndarray:
     """Independent draws from ``p_s = exp(-gamma U)/Z`` (eq. (6)).
 
     ``epsilon = 0``: choose the half line with probability P(v > 0), then invert the truncated
@@ -390,7 +396,7 @@ def sample_stationary(model: Model, size, seed=None) -> np.ndarray:
     if any(s < 0 for s in shape):
         raise ValueError(f"size must be >= 0, got {size!r}")
     if np.ndim(size) == 0:
-        shape = (int(size),)
+        shape = shape[:1]  # a plain int: one dimension
     rng = np.random.default_rng(seed)
     if model.epsilon == 0:
         halves = _halves_sgn(model)
@@ -403,7 +409,7 @@ def sample_stationary(model: Model, size, seed=None) -> np.ndarray:
         # Y = X | X > 0 with X ~ N(z, 1):  P(Y > y) = Phi(z - y)/Phi(z)
         y = z - special.ndtri_exp(log_u + special.log_ndtr(z))
         y = np.maximum(y, 0.0)
-        return s * np.where(upper, y, -y)
+        return np.asarray(s * np.where(upper, y, -y))
     c = model.potential_minimum()
     width = model.velocity_scale
     h = min(width / 400.0, model.epsilon / 20.0)

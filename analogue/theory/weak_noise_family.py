@@ -50,6 +50,7 @@ import math
 from typing import NamedTuple
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy import integrate
 
 from ..model import Model
@@ -58,7 +59,7 @@ __all__ = ["quasi_potential", "direct_path", "direct_action", "indirect_action",
            "DirectPath"]
 
 
-def _check(model) -> Model:
+def _check(model: object) -> Model:
     if not isinstance(model, Model):
         raise ValueError(f"model must be an analogue.Model, got {type(model).__name__}")
     if not (model.dimension == 1 and model.shot is None):
@@ -67,19 +68,19 @@ def _check(model) -> Model:
     return model
 
 
-def quasi_potential(model: Model, v):
+def quasi_potential(model: Model, v: ArrayLike) -> np.ndarray:
     """``U(v) - min U``: ``p_s ~ exp(-gamma (U - U_min))`` exactly, so this is the stationary
     quasi-potential of every 1-D Gaussian member (eq. (6) with the generalised U)."""
     _check(model)
     return model.potential(v) - float(model.potential(model.potential_minimum()))
 
 
-def _u1(model: Model, v, s):
+def _u1(model: Model, v: np.ndarray, s: float) -> np.ndarray:
     """U'(v) on the half line of sign s (friction sign fixed)."""
     return (v / model.tau_m + model.cubic * v**3 + s * model.friction_magnitude(v) - model.a)
 
 
-def _u2(model: Model, v, s):
+def _u2(model: Model, v: np.ndarray, s: float) -> np.ndarray:
     """U''(v) on the half line of sign s (no delta at 0)."""
     out = 1.0 / model.tau_m + 3.0 * model.cubic * v**2
     if model.stribeck is not None:
@@ -108,10 +109,10 @@ def direct_path(model: Model, v: float, t: float, v0: float, n: int = 400) -> Di
     if v0 * v < 0:
         return DirectPath(np.array([0.0, t]), np.array([v0, v]), math.nan)
 
-    def rhs(_t, y):
+    def rhs(_t: np.ndarray, y: np.ndarray) -> np.ndarray:
         return np.vstack([y[1], _u1(model, y[0], s) * _u2(model, y[0], s)])
 
-    def bc(ya, yb):
+    def bc(ya: np.ndarray, yb: np.ndarray) -> np.ndarray:
         return np.array([ya[0] - v0, yb[0] - v])
 
     tt = np.linspace(0.0, t, 201)
