@@ -2,11 +2,13 @@
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 __all__ = ["histogram_chi2"]
 
 
-def histogram_chi2(samples, v, f, min_expected: float = 5.0):
+def histogram_chi2(samples: ArrayLike, v: np.ndarray, f: np.ndarray,
+                   min_expected: float = 5.0) -> tuple[float, int]:
     """Pearson chi^2 of iid ``samples`` against the density ``f`` on the grid ``v``.
 
     Bins are equal-probability under the theory (about ``n/20`` expected counts each, at

@@ -19,7 +19,7 @@ from ..model import Model
 from ..plots.style import KIND_COLOURS, TIME, VELOCITY, new_figure, save
 from .comparisons import ExperimentAnalysis
 from .runs import ExperimentRuns
-from .theory_curves import propagator_times
+from .theory_curves import ExperimentTheory, FigureCurves, propagator_times
 
 __all__ = ["fig_deterministic", "fig_prehistory", "fig_propagator", "fig_stationary",
            "fig_work_paths", "fig_rate_function", "fig_budget",
@@ -69,12 +69,25 @@ def fig_deterministic(all_runs: list, out: Path):
                   f"law: {dev:.1e} (model units).")
 
 
+def _curves(analysis: ExperimentAnalysis) -> FigureCurves:
+    """The figures' theory curves (computed by :func:`analogue.report.comparisons.analyse`)."""
+    if analysis.curves is None:
+        raise ValueError(f"{analysis.runs.exp.name}: no theory curves (analyse() was not run)")
+    return analysis.curves
+
+
+def _theory(analysis: ExperimentAnalysis) -> ExperimentTheory:
+    if analysis.theory is None:
+        raise ValueError(f"{analysis.runs.exp.name}: no theory (analyse() was not run)")
+    return analysis.theory
+
+
 # ------------------------------------------------------------------------- Figs. 2-5
 def fig_prehistory(analysis: ExperimentAnalysis, out: Path, tag: str):
     """Optimal paths (eqs. (16) ... (36)) against the circuit's prehistory: the paths of
     the transition run from v0[0] that end in a window around (v, t)."""
     runs = analysis.runs
-    paths = analysis.curves.get("prehistory")
+    paths = _curves(analysis).get("prehistory")
     if not paths:
         return None
     n = len(paths)
@@ -145,7 +158,7 @@ def fig_propagator(analysis: ExperimentAnalysis, out: Path, v0: float | None = N
     m = runs.exp.model
     v0 = runs.exp.v0[0] if v0 is None else v0
     ens = runs.transition[v0]
-    th = analysis.theory.transition[v0]
+    th = _theory(analysis).transition[v0]
     times = propagator_times(th.times)
     rows = [th.times.index(t) for t in times]
     v = th.v
@@ -192,7 +205,7 @@ def fig_propagator(analysis: ExperimentAnalysis, out: Path, v0: float | None = N
 
 def fig_stationary(analysis: ExperimentAnalysis, out: Path):
     runs = analysis.runs
-    d, v, p_s = analysis.curves.get("stationary law")
+    d, v, p_s = _curves(analysis).get("stationary law")
     fig, axes = new_figure(1, 2, squeeze=False)
     for ax, log in zip(axes.ravel(), (False, True)):
         ax.fill_between(d.centres, d.lower, d.upper, step="mid", color=CIRCUIT, alpha=0.25)
@@ -214,7 +227,7 @@ def fig_stationary(analysis: ExperimentAnalysis, out: Path):
 def fig_work_paths(analysis: ExperimentAnalysis, out: Path):
     """Paper Fig. 7: work-optimal paths against circuit windows of the same work rate."""
     runs = analysis.runs
-    items = analysis.curves.get("work paths")
+    items = _curves(analysis).get("work paths")
     if not items:
         return None
     m = runs.exp.model
@@ -255,7 +268,7 @@ def fig_rate_function(analysis: ExperimentAnalysis, out: Path):
     """Paper Fig. 8 with circuit data: I(w) of eq. (64), the exact I_gamma(w), the weak-noise
     limit, the finite-tau exact -ln P_tau(w)/(tau gamma) and the circuit's estimate."""
     runs = analysis.runs
-    rc = analysis.curves.get("rate function")
+    rc = _curves(analysis).get("rate function")
     if rc is None:
         return None
     m = runs.exp.model

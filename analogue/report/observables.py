@@ -84,6 +84,6 @@ def exact_stationary(model: Model, *, threshold: float, taus=(), h: float | None
     m = cached_call(exact.stationary_moments, model, cache=cache)
     taus = [float(t) for t in taus]
     var_w = (np.asarray(cached_call(work_variance, model, np.asarray(taus), h=h, cache=cache))
-             if taus else [])
+             if taus else np.zeros(0))
     return stationary_theory(model, m, threshold=threshold,
                              work_variance={tau: float(v) for tau, v in zip(taus, var_w)})

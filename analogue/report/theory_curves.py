@@ -102,7 +102,9 @@ def experiment_theory(exp: Experiment, settings: ReportSettings, *, cache=None,
     transition = {}
     for v0 in exp.v0:
         tick(f"{exp.name}: exact transition theory from v0={v0:g}")
-        dens, dens_eff, dens_weak = {}, {}, {}
+        dens: dict = {}
+        dens_eff: dict = {}
+        dens_weak: dict = {}
         ex = exact_transition(model, v0, times, h=h, densities=dens, cache=cache)
         ex_eff = exact_transition(model_eff, v0, times, h=h, densities=dens_eff, cache=cache)
         weak = (weak_noise_transition(model, v0, times, densities=dens_weak)

@@ -20,6 +20,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import integrate
 
+from ..ensemble import Ensemble
+from ..model import Model
+
 __all__ = ["KINDS", "Kind", "Observable", "TRANSITION", "STATIONARY", "density_moments",
            "transition_observables", "stationary_observables", "transition_values",
            "stationary_values", "transition_theory", "stationary_theory", "tname", "sname",
@@ -45,7 +48,7 @@ class StationarySample:
     """What the stationary estimators read: one ensemble after its burn-in (work rates
     computed once per window)."""
 
-    ens: object                 # analogue.Ensemble
+    ens: Ensemble
     v: np.ndarray               # velocities after the burn-in (replicas x samples)
     burn_in: float
     threshold: float
@@ -91,7 +94,7 @@ def density_moments(v: np.ndarray, f: np.ndarray) -> tuple[float, float, float]:
 class StationaryTheory:
     """What the exact stationary values read."""
 
-    model: object               # analogue.Model
+    model: Model
     moments: object             # analogue.theory.stationary.StationaryMoments
     threshold: float
     work_variance: dict         # tau -> exact Var(w)
@@ -193,6 +196,7 @@ class Observable:
     @property
     def label(self) -> str:
         if self.run == TRANSITION:
+            assert self.t is not None and self.v0 is not None  # transition rows have both
             return tname(self.kind, self.t, self.v0)
         return sname(self.kind, self.tau)
 

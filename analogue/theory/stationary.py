@@ -479,8 +479,8 @@ def central_bin_bias(model: Model, epsilon: float, std: float | None = None) -> 
     exact = model.replace(epsilon=0.0)
     gde = model.gamma * model.delta * epsilon
 
-    def h(v):  # exp(-gamma (U_eps - U_0) - gamma Delta eps ln 2)
-        return np.exp(-gde * np.log1p(np.exp(-2.0 * np.abs(v) / epsilon)))
+    def h(v: np.ndarray) -> np.ndarray:  # exp(-gamma (U_eps - U_0) - gamma Delta eps ln 2)
+        return np.asarray(np.exp(-gde * np.log1p(np.exp(-2.0 * np.abs(v) / epsilon))))
 
     # Normaliser ratio Z_eps/(Z_0 e^{gamma Delta eps ln2}) = 1 + R, R = E_0[h - 1]
     span = 20.0 * epsilon
