@@ -46,7 +46,7 @@ from ..study.seeds import SeedPlan
 from .budget import SE_MULTIPLIER, held_noise_pair
 from .metrics import Budget, Comparison, compare
 from ..estimators import transport, work_rate_samples
-from .observables import jackknife_difference, sname, subset, tname
+from .observables import jackknife_difference, stationary_label, subset, transition_label
 
 __all__ = [
     "MEMBERS",
@@ -196,9 +196,9 @@ def _stationary_specs(exp: Experiment, burn_in: float) -> list[ObservableSpec]:
 
     mom = lambda model: family.stationary_moments(model, h=_h(exp))
     specs = [
-        ObservableSpec(sname("mean v"), lambda e: float(_after(e, burn_in).mean()),
+        ObservableSpec(stationary_label("mean v"), lambda e: float(_after(e, burn_in).mean()),
                        lambda model: mom(model).mean, el),
-        ObservableSpec(sname("var v"), lambda e: float(_after(e, burn_in).var()),
+        ObservableSpec(stationary_label("var v"), lambda e: float(_after(e, burn_in).var()),
                        lambda model: mom(model).variance, el),
     ]
     if shot:
@@ -212,15 +212,15 @@ def _stationary_specs(exp: Experiment, burn_in: float) -> list[ObservableSpec]:
                            above, el, "moving forward (above the stick window)")]
     else:
         specs += [
-            ObservableSpec(sname("P(v>0)"), lambda e: float(np.mean(_after(e, burn_in) > 0)),
+            ObservableSpec(stationary_label("P(v>0)"), lambda e: float(np.mean(_after(e, burn_in) > 0)),
                            lambda model: mom(model).p_positive, el),
-            ObservableSpec(sname("stick fraction"),
+            ObservableSpec(stationary_label("stick fraction"),
                            lambda e: float(np.mean(np.abs(_after(e, burn_in)) < thr)), window, el,
                            f"|v| < {thr:g}")]
     if m.a != 0 and not shot:
         # the work rate function's curvature at <w>: I''(<w>) = 1/(2 gamma F^2 D_x)
         specs.append(ObservableSpec(
-            sname("diffusion D_x"),
+            stationary_label("diffusion D_x"),
             lambda e: float(transport(e, burn_in=burn_in).diffusion),
             lambda model: mom(model).diffusion, el,
             "Green-Kubo D_x of the exact generator; fixes the curvature of the work rate "
@@ -279,16 +279,16 @@ def _transition_specs(exp: Experiment, v0: float, times) -> list[ObservableSpec]
 
     out = []
     for i, t in enumerate(times):
-        out += [ObservableSpec(tname("mean v", t, v0), at_time(t, np.mean), theory_at(i, "mean")),
-                ObservableSpec(tname("var v", t, v0), at_time(t, lambda x: np.var(x, ddof=1)),
+        out += [ObservableSpec(transition_label("mean v", t, v0), at_time(t, np.mean), theory_at(i, "mean")),
+                ObservableSpec(transition_label("var v", t, v0), at_time(t, lambda x: np.var(x, ddof=1)),
                                theory_at(i, "var"))]
         if shot:
             out.append(ObservableSpec(
-                tname("P(v=0)", t, v0),
+                transition_label("P(v=0)", t, v0),
                 at_time(t, lambda x: np.mean(np.abs(x) < STICK_THRESHOLD)),
                 theory_at(i, "stuck"), note=f"|v| < {STICK_THRESHOLD:g}"))
         else:
-            out.append(ObservableSpec(tname("P(v<0)", t, v0), at_time(t, lambda x: np.mean(x < 0)),
+            out.append(ObservableSpec(transition_label("P(v<0)", t, v0), at_time(t, lambda x: np.mean(x < 0)),
                                       theory_at(i, "neg")))
     return out
 
@@ -333,10 +333,10 @@ def _spring_specs(exp: Experiment, burn_in: float) -> list[ObservableSpec]:
         return float(np.nanmean(a))
 
     return [
-        ObservableSpec(sname("mean v"), lambda e: float(_after(e, burn_in).mean()), None, 0.0),
-        ObservableSpec(sname("var v"), lambda e: float(_after(e, burn_in).var()), None, rel_v),
-        ObservableSpec(sname("mean x"), lambda e: float(xs(e).mean()), None, 0.0),
-        ObservableSpec(sname("var x"), lambda e: float(xs(e).var()), None, rel_x),
+        ObservableSpec(stationary_label("mean v"), lambda e: float(_after(e, burn_in).mean()), None, 0.0),
+        ObservableSpec(stationary_label("var v"), lambda e: float(_after(e, burn_in).var()), None, rel_v),
+        ObservableSpec(stationary_label("mean x"), lambda e: float(xs(e).mean()), None, 0.0),
+        ObservableSpec(stationary_label("var x"), lambda e: float(xs(e).var()), None, rel_x),
         ObservableSpec("half period (first swing)", t_half, None, 0.0,
                        "time from release to the end of the first swing (v back to 0)"),
         ObservableSpec("amplitude (first swing)", amp, None, 0.0,

@@ -67,14 +67,14 @@ def analyse(runs: ExperimentRuns, *, theory: ExperimentTheory | None = None, pro
     """Every comparison of one experiment.  ``theory``: its circuit-free theory
     (:func:`~analogue.report.theory_curves.experiment_theory`, computed here if not given;
     the pipeline computes it while ngspice runs)."""
-    exp, st = runs.exp, runs.settings
+    exp, settings = runs.exp, runs.settings
     model = exp.model
     mapping = map_model(model, exp.spec)
     model_eff = mapping.model_effective
     noise_dt = mapping.noise_dt
     tick = progress or (lambda *_: None)
     if theory is None:
-        theory = experiment_theory(exp, st, cache=cache, progress=progress)
+        theory = experiment_theory(exp, settings, cache=cache, progress=progress)
     res = ExperimentAnalysis(runs, theory=theory)
     seeds = SeedPlan(exp.seed)
 
@@ -125,13 +125,13 @@ def analyse(runs: ExperimentRuns, *, theory: ExperimentTheory | None = None, pro
     ens = runs.stationary
     thr = theory.threshold
     taus = list(theory.taus)
-    stationary_fn = lambda e: stationary_values(e, burn_in=st.stationary_burn_in, threshold=thr,
+    stationary_fn = lambda e: stationary_values(e, burn_in=settings.stationary_burn_in, threshold=thr,
                                                 force=model.force, taus=taus)
     circ = jackknife(stationary_fn, ens)
     ex, ex_eff = theory.stationary, theory.stationary_eff
     v0_mc = sample_stationary(model_eff, MC_STATIONARY_REPLICAS, seeds.mc_stationary_v0)
     tick(f"{exp.name}: held-noise Monte Carlo pair")
-    held, white = held_noise_pair(model_eff, v0=v0_mc, t_end=st.stationary_t_end,
+    held, white = held_noise_pair(model_eff, v0=v0_mc, t_end=settings.stationary_t_end,
                                   replicas=v0_mc.size, seed=seeds.mc_stationary, noise_dt=noise_dt,
                                   sample_dt=exp.sample_dt)
     band = jackknife_difference(stationary_fn, held, white)

@@ -14,12 +14,12 @@ from scipy import integrate
 from ..estimators.goodness_of_fit import histogram_chi2
 from ..estimators.resampling import jackknife, jackknife_difference, subset
 from ..model import Model
-from ..study.catalogue import (sname, stationary_theory, stationary_values, tname,
+from ..study.catalogue import (stationary_label, stationary_theory, stationary_values, transition_label,
                                transition_theory, transition_values)
 
 __all__ = ["histogram_chi2", "transition_values", "stationary_values", "jackknife", "subset", "jackknife_difference",
            "exact_transition", "weak_noise_transition", "exact_stationary", "velocity_grid",
-           "work_variance_exact", "tname", "sname"]
+           "work_variance_exact", "transition_label", "stationary_label"]
 
 
 # -------------------------------------------------------------------------------- theory

@@ -31,7 +31,7 @@ import numpy as np
 from ..circuit.experiments import (FIG1_EXPERIMENTS, OPEN_QUESTION_EXPERIMENTS,
                                    PAPER_EXPERIMENTS, PAPER_FIGURE_TAGS, Experiment,
                                    load_experiment, standard_circuit)
-from . import figures as F
+from . import figures
 from .comparisons import ExperimentAnalysis, analyse
 from .theory_curves import ExperimentTheory, experiment_theory, figure_curves
 from .html import Figure, Section, Table, write_page
@@ -233,15 +233,15 @@ def _figures_for(runs: ExperimentRuns, analysis: ExperimentAnalysis, out: Path,
     a = analysis
     tag = PAPER_FIGURE_TAGS.get(runs.exp.name, "paths")
     for what, fn in (
-            ("prehistory", lambda: F.fig_prehistory(a, out, tag)),
-            ("boundaries", lambda: F.fig_boundaries(runs, out)),
-            ("propagator", lambda: F.fig_propagator(a, out)),
-            ("propagator", lambda: F.fig_propagator(a, out, runs.exp.v0[-1])
+            ("prehistory", lambda: figures.fig_prehistory(a, out, tag)),
+            ("boundaries", lambda: figures.fig_boundaries(runs, out)),
+            ("propagator", lambda: figures.fig_propagator(a, out)),
+            ("propagator", lambda: figures.fig_propagator(a, out, runs.exp.v0[-1])
              if len(runs.exp.v0) > 1 else None),
-            ("stationary law", lambda: F.fig_stationary(a, out)),
-            ("work paths", lambda: F.fig_work_paths(a, out)),
-            ("rate function", lambda: F.fig_rate_function(a, out)),
-            ("error budget", lambda: F.fig_budget(a, out))):
+            ("stationary law", lambda: figures.fig_stationary(a, out)),
+            ("work paths", lambda: figures.fig_work_paths(a, out)),
+            ("rate function", lambda: figures.fig_rate_function(a, out)),
+            ("error budget", lambda: figures.fig_budget(a, out))):
         _log(f"{runs.exp.name}: figure: {what}")
         r, err = fails.attempt(section, f"figure: {what}", fn, runs.exp.name)
         if err is not None:
@@ -482,7 +482,7 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, t0, load
     if all_runs:
         fig1_runs = [r for r in all_runs if r.exp.name in FIG1_EXPERIMENTS] or all_runs
         fig, err = fails.attempt("Paper Fig. 1: deterministic motion", "figure",
-                                 lambda: Figure(*F.fig_deterministic(fig1_runs, out)))
+                                 lambda: Figure(*figures.fig_deterministic(fig1_runs, out)))
         sections.append(Section("Paper Fig. 1: deterministic motion",
                                 figures=[fig] if fig is not None else [], error=err))
     by_name = {r.exp.name: (r, a) for r, a in zip(all_runs, analyses)}

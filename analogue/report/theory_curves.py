@@ -115,10 +115,10 @@ def experiment_theory(exp: Experiment, settings: ReportSettings, *, cache=None,
     tick(f"{exp.name}: exact stationary theory")
     thr = settings.stick_threshold * model.velocity_scale
     taus = stationary_taus(exp, settings)
-    st = exact_stationary(model, threshold=thr, taus=taus, h=h, cache=cache)
-    st_eff = exact_stationary(model_eff, threshold=thr, taus=taus, h=h, cache=cache)
+    stat = exact_stationary(model, threshold=thr, taus=taus, h=h, cache=cache)
+    stat_eff = exact_stationary(model_eff, threshold=thr, taus=taus, h=h, cache=cache)
     return ExperimentTheory(model=model, model_effective=model_eff, h=h, transition=transition,
-                            stationary=st, stationary_eff=st_eff, threshold=thr, taus=taus,
+                            stationary=stat, stationary_eff=stat_eff, threshold=thr, taus=taus,
                             wall_time_s=time.perf_counter() - t0)
 
 
@@ -207,13 +207,13 @@ def work_distributions(runs) -> dict:
     """The circuit's work-rate histograms, one per window that fits (Figs. 8-9)."""
     from ..estimators import work_distribution
     m = runs.exp.model
-    st = runs.settings
+    settings = runs.settings
     out = {}
     for tau in runs.exp.work_taus:
-        if tau > st.stationary_t_end - st.stationary_burn_in - 1e-9:
+        if tau > settings.stationary_t_end - settings.stationary_burn_in - 1e-9:
             continue
         out[tau] = work_distribution(runs.stationary, tau, m.force, bins=41,
-                                     burn_in=st.stationary_burn_in)
+                                     burn_in=settings.stationary_burn_in)
     return out
 
 

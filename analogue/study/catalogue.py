@@ -25,19 +25,19 @@ from ..model import Model
 
 __all__ = ["KINDS", "Kind", "Observable", "TRANSITION", "STATIONARY", "density_moments",
            "transition_observables", "stationary_observables", "transition_values",
-           "stationary_values", "transition_theory", "stationary_theory", "tname", "sname",
+           "stationary_values", "transition_theory", "stationary_theory", "transition_label", "stationary_label",
            "kind_of", "find", "planned_comparisons"]
 
 TRANSITION = "transition"
 STATIONARY = "stationary"
 
 
-def tname(kind: str, t: float, v0: float) -> str:
+def transition_label(kind: str, t: float, v0: float) -> str:
     """Label of a transition-run observable."""
     return f"{kind} at t={t:g} from v0={v0:g}"
 
 
-def sname(kind: str, tau: float | None = None) -> str:
+def stationary_label(kind: str, tau: float | None = None) -> str:
     """Label of a stationary-run observable (``tau``: the work window)."""
     return kind if tau is None else f"{kind} (tau={tau:g})"
 
@@ -197,8 +197,8 @@ class Observable:
     def label(self) -> str:
         if self.run == TRANSITION:
             assert self.t is not None and self.v0 is not None  # transition rows have both
-            return tname(self.kind, self.t, self.v0)
-        return sname(self.kind, self.tau)
+            return transition_label(self.kind, self.t, self.v0)
+        return stationary_label(self.kind, self.tau)
 
     @property
     def entry(self) -> Kind:

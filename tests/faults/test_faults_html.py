@@ -99,11 +99,11 @@ def test_a_failing_figure_keeps_the_other_figures(tmp_path, monkeypatch):
     names = ["fig_prehistory", "fig_boundaries", "fig_propagator", "fig_stationary",
              "fig_work_paths", "fig_rate_function", "fig_budget"]
     for n in names:
-        monkeypatch.setattr(P.F, n, lambda *a, n=n, **k: (png, f"caption of {n}"))
+        monkeypatch.setattr(P.figures, n, lambda *a, n=n, **k: (png, f"caption of {n}"))
 
     def broken(*a, **k):
         raise ValueError("no circuit window of work rate 0.2 <here>")
-    monkeypatch.setattr(P.F, "fig_work_paths", broken)
+    monkeypatch.setattr(P.figures, "fig_work_paths", broken)
     runs = types.SimpleNamespace(exp=types.SimpleNamespace(name="work", v0=(0.0,)))
     fails = P._Failures()
     figs, errors = P._figures_for(runs, None, tmp_path, fails, "Experiment 'work'")
