@@ -31,6 +31,7 @@ weight 1/2.  Mass that would leave the grid is put into the outermost cell (cons
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -43,7 +44,8 @@ from .fokker_planck import generator as sg_generator
 __all__ = ["ShotGrid", "shot_generator", "jump_kernel", "has_atom", "premultiplier"]
 
 
-def premultiplier(mean: float, h: float, n_cells: int, two_sided: bool, extra: int = 0):
+def premultiplier(mean: float, h: float, n_cells: int, two_sided: bool, extra: int = 0
+                  ) -> sparse.csc_matrix:
     """The discrete ``(1 + mu d/dv)`` (one-sided) or ``(1 - mu^2 d^2/dv^2)`` (two-sided): the
     bidiagonal ``N = I - q S`` (S the shift to the next cell, ``q = e^{-h/mu}``), or
     ``(I - q S^T)(I - q S)``.  It maps the geometric (exponential) kernel to a banded one, so
@@ -133,7 +135,7 @@ class ShotGrid:
     def n(self) -> int:
         return self.v.size
 
-    def weights_to_density(self, p: np.ndarray):
+    def weights_to_density(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(continuous density at ``v`` of the cells/nodes, atom mass)."""
         if self.atom:
             return p[..., :-1] / self.h, p[..., -1]
@@ -255,7 +257,7 @@ def _gaussian_range(model: Model, tail: float = 50.0) -> tuple[float, float]:
     return lo - pad, hi + pad
 
 
-def _grid_range(model: Model, v0s=()) -> tuple[float, float]:
+def _grid_range(model: Model, v0s: Iterable[float] = ()) -> tuple[float, float]:
     shot = model.shot
     tau = model.tau_m
     if shot is None:
@@ -299,7 +301,8 @@ def default_spacing(model: Model) -> float:
     return min(scales)
 
 
-def shot_generator(model: Model, h: float | None = None, v0s=(), max_states: int = 400_000) -> ShotGrid:
+def shot_generator(model: Model, h: float | None = None, v0s: Iterable[float] = (),
+                   max_states: int = 400_000) -> ShotGrid:
     """Generator of the Kolmogorov-Feller equation of ``model`` (module docstring)."""
     if h is None:
         h = default_spacing(model)
