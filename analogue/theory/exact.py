@@ -22,7 +22,10 @@ from __future__ import annotations
 
 import math
 
+from typing import Any
+
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.special import logsumexp
 
 from ..model import Model
@@ -40,7 +43,7 @@ __all__ = ["propagator", "propagator_atom", "stationary_moments", "StationaryMom
            "sample_stationary", "scgf", "rate_function", "work_pdf"]
 
 
-def _check_model(model) -> None:
+def _check_model(model: object) -> None:
     if not isinstance(model, Model):
         raise ValueError(f"model must be an analogue.Model, got {type(model).__name__}")
 
@@ -50,48 +53,57 @@ def stationary_moments(model: Model, h: float | None = None) -> StationaryMoment
     member of the family by :mod:`.family` (with ``p_zero``, the atom at v = 0)."""
     _check_model(model)
     if not model.is_paper:
-        return _family.stationary_moments(model, h=h)
+        moments: StationaryMoments = _family.stationary_moments(model, h=h)
+        return moments
     return _stationary_moments(model, h=h)
 
 
-def scgf(model: Model, k, *, h: float | None = None):
+def scgf(model: Model, k: ArrayLike, *, h: float | None = None) -> np.ndarray:
     """Work SCGF (:func:`.work_statistics.scgf`; family members: :func:`.family.scgf`)."""
     _check_model(model)
     if not model.is_paper:
-        return _family.scgf(model, k, h=h)
-    return _paper_scgf(model, k, h=h)
+        out: np.ndarray = _family.scgf(model, k, h=h)
+    else:
+        out = _paper_scgf(model, k, h=h)
+    return out
 
 
-def rate_function(model: Model, w, *, h: float | None = None):
+def rate_function(model: Model, w: ArrayLike, *, h: float | None = None) -> np.ndarray:
     """Work rate function (:func:`.work_statistics.rate_function`; family members:
     :func:`.family.rate_function`, whose scaling with gamma = inf is documented there)."""
     _check_model(model)
     if not model.is_paper:
-        return _family.rate_function(model, w, h=h)
-    return _paper_rate_function(model, w, h=h)
+        out: np.ndarray = _family.rate_function(model, w, h=h)
+    else:
+        out = _paper_rate_function(model, w, h=h)
+    return out
 
 
-def work_pdf(model: Model, w, tau, **kwargs):
+def work_pdf(model: Model, w: ArrayLike, tau: float, **kwargs: Any) -> np.ndarray:
     """Finite-time work density (:func:`.work_statistics.work_pdf`); the paper's model only
     (for family members the SCGF and rate function are available)."""
     _check_model(model)
     if not model.is_paper:
         raise ValueError("work_pdf is implemented for the paper's model only; for the family use "
                          "exact.scgf / exact.rate_function")
-    return _paper_work_pdf(model, w, tau, **kwargs)
+    out: np.ndarray = _paper_work_pdf(model, w, tau, **kwargs)
+    return out
 
 
-def propagator_atom(model: Model, t, v0: float, t0: float = 0.0, *, h: float | None = None):
+def propagator_atom(model: Model, t: ArrayLike, v0: float, t0: float = 0.0, *,
+                    h: float | None = None) -> float | np.ndarray:
     """``P(v(t) = 0 | v0)``: the atom of the transition law (pure shot noise, stick regime);
     0 for the paper's model."""
     _check_model(model)
     if model.is_paper:
         t_arr = np.asarray(t, dtype=float)
         return 0.0 if t_arr.ndim == 0 else np.zeros(t_arr.shape)
-    return _family.propagator_atom(model, t, v0, t0, h=h)
+    atom: float | np.ndarray = _family.propagator_atom(model, t, v0, t0, h=h)
+    return atom
 
 
-def propagator(model: Model, v, t, v0: float, t0: float = 0.0, *, grid: Grid | None = None,
+def propagator(model: Model, v: ArrayLike, t: ArrayLike, v0: float, t0: float = 0.0, *,
+               grid: Grid | None = None,
                h: float | None = None, method: str = "auto") -> np.ndarray:
     """Transition density ``f(v, t | v0, t0)`` of eq. (4) at finite gamma.
 
@@ -128,7 +140,8 @@ def propagator(model: Model, v, t, v0: float, t0: float = 0.0, *, grid: Grid | N
     if not model.is_paper:
         if grid is not None or method != "auto":
             raise ValueError("grid and method apply to the paper's model only")
-        return _family.propagator(model, v, t, v0, t0, h=h)
+        density: np.ndarray = _family.propagator(model, v, t, v0, t0, h=h)
+        return density
     v = np.asarray(v, dtype=float)
     if not np.all(np.isfinite(v)):
         raise ValueError("v must be finite")
@@ -157,7 +170,8 @@ def propagator(model: Model, v, t, v0: float, t0: float = 0.0, *, grid: Grid | N
     return _interpolate(model, grid, probs / grid.h, v, t_arr.ndim == 0)
 
 
-def _interpolate(model: Model, grid: Grid, dens: np.ndarray, v: np.ndarray, scalar: bool):
+def _interpolate(model: Model, grid: Grid, dens: np.ndarray, v: np.ndarray, scalar: bool
+                ) -> np.ndarray:
     """Interpolate node densities to ``v``: ``ln(f/p_s)`` linearly, times the exact
     ``p_s(v) ~ exp(-gamma U(v))``.  For the sgn law ``f`` and ``p_s`` have the same jump of the
     log-derivative at the node v = 0 (it comes from the jump of the drift), so ``f/p_s`` is
