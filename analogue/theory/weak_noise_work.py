@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy import optimize
 
 from ..checks import finite as _finite, finite_array as _finite_array
@@ -50,7 +51,7 @@ def _require_force(model: Model) -> None:
 
 
 # ------------------------------------------------------------------------ rate function
-def _hold_cost(model: Model, v):
+def _hold_cost(model: Model, v: np.ndarray) -> np.ndarray:
     """Cost per unit time ``U'(v)^2 / 4`` of holding the velocity at ``v`` (the Lagrangian
     ``L(0, v)`` of eq. (9)).  At ``v = 0`` the sgn law is set-valued (Filippov): friction
     can supply any value in ``[-Delta, Delta]``, so holding ``v = 0`` costs
@@ -62,7 +63,7 @@ def _hold_cost(model: Model, v):
     return 0.25 * np.where(v == 0, stuck * stuck, moving * moving)
 
 
-def rate_function(model: Model, w):
+def rate_function(model: Model, w: ArrayLike) -> float | np.ndarray:
     """The paper's work rate function ``I(w)`` (eq. (64)), vectorised over ``w``.
 
     ``I(w) = L(0, tilde v_w) = (1/4) (w/(m a tau_m) + sgn(w/(m a)) Delta - a)^2`` with
@@ -85,7 +86,7 @@ def rate_function(model: Model, w):
     return float(out) if out.ndim == 0 else out
 
 
-def fluctuation_relation(model: Model, w):
+def fluctuation_relation(model: Model, w: ArrayLike) -> float | np.ndarray:
     """``I(-w) - I(w)`` from eq. (64) (eq. (67)), vectorised over ``w``, any sign of ``a``.
 
     For ``a > 0`` and ``w > 0`` this is ``w/(m tau_m) + a Delta`` (eq. (67)); in general it is
@@ -131,7 +132,7 @@ class WorkOptimalPath:
     action: float
     work: float
     kind: str
-    t_nodes: tuple = field(default=())
+    t_nodes: tuple[float, ...] = field(default=())
 
 
 class _Segments:
@@ -165,16 +166,17 @@ class _Segments:
         self.stuck_rate = 0.25 * stuck * stuck
 
     # --- per piece, vectorised over rows of durations T (shape (..., n)) -------------
-    def _pieces(self, T, beta):
+    def _pieces(self, T: np.ndarray, beta: np.ndarray | float
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         tau = self.m.tau_m
         E = np.exp(-T / tau)
-        vp = -self.c * tau + self.k * beta
-        z0 = self.x0 - vp
-        z1 = self.x1 - vp
-        b = 2.0 * beta * self.m.force * tau
+        vp = np.asarray(-self.c * tau + self.k * beta)
+        z0 = np.asarray(self.x0 - vp)
+        z1 = np.asarray(self.x1 - vp)
+        b = np.asarray(2.0 * beta * self.m.force * tau)
         return E, vp, z0, z1, b
 
-    def _work_terms(self, T):
+    def _work_terms(self, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Integral of v over each piece as ``J0 + beta * J1`` (closed form)."""
         tau = self.m.tau_m
         th = np.tanh(T / (2.0 * tau))
@@ -184,12 +186,12 @@ class _Segments:
         mv = self.moving
         return np.where(mv, J0, 0.0), np.where(mv, J1, 0.0)
 
-    def beta_for(self, T, target):
+    def beta_for(self, T: np.ndarray, target: float) -> np.ndarray:
         """Multiplier that makes ``integral v = target`` (target = w tau / F)."""
         J0, J1 = self._work_terms(T)
-        return (target - J0.sum(axis=-1)) / J1.sum(axis=-1)
+        return np.asarray((target - J0.sum(axis=-1)) / J1.sum(axis=-1))
 
-    def action(self, T, beta):
+    def action(self, T: np.ndarray, beta: np.ndarray | float) -> np.ndarray:
         """Action of every piece, using
         ``v' + U' = (2P/tau_m) e^{s/tau_m} + 2 beta m a tau_m`` for ``z = P e^{s/tau_m} + Q e^{-s/tau_m}``,
         written with ``E = e^{-T/tau_m}`` so that long pieces do not overflow."""
@@ -203,7 +205,7 @@ class _Segments:
         A = np.where(T > 0, A, np.where(r == 0, 0.0, np.inf))
         return np.where(self.moving, A, self.stuck_rate * T)
 
-    def admissible(self, T, beta, rtol=1e-9):
+    def admissible(self, T: np.ndarray, beta: np.ndarray | float, rtol: float = 1e-9) -> np.ndarray:
         """True where every moving piece stays on its own half plane.  ``v - v_p`` is a sum of
         two exponentials, so it has at most one interior extremum, found in closed form."""
         tau = self.m.tau_m
@@ -218,9 +220,9 @@ class _Segments:
             ext = vp + 2.0 * np.sign(P) * np.sqrt(np.abs(P * Q))
         scale = rtol * (1.0 + abs(self.v0) + abs(self.v1) + np.abs(vp))
         bad = self.moving & interior & (self.sigma * ext < -scale)
-        return ~bad.any(axis=-1)
+        return np.asarray(~bad.any(axis=-1))
 
-    def evaluate(self, T, beta, s):
+    def evaluate(self, T: np.ndarray, beta: float, s: np.ndarray) -> np.ndarray:
         """The path at times ``s`` for one set of durations ``T``."""
         tau = self.m.tau_m
         edges = np.concatenate([[0.0], np.cumsum(T)])
@@ -245,7 +247,7 @@ class _Segments:
         return out
 
 
-def _patterns(v0: float, v: float, allow_stick: bool):
+def _patterns(v0: float, v: float, allow_stick: bool) -> list[str]:
     """Sign patterns of candidate optimal paths: up to three sliding pieces (so up to two
     crossings of v = 0) with, optionally, a stuck stretch at any node on v = 0."""
     first = ["+", "-"] if v0 == 0 else ["+" if v0 > 0 else "-"]
@@ -276,12 +278,13 @@ def _patterns(v0: float, v: float, allow_stick: bool):
     return list(dict.fromkeys(out))
 
 
-def _softmax(x):
+def _softmax(x: np.ndarray) -> np.ndarray:
     e = np.exp(x - x.max(axis=-1, keepdims=True))
-    return e / e.sum(axis=-1, keepdims=True)
+    return np.asarray(e / e.sum(axis=-1, keepdims=True))
 
 
-def _best_durations(seg: _Segments, tau: float, target: float, rng):
+def _best_durations(seg: _Segments, tau: float, target: float, rng: np.random.Generator
+                    ) -> tuple[float, np.ndarray | None, float | None]:
     """Minimise the constrained action over the node times of one sign pattern."""
     n = len(seg.pattern)
     if n == 1:
@@ -291,7 +294,7 @@ def _best_durations(seg: _Segments, tau: float, target: float, rng):
             return math.inf, None, None
         return float(seg.action(T, beta).sum()), T, beta
 
-    def objective(x):
+    def objective(x: np.ndarray) -> float:
         T = tau * _softmax(np.concatenate([[0.0], x]))
         beta = seg.beta_for(T, target)
         if not np.isfinite(beta) or not seg.admissible(T, beta):
@@ -302,9 +305,9 @@ def _best_durations(seg: _Segments, tau: float, target: float, rng):
     # Coarse vectorised search over the simplex of durations, then a local polish.
     X = rng.normal(scale=2.0, size=(600, n - 1))
     T = tau * _softmax(np.concatenate([np.zeros((X.shape[0], 1)), X], axis=1))
-    beta = seg.beta_for(T, target)
-    A = seg.action(T, beta).sum(axis=-1)
-    A = np.where(np.isfinite(beta) & seg.admissible(T, beta) & np.isfinite(A), A, np.inf)
+    betas = seg.beta_for(T, target)
+    A = seg.action(T, betas).sum(axis=-1)
+    A = np.where(np.isfinite(betas) & seg.admissible(T, betas) & np.isfinite(A), A, np.inf)
     order = np.argsort(A)
     best = (math.inf, None)
     for j in order[:2]:
@@ -320,7 +323,8 @@ def _best_durations(seg: _Segments, tau: float, target: float, rng):
     return best[0], T, float(seg.beta_for(T, target))
 
 
-def work_optimal_path(model: Model, w, tau, v0, v, n: int = 400) -> WorkOptimalPath:
+def work_optimal_path(model: Model, w: float, tau: float, v0: float, v: float,
+                      n: int = 400) -> WorkOptimalPath:
     """Optimal path at fixed work rate (eqs. (57), (58), (60); Fig. 7 of the paper).
 
     Minimises the Onsager-Machlup action ``A`` over paths on ``[0, tau]`` with ``v(0) = v0``,
