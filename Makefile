@@ -18,7 +18,9 @@ setup: $(VENV)/.installed
 setup-test: setup
 	scripts/install-system.sh --test
 
+# The stick board (issue 13) first, so that the paper report links it (board/index.html).
 paper: setup
+	$(VENV)/bin/analogue board stick $(PAPER_FLAGS) --out $(OUT)/board
 	$(VENV)/bin/analogue paper $(PAPER_FLAGS) --out $(OUT)
 
 test: setup-test
