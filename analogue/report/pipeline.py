@@ -295,8 +295,8 @@ class _TheoryThread:
     """One background thread for the theory, which needs no circuit data (issue 10, item 4).
 
     ngspice runs as subprocesses and the main thread mostly waits for them, so the theory
-    runs beside them; BLAS/LAPACK are limited to one thread meanwhile (threadpoolctl), so the
-    theory adds one runnable thread, not one per core.  The thread is a daemon: an interrupt
+    runs beside them; BLAS/LAPACK are limited to one thread while a task runs (threadpoolctl),
+    so the theory adds one runnable thread, not one per core.  The thread is a daemon: an interrupt
     does not wait for the theory step under way."""
 
     def __init__(self, phases: _Phases):
@@ -309,19 +309,21 @@ class _TheoryThread:
 
     def _run(self):
         from threadpoolctl import threadpool_limits
-        with threadpool_limits(1):
-            while True:
-                item = self.queue.get()
-                if item is None:
-                    return
-                fut, phase, experiment, fn = item
-                if not fut.set_running_or_notify_cancel():
-                    continue
-                try:
-                    with self.phases(phase, experiment, thread="theory"):
-                        fut.set_result(fn())
-                except BaseException as exc:  # handed to whoever waits for the result
-                    fut.set_exception(exc)
+        while True:
+            item = self.queue.get()
+            if item is None:
+                return
+            fut, phase, experiment, fn = item
+            if not fut.set_running_or_notify_cancel():
+                continue
+            try:
+                # the limit is process-wide (OpenBLAS has one pool): held only while a theory
+                # task runs, so the main thread's own theory (the family chapter) gets both
+                # cores once the background work is done
+                with threadpool_limits(1), self.phases(phase, experiment, thread="theory"):
+                    fut.set_result(fn())
+            except BaseException as exc:  # handed to whoever waits for the result
+                fut.set_exception(exc)
 
     def submit(self, phase: str, experiment: str | None, fn) -> Future:
         fut: Future = Future()
