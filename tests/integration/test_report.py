@@ -97,7 +97,14 @@ def test_quick_paper_writes_valid_report(paper_report):
     metrics = json.loads((out / "metrics.json").read_text())
     validate_metrics(metrics)
     names = {c["experiment"] for c in metrics["comparisons"]}
-    assert names == {"stick", "slip", "work"}
+    from analogue.circuit.experiments import PAPER_EXPERIMENTS
+    from analogue.report.beyond import MEMBERS
+    # the paper's experiments, then the chapter "Beyond the paper" (one per family member)
+    assert names == set(PAPER_EXPERIMENTS) | set(MEMBERS)
+    phases = metrics["provenance"]["phases"]
+    assert {p["phase"] for p in phases} >= {"circuit runs", "exact theory", "comparisons"}
+    # the circuit-free theory ran in the background thread
+    assert all(p["thread"] == "theory" for p in phases if p["phase"] == "exact theory")
     kinds = {c["theory_kind"] for c in metrics["comparisons"]}
     assert kinds == {"exact", "weak-noise"}
     prov = metrics["provenance"]
