@@ -398,7 +398,7 @@ def store():
 
 
 _store_option = click.option(
-    "--store", "store_dir", type=click.Path(file_okay=False, path_type=Path), default=None,
+    "--store", "store_dir", default=None, metavar="DIRECTORY", callback=_store_dir_option,
     help="Run-store directory (default $ANALOGUE_STORE or ~/.cache/analogue/runs).")
 
 
@@ -575,8 +575,8 @@ def theory(quantity, experiment_arg, experiment, tau_m, delta, a, gamma, mass, e
 @click.option("--quick", is_flag=True, help="Few boards, short runs (about two minutes).")
 @click.option("--workers", type=click.IntRange(1, 256), default=None,
               help="ngspice processes at once (default: all cores).")
-@click.option("--store", "board_store", type=click.Path(file_okay=False, path_type=Path),
-              default=None, help="Run-store directory (default $ANALOGUE_STORE or ~/.cache/analogue/runs).")
+@click.option("--store", "board_store", default=None, metavar="DIRECTORY",
+              callback=_store_dir_option, help="Run-store directory (default $ANALOGUE_STORE or ~/.cache/analogue/runs).")
 @click.option("--seed", type=click.IntRange(0, 2**31 - 1), default=None,
               help="Master seed (default: the experiment's).")
 @click.option("--opamp-model", type=click.Path(dir_okay=False, path_type=Path), default=None,

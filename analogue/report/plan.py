@@ -13,8 +13,8 @@ The ``[report]`` table of ``circuits/<name>.toml`` (all keys optional)::
     work_paths = [[1.0, 5.0]]      # (w, tau): circuit windows of work rate ~ w vs eq. (60)
     check_replicas = 64            # replicas re-run with tight tolerances (integration check)
 
-``--quick`` divides replica counts by four (at least 32; the integration check: at least 16)
-and halves the stationary length.
+``--quick`` divides replica counts by four (at least 32; the integration check: at least 16;
+never more than the file's count) and halves the stationary length.
 
 The table is parsed with the rest of the file, by
 :func:`analogue.circuit.experiments.experiment_from_dict`, and travels with the experiment
@@ -69,7 +69,8 @@ class RunOptions:
     def scaled(self, replicas: int) -> int:
         if not self.quick:
             return int(replicas)
-        return max(MIN_QUICK_REPLICAS, int(replicas) // QUICK_DIVISOR)
+        # never more than the file asks for (replicas = 8 used to run 32 with --quick)
+        return min(int(replicas), max(MIN_QUICK_REPLICAS, int(replicas) // QUICK_DIVISOR))
 
 
 @dataclass(frozen=True)

@@ -103,7 +103,14 @@ class TheoryTable:
             if why:
                 rec["null_reasons"] = why
             out.append(rec)
-        return {"model": model.as_dict(), "quantity": self.quantity, "kind": self.kind,
+        # gamma = inf (pure shot noise) is a valid model value: null, with its reason
+        params = model.as_dict()
+        bad = {k for k, v in params.items() if isinstance(v, float) and not math.isfinite(v)}
+        data: dict[str, Any] = {"model": {k: None if k in bad else v for k, v in params.items()}}
+        if bad:
+            data["model_null_reasons"] = {k: "infinite" if math.isinf(params[k]) else "not a number"
+                                          for k in sorted(bad)}
+        return {**data, "quantity": self.quantity, "kind": self.kind,
                 "columns": list(self.header), "rows": out}
 
     def as_text(self) -> str:

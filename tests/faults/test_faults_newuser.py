@@ -1,0 +1,76 @@
+"""Faults found by trying the tool as a new user would, off the happy path (issue 8): each
+test failed on main before its fix.  No ngspice here: every case fails or answers before a
+deck runs."""
+import json
+from pathlib import Path
+
+import pytest
+
+from analogue.cli import main
+from analogue.report.plan import ReportSettings, RunOptions
+
+ROOT = Path(__file__).resolve().parents[2]
+SHOT = ROOT / "circuits" / "shot.toml"
+
+
+def one_error_line(r) -> str:
+    text = r.stderr if r.stderr else r.output
+    lines = [ln for ln in text.splitlines() if ln.strip()]
+    assert len(lines) == 1, text
+    assert "Traceback" not in text
+    return lines[0]
+
+
+def _strict(s: str):
+    def refuse(c):
+        raise AssertionError(f"not strict JSON: {c}")
+    return json.loads(s, parse_constant=refuse)
+
+
+# --- theory --json on a model with gamma = inf (pure shot noise) -----------------------
+# Before: "analogue: error: Out of range float values are not JSON compliant: inf", exit 2,
+# although the same query without --json printed its values.
+@pytest.mark.parametrize("args", [["stationary"], ["deterministic", "--t", "1", "--v0", "1"],
+                                  ["scgf", "--k", "0.1"]])
+def test_theory_json_with_infinite_gamma_is_strict_json(cli, args):
+    r = cli.invoke(main, ["theory", args[0], str(SHOT), *args[1:], "--json"])
+    assert r.exit_code == 0, r.output
+    data = _strict(r.stdout)
+    assert data["model"]["gamma"] is None
+    assert "gamma" in data["model_null_reasons"]
+    assert data["model"]["tau_m"] == 1.0  # finite values unchanged
+    assert data["rows"]
+
+
+# --- --quick never enlarges what the file asks for ----------------------------------------
+# Before: replicas = 8 in the file ran 32 replicas with --quick ("small ensembles"), four times
+# what the run without --quick does.
+@pytest.mark.parametrize("n", [1, 8, 31, 32])
+def test_quick_never_runs_more_replicas_than_the_file(n):
+    assert RunOptions(quick=True).scaled(n) <= n
+    assert RunOptions(quick=False).scaled(n) == n
+
+
+def test_quick_scales_large_counts_by_four():
+    assert RunOptions(quick=True).scaled(1000) == 250
+    assert RunOptions(quick=True).scaled(64) == 32
+
+
+def test_quick_stationary_replicas_not_enlarged():
+    s = ReportSettings(stationary_replicas=16).for_options(RunOptions(quick=True))
+    assert s.stationary_replicas <= 16
+
+
+# --- store subcommands and board refuse --store '' ----------------------------------------
+# Before: `analogue store ls --store ''` listed (and prune would have pruned) the current
+# directory; run/report/export already refused the empty string.
+@pytest.mark.parametrize("args", [["store", "ls"], ["store", "du"],
+                                  ["store", "prune", "--max-size", "0", "--dry-run"],
+                                  ["board", "stick", "--out", "OUT", "--quick"]])
+def test_empty_store_is_refused_everywhere(cli, tmp_path, monkeypatch, args):
+    monkeypatch.chdir(tmp_path)
+    r = cli.invoke(main, [*args, "--store", ""])
+    assert r.exit_code == 2, r.output
+    line = one_error_line(r)
+    assert "--store" in line and "empty" in line
+    assert not (tmp_path / "OUT").exists()
