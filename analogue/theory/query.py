@@ -254,7 +254,7 @@ def theory_table(model: Model, quantity: str, *, v: ArrayLike | None = None,
         rows = []
         for tt in _floats("t", t):
             for vv in _floats("v", v):
-                p = weak_noise.optimal_path(model, vv, tt, v0, n=n if quantity == "path" else 2)
+                p = weak_noise.optimal_path(model, vv, tt, start, n=n if quantity == "path" else 2)
                 if quantity == "path":
                     rows += [[float(tt), float(vv), p.kind, float(s), float(x)]
                              for s, x in zip(p.s, p.v)]
@@ -269,7 +269,7 @@ def theory_table(model: Model, quantity: str, *, v: ArrayLike | None = None,
         from . import weak_noise
         rows = []
         for tt in _floats("t", t):
-            b = weak_noise.boundaries(model, tt, v0)
+            b = weak_noise.boundaries(model, tt, start)
             rows.append([float(tt), float(b["w"]), float(b["u"]), float(b["w_cr"])])
         return table(["t", "w", "u", "w_cr"], rows, _boundary_reasons(model, start))
     if quantity == "propagator":

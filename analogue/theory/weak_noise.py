@@ -40,14 +40,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any, cast
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.integrate import trapezoid
 from scipy.optimize.elementwise import find_root
 
 from ..checks import finite as _finite
 from ..model import Model
-from .weak_noise_pieces import bridge, bridge_min, monotone_time, ou_action, ou_action_rate
+from .weak_noise_pieces import (FloatOrArray, bridge, bridge_min, monotone_time, ou_action,
+                                ou_action_rate)
 
 __all__ = ["action", "optimal_path", "OptimalPath", "boundaries", "propagator", "Lambda",
            "crossing_time", "lagrangian", "KINDS",
@@ -62,7 +65,7 @@ _ADMISSIBLE_RTOL = 1e-11
 
 # ----------------------------------------------------------------------------- validation
 
-def _times(t, t0):
+def _times(t: float, t0: float) -> tuple[float, float]:
     t0 = _finite("t0", t0)
     t = _finite("t", t)
     if not t > t0:
@@ -70,7 +73,7 @@ def _times(t, t0):
     return t, t0
 
 
-def _velocities(v):
+def _velocities(v: ArrayLike) -> np.ndarray:
     arr = np.asarray(v, dtype=float)
     if not np.all(np.isfinite(arr)):
         raise ValueError("v must be finite")
@@ -106,10 +109,10 @@ class _Frame:
         """``v = 0`` in the shifted coordinate ``y = |v| + b tau`` of side sigma."""
         return self.b(sigma) * self.tau
 
-    def potential(self, v):
+    def potential(self, v: FloatOrArray) -> FloatOrArray:
         return v * v / (2.0 * self.tau) + self.delta * np.abs(v) - self.a * v
 
-    def stick_time(self, sigma: float, speed):
+    def stick_time(self, sigma: float, speed: ArrayLike) -> np.ndarray:
         """Deterministic time to reach v = 0 from |v| = speed on side sigma (eqs. (31)/(32));
         inf if that side never reaches v = 0 (b <= 0) unless speed == 0."""
         b = self.b(sigma)
@@ -119,7 +122,8 @@ class _Frame:
         return self.tau * np.log1p(speed / (b * self.tau))
 
 
-def _admissible(y0, y1, T, c, tau):
+def _admissible(y0: FloatOrArray, y1: FloatOrArray, T: FloatOrArray, c: float,
+                tau: float) -> np.ndarray:
     """Does the basic piece from y0 to y1 in time T stay on its side (y >= c)?  Touching
     within rounding of c counts as staying (pieces ending on v = 0 have y = c exactly)."""
     return bridge_min(y0, y1, T, tau) >= c - _ADMISSIBLE_RTOL * abs(c)
@@ -134,15 +138,16 @@ class _Best:
     kind: np.ndarray
     side0: np.ndarray
     side1: np.ndarray
-    times: dict = field(default_factory=dict)
+    times: dict[str, np.ndarray] = field(default_factory=dict)
 
     @classmethod
-    def empty(cls, shape):
+    def empty(cls, shape: tuple[int, ...]) -> _Best:
         nan = np.full(shape, np.nan)
         return cls(np.full(shape, np.inf), np.full(shape, -1), np.zeros(shape), np.zeros(shape),
                    {k: nan.copy() for k in ("t_cross", "t_a", "t_b", "t_1", "t_2")})
 
-    def offer(self, cand, kind, side0, side1, **times):
+    def offer(self, cand: FloatOrArray, kind: int | np.ndarray, side0: float, side1: float,
+              **times: FloatOrArray) -> None:
         cand = np.where(np.isfinite(cand), cand, np.inf)
         margin = np.where(np.isfinite(self.action), 1e-13 * (1.0 + np.abs(self.action)), 0.0)
         better = cand < self.action - margin
@@ -157,7 +162,8 @@ class _Best:
             self.times[key] = np.where(better, new, self.times[key])
 
 
-def _direct(fr: _Frame, sigma, v0, v, T):
+def _direct(fr: _Frame, sigma: float, v0: float, v: FloatOrArray,
+            T: FloatOrArray) -> np.ndarray:
     """eq. (22): Lambda_sigma, if the basic solution stays on side sigma."""
     c = fr.c(sigma)
     y0, y1 = abs(v0) + c, np.abs(v) + c
@@ -165,7 +171,8 @@ def _direct(fr: _Frame, sigma, v0, v, T):
     return np.where(ok, ou_action(y0, y1, T, fr.tau), np.inf)
 
 
-def _crossing(fr: _Frame, sigma0, v0, v, T):
+def _crossing(fr: _Frame, sigma0: float, v0: float, v: ArrayLike,
+              T: float) -> tuple[np.ndarray, np.ndarray]:
     """eqs. (24), (25): minimise Lambda_s0(0,tx;v0,0) + Lambda_-s0(v,T;0,tx) over tx.
 
     Returns (action, tx); inf/NaN where eq. (25) has no interior root or a piece leaves its
@@ -177,8 +184,9 @@ def _crossing(fr: _Frame, sigma0, v0, v, T):
     shape = yC1.shape
     yC1 = yC1.ravel()
 
-    def slope(x, yc1):
-        return ou_action_rate(yA0, c0, x, tau) - ou_action_rate(c1, yc1, T - x, tau)
+    def slope(x: FloatOrArray, yc1: np.ndarray) -> np.ndarray:
+        rate: np.ndarray = ou_action_rate(yA0, c0, x, tau) - ou_action_rate(c1, yc1, T - x, tau)
+        return rate
 
     lo, hi = T * 1e-12, T * (1.0 - 1e-12)
     f_lo, f_hi = slope(lo, yC1), slope(hi, yC1)
@@ -196,7 +204,8 @@ def _crossing(fr: _Frame, sigma0, v0, v, T):
     return act.reshape(shape), np.where(ok, tx, np.nan).reshape(shape)
 
 
-def _indirect(fr: _Frame, sigma0, sigma1, v0, v, T):
+def _indirect(fr: _Frame, sigma0: float, sigma1: float, v0: float, v: np.ndarray,
+              T: float) -> tuple[FloatOrArray, FloatOrArray, FloatOrArray]:
     """eqs. (33)/(34): action U(v) when sticking is free (b >= 0 on both sides) and
     t_a (eq. (31)) <= t_b (eq. (32)).  Returns (action, t_a, t_b)."""
     if fr.a > fr.delta:  # sticking on v = 0 costs (a - Delta)^2/4 per unit time: no indirect paths
@@ -208,7 +217,8 @@ def _indirect(fr: _Frame, sigma0, sigma1, v0, v, T):
     return act, np.where(ok, ta, np.nan), np.where(ok, tb, np.nan)
 
 
-def _twice(fr: _Frame, sigma, v0, v, T):
+def _twice(fr: _Frame, sigma: float, v0: float, v: ArrayLike,
+           T: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """eq. (36): v0 and v on side sigma, the attractor on the other side (b_-sigma < 0).
 
     The common energy ``E = -b_B^2 q`` (``0 < q <= 1``) of the three pieces is the unique root
@@ -226,7 +236,7 @@ def _twice(fr: _Frame, sigma, v0, v, T):
     yC1 = (np.abs(v) + cA).ravel()
     T = T.ravel()
 
-    def durations(z, yc1):
+    def durations(z: np.ndarray, yc1: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         q = np.exp(z)
         E = -bB * bB * q
         tA = monotone_time(yA0, cA, E, tau)
@@ -234,9 +244,10 @@ def _twice(fr: _Frame, sigma, v0, v, T):
         tC = monotone_time(cA, yc1, E, tau)
         return tA, tB, tC
 
-    def excess(z, yc1, tt):
+    def excess(z: np.ndarray, yc1: np.ndarray, tt: np.ndarray) -> np.ndarray:
         tA, tB, tC = durations(z, yc1)
-        return tA + tB + tC - tt
+        out: np.ndarray = tA + tB + tC - tt
+        return out
 
     zl = -(T / tau) - 2.0  # there T_B alone exceeds T
     zh = np.zeros(T.shape)
@@ -258,7 +269,7 @@ def _twice(fr: _Frame, sigma, v0, v, T):
     return act.reshape(shape), t1.reshape(shape), t2.reshape(shape)
 
 
-def _solve(fr: _Frame, v, T, v0):
+def _solve(fr: _Frame, v: ArrayLike, T: float, v0: float) -> _Best:
     """Minimal action over all admissible candidates, canonical frame (a >= 0), t0 = 0."""
     v = np.asarray(v, float)
     best = _Best.empty(v.shape)
@@ -290,7 +301,8 @@ def _solve(fr: _Frame, v, T, v0):
 
 
 # ----------------------------------------------------------------------------- public API
-def Lambda(sign, v, t, v0, t0, model: Model):
+def Lambda(sign: int, v: ArrayLike, t: float, v0: float, t0: float,
+           model: Model) -> float | np.ndarray:
     """Action of the basic solution on the upper (``sign = +1``) or lower (``-1``) half plane,
     eq. (20): ``Lambda_pm(v,t;v0,t0)`` with ``Delta -+ a``; uses ``|v|, |v0|`` as the paper
     does.  No admissibility check (that is the caller's business).  Vectorised in v."""
@@ -303,7 +315,8 @@ def Lambda(sign, v, t, v0, t0, model: Model):
     return float(out) if np.ndim(out) == 0 else out
 
 
-def crossing_time(model: Model, v, t, v0, t0=0.0):
+def crossing_time(model: Model, v: ArrayLike, t: float, v0: float,
+                  t0: float = 0.0) -> float | np.ndarray:
     """Crossing time ``t_cross`` of the direct crossing path (root of eq. (25)), absolute
     time; NaN where v and v0 are on the same side (or v0 = 0 / v = 0) or where the direct
     crossing path is not admissible.  Vectorised in v."""
@@ -321,7 +334,8 @@ def crossing_time(model: Model, v, t, v0, t0=0.0):
     return float(out) if out.ndim == 0 else out
 
 
-def action(model: Model, v, t, v0, t0=0.0):
+def action(model: Model, v: ArrayLike, t: float, v0: float,
+           t0: float = 0.0) -> float | np.ndarray:
     """Minimal Onsager-Machlup action ``A*(v, t | v0, t0)`` (eqs. (8), (9)) over the
     admissible direct, direct-crossing, indirect, indirect-crossing and twice-crossing paths
     (eqs. (22), (24), (33), (34), (36)).  ``f ~ exp(-gamma A*)`` (eq. (12)).
@@ -336,7 +350,7 @@ def action(model: Model, v, t, v0, t0=0.0):
     return float(out) if out.ndim == 0 else out
 
 
-def lagrangian(model: Model, v, vdot):
+def lagrangian(model: Model, v: ArrayLike, vdot: ArrayLike) -> np.ndarray:
     """Onsager-Machlup Lagrangian eq. (9) ``(v' + U'(v))^2 / 4`` for the sgn law; on
     ``v = 0`` the set-valued ``sgn(0) in [-1, 1]`` is resolved to the cheapest value (Filippov),
     so sticking costs nothing when ``|a| <= Delta``."""
@@ -368,7 +382,8 @@ class OptimalPath:
     t_2: float = math.nan
 
 
-def optimal_path(model: Model, v, t, v0, t0=0.0, n=400) -> OptimalPath:
+def optimal_path(model: Model, v: float, t: float, v0: float, t0: float = 0.0,
+                 n: int = 400) -> OptimalPath:
     """The optimal path (eqs. (21), (23), (26), (27), (35)) and its action."""
     t, t0 = _times(t, t0)
     v0 = _finite("v0", v0)
@@ -384,7 +399,8 @@ def optimal_path(model: Model, v, t, v0, t0=0.0, n=400) -> OptimalPath:
     times = {k: float(x) for k, x in best.times.items()}
     s = np.linspace(0.0, T, n + 1)
 
-    def piece(sigma, speed0, speed1, start, end):
+    def piece(sigma: float, speed0: float, speed1: float, start: float,
+              end: float) -> tuple[np.ndarray, np.ndarray]:
         """Basic solution on side sigma between (start, speed0) and (end, speed1)."""
         c = fr.c(sigma)
         inside = (s >= start) & (s <= end)
@@ -414,7 +430,7 @@ def optimal_path(model: Model, v, t, v0, t0=0.0, n=400) -> OptimalPath:
                        **{k: (t0 + x if math.isfinite(x) else math.nan) for k, x in times.items()})
 
 
-def _w_cr(fr: _Frame, v0, T):
+def _w_cr(fr: _Frame, v0: float, T: np.ndarray) -> np.ndarray:
     """eq. (49): the v (on v0's side) where the direct and the twice-crossing actions are
     equal, by bisection in ``x = ln(1 + |v|/((Delta+a) tau))`` (canonical frame, v0 < 0).
 
@@ -424,7 +440,7 @@ def _w_cr(fr: _Frame, v0, T):
     bA, bB, tau = fr.b(-1.0), fr.b(1.0), fr.tau
     cA, cB = bA * tau, bB * tau
 
-    def sign(x):
+    def sign(x: np.ndarray) -> np.ndarray:
         v = -cA * np.expm1(x)
         d = _direct(fr, -1.0, v0, v, T)
         tc, _, _ = _twice(fr, -1.0, v0, v, T)
@@ -445,7 +461,8 @@ def _w_cr(fr: _Frame, v0, T):
     return np.where(found, root, np.nan)
 
 
-def boundaries(model: Model, t, v0, t0=0.0):
+def boundaries(model: Model, t: ArrayLike, v0: float,
+               t0: float = 0.0) -> dict[str, Any]:
     """Boundary lines of the optimal-path kinds in the (v, t) plane (section IV).
 
     Returns a dict of arrays (floats for scalar t):
@@ -502,7 +519,8 @@ def boundaries(model: Model, t, v0, t0=0.0):
     return out
 
 
-def propagator(model: Model, v, t, v0, t0=0.0):
+def propagator(model: Model, v: ArrayLike, t: float, v0: float,
+               t0: float = 0.0) -> np.ndarray:
     """Saddle-point transition probability ``f(v,t|v0,t0) ~ exp(-gamma A*)`` (eq. (12);
     eqs. (46), (47), (51) and their mirror images), normalised on the grid ``v`` by the
     trapezoid rule, because the paper drops the Jacobian (eq. (10)) and the fluctuation
@@ -512,9 +530,10 @@ def propagator(model: Model, v, t, v0, t0=0.0):
     v = _velocities(v)
     if v.ndim != 1 or v.size < 2 or not np.all(np.diff(v) > 0):
         raise ValueError("v must be a 1-D strictly increasing grid with at least 2 points")
-    A = action(model, v, t, v0, t0)
+    A = cast(np.ndarray, action(model, v, t, v0, t0))  # v is a 1-D grid: an array comes back
     f = np.exp(-model.gamma * (A - A.min()))
-    return f / trapezoid(f, v)
+    out: np.ndarray = f / trapezoid(f, v)
+    return out
 
 
 # The work large deviations (section V) live in their own module; re-exported here so that
