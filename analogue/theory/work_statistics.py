@@ -52,8 +52,9 @@ from __future__ import annotations
 import math
 import warnings
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager
 from contextvars import ContextVar
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -69,7 +70,7 @@ except ImportError:  # pragma: no cover - declared dependency; only speed depend
     _threadpool_limits = None
 
 
-def _single_threaded():
+def _single_threaded() -> AbstractContextManager[Any]:
     """Context limiting BLAS/LAPACK to one thread (a no-op without threadpoolctl)."""
     import contextlib
     return _threadpool_limits(1) if _threadpool_limits is not None else contextlib.nullcontext()
@@ -86,7 +87,7 @@ _MAX_NODES = 2_000_000
 
 
 # ---------------------------------------------------------------------------- validation
-def _check_model(model) -> Model:
+def _check_model(model: Model) -> Model:
     if not isinstance(model, Model):
         raise ValueError(f"model must be an analogue.Model, got {type(model).__name__}")
     return model
@@ -105,7 +106,7 @@ def _reach(model: Model) -> float:
     return math.sqrt(2.0 * _TAIL * model.tau_m / model.gamma) + 4.0 * model.velocity_scale
 
 
-def _tilt_centres(model: Model, k) -> np.ndarray:
+def _tilt_centres(model: Model, k: ArrayLike) -> np.ndarray:
     """Velocities where the tilted ground state can sit: the maxima of k F v - U'(v)^2 (gamma/4)
     on either half line (``v = tau_m (2 k F tau_m/gamma + a -+ Delta)``), and the stuck state 0."""
     k = np.atleast_1d(np.asarray(k, dtype=float))
@@ -132,7 +133,8 @@ def tilted_grid_spacing(model: Model) -> float:
     return h
 
 
-def tilted_operator(model: Model, grid: Grid, k: float = 0.0):
+def tilted_operator(model: Model, grid: Grid,
+                    k: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """``(diag, off)`` of the symmetric tridiagonal discretisation of the tilted generator
     ``S_k = (1/gamma) d^2/dv^2 - V(v) + k F v``, ``V = gamma U'^2/4 - U''/2`` (ground-state
     transform of the Fokker-Planck operator, detailed balance).
@@ -162,7 +164,7 @@ def tilted_operator(model: Model, grid: Grid, k: float = 0.0):
     return -2.0 * c - V + k * model.force * v, np.full(grid.n - 1, c)
 
 
-def _grid_for(model: Model, k: float, h: float, extra=()) -> Grid:
+def _grid_for(model: Model, k: float, h: float, extra: ArrayLike = ()) -> Grid:
     c = _tilt_centres(model, k)
     pts = np.concatenate([c, np.asarray(extra, dtype=float)])
     r = _reach(model)
@@ -309,7 +311,7 @@ def _top_eigenpair(d: np.ndarray, e: np.ndarray) -> tuple[float, np.ndarray]:
     return float(lam[0]), vec[:, 0]
 
 
-def _principal(model: Model, k: float, grid: Grid):
+def _principal(model: Model, k: float, grid: Grid) -> tuple[float, float]:
     """Principal eigenvalue and Hellmann-Feynman derivative ``F <phi| v |phi>``."""
     d, e = tilted_operator(model, grid, k)
     lam, phi = _top_eigenpair(d, e)
@@ -322,7 +324,8 @@ def _principal_nodes(model: Model, k: float, v: np.ndarray, h: float) -> tuple[f
     return lam, model.force * float(np.dot(phi * phi, v))
 
 
-def _scgf_pair(model: Model, k: float, h: float, check: bool = True, mesh: str = "uniform"):
+def _scgf_pair(model: Model, k: float, h: float, check: bool = True,
+               mesh: str = "uniform") -> tuple[float, float]:
     """Richardson-extrapolated (lambda, lambda') from spacings h and h/2 (``mesh``: "uniform"
     grid of spacing h, or "graded" mesh of :func:`_graded_nodes`, and their refinements)."""
     lam, der, l1, l2 = _scgf_pair_raw(model, k, h, mesh)
@@ -377,7 +380,7 @@ def _check_converged(model: Model, k: float, h: float, lam: float, l1: float,
                       "pass a smaller h", RuntimeWarning, stacklevel=4)
 
 
-def scgf(model: Model, k, *, h: float | None = None, mesh: str = "auto"):
+def scgf(model: Model, k: ArrayLike, *, h: float | None = None, mesh: str = "auto") -> np.ndarray:
     """Scaled cumulant generating function ``lambda(k) = lim (1/tau) ln E exp(k W_tau)``.
 
     Principal eigenvalue of the symmetrised tilted generator ``S_0 + k F diag(v)`` (Touchette,
@@ -399,13 +402,15 @@ def scgf(model: Model, k, *, h: float | None = None, mesh: str = "auto"):
     return _scgf_and_derivative(model, k, h, mesh)[0]
 
 
-def scgf_derivative(model: Model, k, *, h: float | None = None, mesh: str = "auto"):
+def scgf_derivative(model: Model, k: ArrayLike, *, h: float | None = None,
+                    mesh: str = "auto") -> np.ndarray:
     """``lambda'(k)`` by Hellmann-Feynman: ``F <phi_k| v |phi_k>`` (the tilted mean work rate);
     ``mesh`` as in :func:`scgf`."""
     return _scgf_and_derivative(model, k, h, mesh)[1]
 
 
-def _scgf_and_derivative(model, k, h, mesh="auto"):
+def _scgf_and_derivative(model: Model, k: ArrayLike, h: float | None,
+                         mesh: str = "auto") -> tuple[np.ndarray, np.ndarray]:
     model = _check_model(model)
     k = _finite_array("k", k)
     if h is None:
@@ -426,17 +431,19 @@ def work_rate_mean(model: Model) -> float:
     val, _ = integrate.quad(lambda v: v * float(model.stationary_pdf(v)), c - r, c + r,
                             points=[p for p in pts if c - r < p < c + r], limit=400,
                             epsabs=1e-14, epsrel=1e-12)
-    return model.force * val
+    out: float = model.force * val
+    return out
 
 
-def _k_guess(model: Model, w):
+def _k_guess(model: Model, w: float) -> float:
     """k whose weak-noise tilt centre is at v = w/F (OU-like: lambda'(k) ~ F tau_m (2kF tau_m/gamma + a))."""
     F, tm, g = model.force, model.tau_m, model.gamma
     return g * (w / F - tm * model.a) / (2.0 * F * tm * tm)
 
 
 def _legendre_root(model: Model, w: float, h: float, mean: float, mesh: str = "uniform",
-                   near=None, counter=None):
+                   near: tuple[float, float, float] | None = None,
+                   counter: list[float] | None = None) -> tuple[float, ...]:
     """k with lambda'(k) = w (lambda' increases with k) and lambda(k).
 
     Without ``near`` the root is bracketed from k = 0 (where lambda'(0) = <w>) outwards by
@@ -450,14 +457,16 @@ def _legendre_root(model: Model, w: float, h: float, mean: float, mesh: str = "u
         return 0.0, 0.0
     memo: dict[float, tuple[float, float, float, float]] = {}
 
-    def pair(k):
+    def pair(k: float) -> tuple[float, float, float, float]:
         if k not in memo:
             memo[k] = _scgf_pair_raw(model, k, h, mesh)
             if counter is not None:
                 counter.append(k)
         return memo[k]
 
-    f = lambda k: pair(k)[1] - w
+    def f(k: float) -> float:
+        return pair(k)[1] - w
+
     if near is None:
         side = 1.0 if w > mean else -1.0
         step = max(abs(_k_guess(model, w)),
@@ -513,7 +522,8 @@ def _legendre_sweep(model: Model, w: np.ndarray, h: float, mesh: str,
     return ks, lams
 
 
-def rate_function(model: Model, w, *, h: float | None = None, mesh: str = "auto"):
+def rate_function(model: Model, w: ArrayLike, *, h: float | None = None,
+                  mesh: str = "auto") -> np.ndarray:
     """Exact rate function ``I(w) = (1/gamma) sup_k [k w - lambda(k)]`` in the paper's scaling
     ``P_tau(w) ~ exp(-tau gamma I(w))`` (eqs. (54), (55)).
 
@@ -535,7 +545,7 @@ def rate_function(model: Model, w, *, h: float | None = None, mesh: str = "auto"
     kind = _mesh_kind(model, h, mesh)
     flat = w.ravel()
     ks, lams = _legendre_sweep(model, flat, h, kind)
-    out = np.maximum(ks * flat - lams, 0.0) / model.gamma
+    out: np.ndarray = np.maximum(ks * flat - lams, 0.0) / model.gamma
     return out.reshape(w.shape)
 
 
@@ -601,16 +611,17 @@ def work_variance(model: Model, taus: ArrayLike, *, n: int = 801,
 
 
 # --------------------------------------------------------------- weak-noise objects
-def paper_rate_function(model: Model, w):
+def paper_rate_function(model: Model, w: ArrayLike) -> np.ndarray:
     """The paper's eq. (64), ``I(w) = (1/4)(w/(m a tau_m) + sgn(w) Delta - a)^2`` (at w = 0 the
     formula is ambiguous; sgn(0) = 0 is used)."""
     model = _check_model(model)
     F = _force(model)
     v = _finite_array("w", w) / F
-    return 0.25 * (v / model.tau_m + np.sign(v) * model.delta - model.a) ** 2
+    out: np.ndarray = 0.25 * (v / model.tau_m + np.sign(v) * model.delta - model.a) ** 2
+    return out
 
 
-def _envelope_right(v, a, delta, tm):
+def _envelope_right(v: np.ndarray, a: float, delta: float, tm: float) -> np.ndarray:
     """Convex envelope on v >= 0 of {(0, c0)} and the branch (v/tm + Delta - a)^2/4 (v > 0)."""
     branch = 0.25 * (v / tm + delta - a) ** 2
     if abs(a) <= delta:          # tangent from (0, 0) touches at v_t = tm (Delta - a)
@@ -624,7 +635,7 @@ def _envelope_right(v, a, delta, tm):
     return np.where(v < vt, c0 + slope * v, branch)
 
 
-def weak_noise_limit_rate_function(model: Model, w):
+def weak_noise_limit_rate_function(model: Model, w: ArrayLike) -> np.ndarray:
     """``lim_{gamma -> inf} I_gamma(w)``: the lower convex envelope of the cost of holding the
     velocity at ``v = w/F`` (see the module docstring for the derivation).
 
@@ -644,8 +655,8 @@ def weak_noise_limit_rate_function(model: Model, w):
 
 
 # ------------------------------------------------------------------ finite-tau density
-def work_pdf(model: Model, w, tau, *, h: float | None = None, modes: int = 48,
-             share: bool = True, propagator: str = "expm"):
+def work_pdf(model: Model, w: ArrayLike, tau: ArrayLike, *, h: float | None = None,
+             modes: int = 48, share: bool = True, propagator: str = "expm") -> np.ndarray:
     """Exact density of the work rate ``w = W_tau/tau`` at finite tau in the stationary state.
 
     ``G(k) = E e^{kW} = <sqrt(pi)| exp(tau S_k) |sqrt(pi)>`` (sqrt(pi) the normalised discrete
@@ -892,11 +903,12 @@ class _Reduced:
         self.B = (phi.T * (model.force * v)) @ phi
         self.k0 = k0
 
-    def matrix(self, k):
+    def matrix(self, k: ArrayLike) -> np.ndarray:
         k = np.atleast_1d(k)
-        return np.diag(self.mu)[None] + (k - self.k0)[:, None, None] * self.B[None]
+        out: np.ndarray = np.diag(self.mu)[None] + (k - self.k0)[:, None, None] * self.B[None]
+        return out
 
-    def log_g_and_derivatives(self, k: float, tau: float):
+    def log_g_and_derivatives(self, k: float, tau: float) -> tuple[float, float]:
         """ln G(k), d/dk ln G and d^2/dk^2 ln G for real k (eigen-decomposition + Daleckii-Krein)."""
         mu, U = np.linalg.eigh(self.matrix(k)[0])
         top = mu.max()
@@ -912,7 +924,7 @@ class _Reduced:
         dG = float(z @ (Bt * dd) @ z)
         return tau * top + math.log(G), dG / G
 
-    def log_g_complex(self, k: complex | np.ndarray, tau: float, shift: float):
+    def log_g_complex(self, k: complex | np.ndarray, tau: float, shift: float) -> np.ndarray:
         """ln G at complex k (array), relative to exp(tau*shift)."""
         A = self.matrix(np.asarray(k, dtype=complex))
         if self.propagator == "expm":
@@ -926,17 +938,20 @@ class _Reduced:
                     E = linalg.expm(tau * (A - shift * np.eye(n)))
                 except (np.linalg.LinAlgError, ValueError):  # overflow: the caller retries
                     return np.full(A.shape[0], np.nan + 0j)
-                return np.log(np.einsum("i,kij,j->k", self.c, E, self.c))
+                out: np.ndarray = np.log(np.einsum("i,kij,j->k", self.c, E, self.c))
+                return out
         # A is complex symmetric: A = V diag(mu) V^-1, and c^T V = (V^T c)^T.
         mu, V = np.linalg.eig(A)
         left = np.einsum("i,kij->kj", self.c, V)
         right = np.linalg.solve(V, np.broadcast_to(self.c.astype(complex), mu.shape)[..., None])[..., 0]
         # a failing basis shows up as overflow/NaN here; the caller checks and retries
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-            return np.log(np.sum(left * right * np.exp(tau * (mu - shift)), axis=-1))
+            log_g: np.ndarray = np.log(np.sum(left * right * np.exp(tau * (mu - shift)), axis=-1))
+            return log_g
 
 
-def _work_pdf_one(model, w, tau, h, modes, mean, propagator="expm"):
+def _work_pdf_one(model: Model, w: float, tau: float, h: float, modes: int, mean: float,
+                  propagator: str = "expm") -> float:
     """ln p on the fine grid (h/2) by the contour integral, with the O(h^2) grid error of the
     saddle term ``K(k*) - k* W`` (the eigenvalue error times tau) removed by Richardson
     extrapolation against the coarse grid h at the same k*; the remaining factor (the contour
@@ -988,7 +1003,7 @@ def _work_pdf_one(model, w, tau, h, modes, mean, propagator="expm"):
     return p
 
 
-def _log_ground_state(d, c, lam, phi):
+def _log_ground_state(d: np.ndarray, c: float, lam: float, phi: np.ndarray) -> np.ndarray:
     """ln of a positive tridiagonal ground state ``c phi_{i-1} + d_i phi_i + c phi_{i+1} =
     lam phi_i`` with tails far below round-off: the eigen-solver's vector (accurate only to
     1e-16 of its peak) anchors the peak, the ratios phi_{i-1}/phi_i (from the left end) and
@@ -1013,7 +1028,7 @@ def _log_ground_state(d, c, lam, phi):
     return out
 
 
-def _log_overlap(model, grid, k):
+def _log_overlap(model: Model, grid: Grid, k: float) -> float:
     """ln <phi_k|phi_0> of the normalised principal eigenvectors of S_k and S_0 (both
     positive), with the tails from :func:`_log_ground_state`, so that overlaps far below
     1e-16 (tilted states far from the stationary one) are resolved."""
@@ -1052,11 +1067,12 @@ def _note_fallback(w: float, tau: float) -> None:
         log.append((w, tau))
 
 
-def _saddle(model, red, W, tau, k0):
+def _saddle(model: Model, red: _Reduced, W: float, tau: float,
+            k0: float) -> tuple[float, float, float]:
     """Real saddle k* of ``ln G(k) - k W`` (ln G convex, so its derivative is increasing),
     ``K(k*)`` and ``K''(k*)``.  Any real point gives the same integral; the saddle only makes
     the contour integral well-conditioned, so k* is needed to a fraction of 1/sqrt(K'')."""
-    def dK(k):
+    def dK(k: float) -> float:
         return red.log_g_and_derivatives(k, tau)[1] - W
 
     scale = max(abs(k0), model.gamma / (model.force**2 * model.tau_m * max(tau, model.tau_m)))
@@ -1082,7 +1098,8 @@ _TOL = 1e-9        # integrand (relative to its value at the saddle) counted as 
                    # above the round-off floor (~1e-10) of the ill-conditioned complex eigenvectors
 
 
-def _contour_integral(red, ks, W, tau, K, curv):
+def _contour_integral(red: _Reduced, ks: float, W: float, tau: float, K: float,
+                      curv: float) -> float | None:
     """``int_0^inf Re[G(k*+iy) e^{-iyW}] dy / (G(k*) e^{-k* W})`` by the trapezoid rule (step
     0.7/sqrt(K''): error ~exp(-2 pi^2/0.7^2) ~ 3e-18 for a Gaussian integrand), or None when
     the reduced integrand violates ``|G(k*+iy)| <= G(k*)`` (a property of every moment
