@@ -29,14 +29,22 @@ Methods
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Iterable, Sequence
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy import integrate, optimize, sparse
 from scipy.linalg import eigh_tridiagonal
 from scipy.sparse.linalg import splu
 
 from ..model import Model
 from .kolmogorov_feller import ShotGrid, default_spacing, shot_generator
+
+if TYPE_CHECKING:
+    from .stationary import StationaryMoments
+
+_Solve = Callable[[np.ndarray], np.ndarray]   # b -> x of a factorised linear system
 
 __all__ = ["is_member", "stationary_law", "stationary_moments", "propagator", "propagator_atom",
            "scgf", "rate_function", "check_one_dimensional", "unkicked", "sample_stationary",
@@ -60,7 +68,7 @@ def check_one_dimensional(model: Model) -> None:
 
 
 # ----------------------------------------------------------------------- stationary law
-def _factor(M: sparse.spmatrix, extra_dense=()):
+def _factor(M: sparse.spmatrix, extra_dense: Iterable[int] = ()) -> _Solve:
     """Sparse LU of a nearly banded matrix whose few dense rows (folds of the jump kernel at the
     grid ends, a normalisation row) would fill any ordering in: those states are moved to the
     end by a symmetric permutation (diagonal stays diagonal), then LU in the natural order with
@@ -71,13 +79,14 @@ def _factor(M: sparse.spmatrix, extra_dense=()):
     dense = set(np.flatnonzero(np.diff(M.indptr) > 24).tolist()) | set(extra_dense)
     if not dense:
         lu = splu(M.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0)
-        return lu.solve
+        solve_lu: _Solve = lu.solve
+        return solve_lu
     last = np.array(sorted(dense), dtype=int)
     perm = np.r_[np.setdiff1d(np.arange(n), last), last]
     P = M[perm][:, perm].tocsc()
     lu = splu(P, permc_spec="NATURAL", diag_pivot_thresh=0.0)
 
-    def solve(b):
+    def solve(b: np.ndarray) -> np.ndarray:
         out = np.empty_like(b, dtype=float)
         out[perm] = lu.solve(np.asarray(b, dtype=float)[perm])
         return out
@@ -123,10 +132,12 @@ def _solve_stationary(g: ShotGrid, model: Model) -> np.ndarray:
         raise RuntimeError(f"stationary solve gave negative weights ({p.min():.3g}): the anchor "
                            "state is not recurrent")
     p = np.clip(p, 0.0, None)
-    return p / p.sum()
+    out: np.ndarray = p / p.sum()
+    return out
 
 
-def stationary_law(model: Model, h: float | None = None):
+def stationary_law(model: Model,
+                   h: float | None = None) -> tuple[np.ndarray, np.ndarray, float]:
     """``(v, density, p_zero)``: the grid's stationary law (continuous density at the states'
     velocities, atom at 0) at spacing h (default :func:`kolmogorov_feller.default_spacing`)."""
     check_one_dimensional(model)
@@ -163,7 +174,7 @@ def _grid_moments(model: Model, h: float) -> np.ndarray:
     return np.array([mean, second, pp, pm, sign, atom, diff])
 
 
-def _gradient_smooth_moments(model: Model):
+def _gradient_smooth_moments(model: Model) -> np.ndarray:
     """[mean, second, P(v>0), P(v<0), <tanh(v/eps)>] of exp(-gamma U)/Z for a smooth law
     (epsilon > 0): U by cumulative Simpson of the drift (U' = -drift) and the moments by
     Simpson on a uniform grid resolving epsilon/20, the width/400 and the Stribeck length/100
@@ -172,7 +183,7 @@ def _gradient_smooth_moments(model: Model):
     lo, hi = _gaussian_range(model)
     h = min(model.epsilon / 20.0, model.velocity_scale / 400.0,
             model.stribeck[1] / 100.0 if model.stribeck is not None else math.inf)
-    def nodes(a, b):
+    def nodes(a: float, b: float) -> np.ndarray:
         n = int(min(2_000_000, 2 * math.ceil((b - a) / (2 * h))))
         return np.linspace(a, b, max(n, 2) + 1)
     if lo < 0.0 < hi:  # v = 0 a node, so that P(v > 0) is a Simpson sum of a smooth integrand
@@ -191,7 +202,7 @@ def _gradient_smooth_moments(model: Model):
     return np.array([m1, m2, pp, 1.0 - pp, sign])
 
 
-def _gradient_quadrature(model: Model):
+def _gradient_quadrature(model: Model) -> np.ndarray:
     """[mean, second, P(v>0), P(v<0), <sgn v>] of exp(-gamma U)/Z by quadrature."""
     r = model._support_bound(50.0)
     grid = np.linspace(-r, r, 4001)
@@ -205,7 +216,7 @@ def _gradient_quadrature(model: Model):
     for lo, hi in ((-r, 0.0), (0.0, r)):
         ps = [p for p in pts if lo < p < hi]
 
-        def f(v):
+        def f(v: float) -> np.ndarray:
             e = math.exp(-(model.gamma * float(model.potential(v)) - u0))
             return np.array([e, e * v, e * v * v])
 
@@ -224,7 +235,7 @@ def _gradient_quadrature(model: Model):
     return np.array([(m1m + m1p) / z, (m2m + m2p) / z, zp / z, zm / z, sign])
 
 
-def stationary_moments(model: Model, h: float | None = None):
+def stationary_moments(model: Model, h: float | None = None) -> StationaryMoments:
     """Exact stationary moments of a 1-D member (module docstring) as
     :class:`analogue.theory.stationary.StationaryMoments`, with ``p_zero = P(v = 0)`` (the atom:
     the probability of being stuck, > 0 only for pure shot noise in the stick regime).
@@ -256,7 +267,8 @@ def stationary_moments(model: Model, h: float | None = None):
 
 
 # --------------------------------------------------------------------------- propagator
-def _evolve(g: ShotGrid, p0: np.ndarray, times: np.ndarray, tau: float, source=None) -> np.ndarray:
+def _evolve(g: ShotGrid, p0: np.ndarray, times: np.ndarray, tau: float,
+            source: Callable[[float], np.ndarray] | None = None) -> np.ndarray:
     """``p(t)`` of ``dp/dt = L p + s(t)`` at each of ``times`` by Crank-Nicolson on the banded
     form ``N dp/dt = (N L) p + N s`` (one sparse LU per step size; every step is a cheap banded
     solve), started with two implicit-Euler half steps (Rannacher) so that the stiff
@@ -268,13 +280,13 @@ def _evolve(g: ShotGrid, p0: np.ndarray, times: np.ndarray, tau: float, source=N
     N = g.premultiplier if g.premultiplier is not None else sparse.identity(n, format="csc")
     t_max = float(times.max())
     dt = min(t_max / 400.0, tau / 100.0)
-    cache = {}
+    cache: dict[tuple[str, float], _Solve] = {}
     zero = np.zeros(n)
 
-    def src(t):
+    def src(t: float) -> np.ndarray:
         return zero if source is None else source(t)
 
-    def lu(kind, step):
+    def lu(kind: str, step: float) -> _Solve:
         key = (kind, round(step / dt, 12))
         if key not in cache:
             M = (N - step * A) if kind == "be" else (N - 0.5 * step * A)
@@ -304,7 +316,7 @@ def _evolve(g: ShotGrid, p0: np.ndarray, times: np.ndarray, tau: float, source=N
     return out
 
 
-def unkicked(model: Model, t, v0: float):
+def unkicked(model: Model, t: ArrayLike, v0: float) -> tuple[np.ndarray, np.ndarray]:
     """Pure shot noise: the mass ``e^{-rate t}`` not yet kicked sits on the noise-free path
     ``v_det(t)`` (an atom that moves; at 0 once the path sticks).  Returns ``(v_det, mass)``."""
     if model.shot is None:
@@ -313,7 +325,8 @@ def unkicked(model: Model, t, v0: float):
     return np.asarray(model.deterministic(float(v0), t)), np.exp(-model.shot.rate * t)
 
 
-def _propagate(model, v0, times, h):
+def _propagate(model: Model, v0: float, times: np.ndarray,
+               h: float | None) -> tuple[ShotGrid, np.ndarray]:
     """Grid and state probabilities at ``times``.  With gamma = inf and shot noise the
     unkicked mass (:func:`unkicked`) is kept out of the grid: the grid carries only the mass
     kicked at least once, fed by the exact source ``rate e^{-rate t} landing(v_det(t))``; this
@@ -328,7 +341,7 @@ def _propagate(model, v0, times, h):
     tg = np.linspace(0.0, float(times.max()), 20001)
     vg = np.asarray(model.deterministic(float(v0), tg))
 
-    def source(t):
+    def source(t: float) -> np.ndarray:
         vd = float(np.interp(t, tg, vg))
         land = g.landing(vd)
         return lam * math.exp(-lam * t) * land
@@ -336,7 +349,7 @@ def _propagate(model, v0, times, h):
     return g, np.clip(out, 0.0, None)
 
 
-def _times(t, t0):
+def _times(t: ArrayLike, t0: float) -> tuple[np.ndarray, np.ndarray]:
     t_arr = np.asarray(t, dtype=float)
     if t_arr.ndim > 1:
         raise ValueError(f"t must be a number or a 1-D array, got shape {t_arr.shape}")
@@ -346,7 +359,8 @@ def _times(t, t0):
     return t_arr, el
 
 
-def _on_grid(model, flat, el, v0, h):
+def _on_grid(model: Model, flat: np.ndarray, el: np.ndarray, v0: float,
+             h: float) -> tuple[np.ndarray, np.ndarray]:
     """(density at ``flat`` (times x points), atom (times)) on one grid."""
     g, probs = _propagate(model, float(v0), el, h)
     dens, atom = g.weights_to_density(probs)
@@ -365,7 +379,8 @@ def _on_grid(model, flat, el, v0, h):
     return out, np.asarray(atom, dtype=float)
 
 
-def _richardson_pair(model, flat, el, v0, h):
+def _richardson_pair(model: Model, flat: np.ndarray, el: np.ndarray, v0: float,
+                     h: float | None) -> tuple[np.ndarray, np.ndarray]:
     if h is None:
         h = default_spacing(model)
     fc, ac = _on_grid(model, flat, el, v0, h)
@@ -374,7 +389,8 @@ def _richardson_pair(model, flat, el, v0, h):
     return (w * ff - fc) / (w - 1.0), (w * af - ac) / (w - 1.0)
 
 
-def propagator(model: Model, v, t, v0: float, t0: float = 0.0, *, h: float | None = None):
+def propagator(model: Model, v: ArrayLike, t: ArrayLike, v0: float, t0: float = 0.0, *,
+               h: float | None = None) -> np.ndarray:
     """Density of the continuous part of ``f(v, t | v0, t0)`` for a 1-D member (the atom at 0,
     present for pure shot noise, is :func:`propagator_atom`).  Shapes as
     :func:`analogue.theory.exact.propagator`.  Grids h and h/2 Richardson-combined (first-order
@@ -387,10 +403,12 @@ def propagator(model: Model, v, t, v0: float, t0: float = 0.0, *, h: float | Non
     t_arr, el = _times(t, t0)
     dens, _ = _richardson_pair(model, v.ravel(), el, v0, h)
     out = np.clip(dens, 0.0, None).reshape((el.size,) + v.shape)
-    return out[0] if t_arr.ndim == 0 else out
+    res: np.ndarray = out[0] if t_arr.ndim == 0 else out
+    return res
 
 
-def propagator_atom(model: Model, t, v0: float, t0: float = 0.0, *, h: float | None = None):
+def propagator_atom(model: Model, t: ArrayLike, v0: float, t0: float = 0.0, *,
+                    h: float | None = None) -> float | np.ndarray:
     """``P(v(t) = 0 | v0, t0)``: the mass of the atom at 0 (0 unless pure shot noise in the
     stick regime); grids h and h/2 Richardson-combined."""
     check_one_dimensional(model)
@@ -403,7 +421,7 @@ def propagator_atom(model: Model, t, v0: float, t0: float = 0.0, *, h: float | N
     return float(atom[0]) if t_arr.ndim == 0 else atom
 
 
-def autocorrelation(model: Model, lags, h: float | None = None) -> np.ndarray:
+def autocorrelation(model: Model, lags: ArrayLike, h: float | None = None) -> np.ndarray:
     """Connected stationary velocity autocorrelation ``C(t) = sum_i (v_i - m) [e^{L t}
     ((v - m) p_s)]_i`` of a 1-D member at ``|lags|`` (the same generator and Crank-Nicolson
     evolution as :func:`propagator`; grids h and h/2 Richardson-combined).  ``C(0)`` is the
@@ -427,11 +445,12 @@ def autocorrelation(model: Model, lags, h: float | None = None) -> np.ndarray:
             out[pos] = y @ dv
         vals.append(out)
     w = 2.0 ** (2.0 if math.isfinite(model.gamma) else 1.0)
-    return ((w * vals[1] - vals[0]) / (w - 1.0)).reshape(lags.shape)
+    out_c: np.ndarray = ((w * vals[1] - vals[0]) / (w - 1.0)).reshape(lags.shape)
+    return out_c
 
 
 # ------------------------------------------------------------------ work large deviations
-def _force(model):
+def _force(model: Model) -> float:
     if model.force == 0:
         raise ValueError("a must be != 0: for a == 0 the work W = m a int v vanishes identically")
     return model.force
@@ -507,7 +526,7 @@ class _Scgf:
         scale = 0.1 * abs(guess) + 0.1 * (abs(k * F) * self.sd + 1.0 / model.tau_m)
         a = _principal(self.fine[0], k, F, guess, scale)
         b = _principal(self.fine[1], k, F, guess, scale)
-        w = 2.0**self.order
+        w: float = 2.0**self.order
         return (w * b - a) / (w - 1.0)
 
 
@@ -515,7 +534,7 @@ def _scgf_one(model: Model, k: float, h: float) -> float:
     return _Scgf(model, h)(k)
 
 
-def scgf(model: Model, k, *, h: float | None = None):
+def scgf(model: Model, k: ArrayLike, *, h: float | None = None) -> np.ndarray:
     """SCGF ``lambda(k) = lim (1/tau) ln E exp(k W_tau)`` of a 1-D member (vectorised in k)."""
     check_one_dimensional(model)
     _force(model)
@@ -528,7 +547,7 @@ def scgf(model: Model, k, *, h: float | None = None):
     return np.array([solver(float(kk)) for kk in k.ravel()]).reshape(k.shape)
 
 
-def rate_function(model: Model, w, *, h: float | None = None):
+def rate_function(model: Model, w: ArrayLike, *, h: float | None = None) -> np.ndarray:
     """Rate function of the work rate w (module docstring for the scaling), by the Legendre
     transform of :func:`scgf`, maximising the concave ``k w - lambda(k)`` in k."""
     check_one_dimensional(model)
@@ -564,7 +583,8 @@ def rate_function(model: Model, w, *, h: float | None = None):
 
 
 # ------------------------------------------------------------------------------- sampling
-def sample_stationary(model: Model, size, seed=None) -> np.ndarray:
+def sample_stationary(model: Model, size: int | Sequence[int],
+                      seed: int | np.random.SeedSequence | np.random.Generator | None = None) -> np.ndarray:
     """Independent draws from the stationary law of a 1-D member.  Gaussian only: inverse of
     the CDF of ``exp(-gamma U)`` tabulated by the trapezoid rule (spacing resolving the width,
     the Stribeck length and the kink); with shot noise: the atom at 0 with probability
@@ -572,7 +592,9 @@ def sample_stationary(model: Model, size, seed=None) -> np.ndarray:
     in it."""
     check_one_dimensional(model)
     rng = np.random.default_rng(seed)
-    shape = (int(size),) if np.ndim(size) == 0 else tuple(int(s) for s in size)
+    # (np.ndim, not isinstance: numpy integers and 0-d arrays are scalar sizes too)
+    shape = ((int(cast(int, size)),) if np.ndim(size) == 0
+             else tuple(int(s) for s in cast("Sequence[int]", size)))
     h = default_spacing(model) / 2.0
     if model.shot is None:
         r = model._support_bound(50.0)
