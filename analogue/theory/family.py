@@ -549,7 +549,9 @@ def scgf(model: Model, k: ArrayLike, *, h: float | None = None) -> np.ndarray:
 
 def rate_function(model: Model, w: ArrayLike, *, h: float | None = None) -> np.ndarray:
     """Rate function of the work rate w (module docstring for the scaling), by the Legendre
-    transform of :func:`scgf`, maximising the concave ``k w - lambda(k)`` in k."""
+    transform of :func:`scgf`, maximising the concave ``k w - lambda(k)`` in k.  NaN where
+    no maximiser is found for |k| up to 2^25 times the Gaussian guess (w at or beyond the
+    edge of the work's support)."""
     check_one_dimensional(model)
     F = _force(model)
     w = np.asarray(w, dtype=float)
@@ -570,14 +572,34 @@ def rate_function(model: Model, w: ArrayLike, *, h: float | None = None) -> np.n
             continue
         obj = lambda kk: -(kk * wi - solver(kk))  # noqa: E731  (convex in k)
         k0 = (wi - mean) / curv
-        lo, hi = sorted((0.0, 2.0 * k0))
-        for _ in range(40):  # widen until the maximiser lies inside the bracket
-            res = optimize.minimize_scalar(obj, bounds=(lo, hi), method="bounded",
-                                           options={"xatol": 1e-7 * max(1.0, abs(hi - lo))})
-            near_edge = min(abs(res.x - lo), abs(res.x - hi)) < 1e-3 * (hi - lo)
-            if not near_edge or (res.x * k0 > 0 and abs(res.x - 0.0) < 1e-3 * (hi - lo)):
+        # bracket the minimum of the convex objective by doubling (one solve per step), then
+        # one bounded search.  At the edge of the work's support (w = 0 with one-sided shot
+        # noise) the minimiser runs to |k| -> inf, where the grid's lambda(k) is not resolved
+        # (lambda(-1e4) = -1497 for circuits/shot.toml, below its bound -rate = -1): NaN, not
+        # a number from there (the former widen-and-minimise loop took minutes to return it)
+        p0, p1, f1 = 0.0, 2.0 * k0, obj(2.0 * k0)
+        # the guess can overshoot where lambda(k) diverges (exponential kicks of mean m:
+        # k F m = 1): halve until the objective is below its value at k = 0 (circuits/shot.toml,
+        # w = 1: 2 k0 = 143 > 10; the bounded search from there returned I = 5.17, the
+        # maximum is 6.02 at k = 8.0)
+        f0 = obj(0.0)
+        for _ in range(40):
+            if f1 < f0:
                 break
-            lo, hi = (lo, lo + 2.0 * (hi - lo)) if k0 > 0 else (hi - 2.0 * (hi - lo), hi)
+            p1 *= 0.5
+            f1 = obj(p1)
+        for _ in range(24):
+            p2 = 2.0 * p1
+            f2 = obj(p2)
+            if not f2 < f1:
+                break
+            p0, p1, f1 = p1, p2, f2
+        else:
+            out[i] = math.nan
+            continue
+        lo, hi = sorted((p0, p2))
+        res = optimize.minimize_scalar(obj, bounds=(lo, hi), method="bounded",
+                                       options={"xatol": 1e-7 * max(1.0, abs(hi - lo))})
         out[i] = max(-res.fun, 0.0) / scale
     return out.reshape(w.shape)
 

@@ -74,3 +74,25 @@ def test_empty_store_is_refused_everywhere(cli, tmp_path, monkeypatch, args):
     line = one_error_line(r)
     assert "--store" in line and "empty" in line
     assert not (tmp_path / "OUT").exists()
+
+
+# --- theory rate-function at the edge of the work's support ------------------------------
+# Before: `analogue theory rate-function circuits/shot.toml --w 0` (one-sided kicks: w >= 0,
+# the maximiser of k w - lambda(k) runs to k -> -inf) ran for minutes and then printed a
+# number from the grid's unresolved lambda at |k| ~ 1e12.  Now: n/a (NaN) within seconds.
+@pytest.mark.timeout(120)
+def test_shot_rate_function_at_the_support_edge_is_nan_not_a_hang():
+    import math
+    from analogue.circuit.experiments import load_experiment
+    from analogue.theory import exact
+    m = load_experiment(SHOT).model
+    got = exact.rate_function(m, [0.0, -0.1])
+    assert all(math.isnan(x) for x in got)
+
+
+@pytest.mark.timeout(120)
+def test_shot_rate_function_cli_answers_n_a(cli):
+    r = cli.invoke(main, ["theory", "rate-function", str(SHOT), "--w", "0", "--json"])
+    assert r.exit_code == 0, r.output
+    row = _strict(r.stdout)["rows"][0]
+    assert row["I_exact"] is None and row["null_reasons"]["I_exact"]
