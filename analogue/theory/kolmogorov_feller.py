@@ -298,7 +298,30 @@ def default_spacing(model: Model) -> float:
         scales.append(model.stribeck[1] / 10.0)
     if model.epsilon > 0:
         scales.append(model.epsilon / 8.0)
-    return min(scales)
+    h = min(scales)
+    if model.shot is not None and not math.isfinite(model.gamma):
+        h = _pure_shot_spacing(model, h)
+    return h
+
+
+def _pure_shot_spacing(model: Model, h: float) -> float:
+    """Pure shot noise (cells): refine and align h with the sliding attractor ``v*``.
+
+    Between kicks the flow runs into ``v*`` (the zero of the drift), so near it the density
+    behaves like ``|v - v*|^(rate/|drift'(v*)| - 1)``: integrable but singular when
+    ``rate tau_m < 1``.  With ``v*`` inside a cell the upwind error depends on where ``v*``
+    falls in it, which changes between h and h/2, so the Richardson step did not cancel it:
+    for the Gamma law (Delta = 0, a = -0.3, tau_m = 0.5, rate 0.5, mean 0.3) the mean was off
+    by 1.3e-2 standard deviations, P(v > 0) by 8e-4.  With ``v*`` on a cell edge (as v = 0
+    already is) the mean error is ~1e-14; resolving the law's width ``mean sqrt(rate tau_m)``
+    by 40 cells brings the variance error from 1e-3 to below 1e-4 (measured)."""
+    shot = model.shot
+    assert shot is not None
+    h = min(h, shot.mean * math.sqrt(shot.rate * model.tau_m) / 40.0)
+    target = abs(model.attractor)
+    if target > 0.0:
+        h = target / math.ceil(target / h)
+    return h
 
 
 def shot_generator(model: Model, h: float | None = None, v0s: Iterable[float] = (),
