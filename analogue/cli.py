@@ -190,7 +190,20 @@ def _floats(text, name: str):
                                  param_hint=name) from None
     if not vals or not all(math.isfinite(v) for v in vals):
         raise click.BadParameter("expected finite numbers", param_hint=name)
+    # beyond this the closed forms overflow (--v 1e308: RuntimeWarnings, then "no admissible
+    # optimal path found (please report)", exit 1); 1e12 still answers for every quantity
+    if any(abs(v) > _MAX_MAGNITUDE for v in vals):
+        raise click.BadParameter(f"expected numbers with |x| <= {_MAX_MAGNITUDE:g}, got {text!r}",
+                                 param_hint=name)
     return vals
+
+
+_MAX_MAGNITUDE = 1e12
+
+
+def _magnitude(value, name: str):
+    """A single number option: as :func:`_floats` (finite, at most 1e12 in magnitude)."""
+    return None if value is None else _floats(repr(value), name)[0]
 
 
 @click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
@@ -526,12 +539,14 @@ Examples:
               help="Final velocities, comma-separated (or repeat the option).")
 @click.option("--t", "t", multiple=True, metavar="T[,T...]",
               help="Times, comma-separated (or repeat the option).")
-@click.option("--v0", type=float, default=None, help="Initial velocity.")
+@click.option("--v0", type=float, default=None, callback=lambda c, p, x: _magnitude(x, "--v0"),
+              help="Initial velocity.")
 @click.option("--w", "w", multiple=True, metavar="W[,W...]",
               help="Work rates, comma-separated (or repeat the option).")
 @click.option("--k", "k", multiple=True, metavar="K[,K...]",
               help="Tilts for the SCGF, comma-separated (or repeat the option).")
-@click.option("--tau", type=float, default=None, help="Work time window.")
+@click.option("--tau", type=float, default=None, callback=lambda c, p, x: _magnitude(x, "--tau"),
+              help="Work time window.")
 @click.option("--points", type=int, default=None,
               help="Points along an optimal path (path only; default 50).")
 @click.option("--kind", type=click.Choice(["exact", "weak-noise", "limit"]), default=None,

@@ -570,7 +570,8 @@ def rate_function(model: Model, w: ArrayLike, *, h: float | None = None) -> np.n
         if wi == mean:
             out[i] = 0.0
             continue
-        obj = lambda kk: -(kk * wi - solver(kk))  # noqa: E731  (convex in k)
+        def obj(kk: float, wi: float = float(wi)) -> float:  # convex in k
+            return -(kk * wi - float(solver(kk)))
         k0 = (wi - mean) / curv
         # bracket the minimum of the convex objective by doubling (one solve per step), then
         # one bounded search.  At the edge of the work's support (w = 0 with one-sided shot
@@ -580,8 +581,9 @@ def rate_function(model: Model, w: ArrayLike, *, h: float | None = None) -> np.n
         p0, p1, f1 = 0.0, 2.0 * k0, obj(2.0 * k0)
         # the guess can overshoot where lambda(k) diverges (exponential kicks of mean m:
         # k F m = 1): halve until the objective is below its value at k = 0 (circuits/shot.toml,
-        # w = 1: 2 k0 = 143 > 10; the bounded search from there returned I = 5.17, the
-        # maximum is 6.02 at k = 8.0)
+        # w = 1: 2 k0 = 143 > 10).  Near that pole the grid's lambda is not convex (shot, w = 1:
+        # k w - lambda = 5.11, 4.97, 5.99 at k = 7, 7.5, 8), so I there is only as good as it
+        # was before this bracket (5.109 both ways)
         f0 = obj(0.0)
         for _ in range(40):
             if f1 < f0:

@@ -249,8 +249,10 @@ def theory_table(model: Model, quantity: str, *, v: ArrayLike | None = None,
     if quantity in ("action", "path"):
         from . import weak_noise
         n = 50 if points is None else points
-        if quantity == "path" and (isinstance(n, bool) or not isinstance(n, int) or n < 2):
-            raise ValueError(f"--points must be an integer >= 2, got {points!r}")
+        # bounded: --points 100000000 ran past a minute (killed) instead of answering
+        if quantity == "path" and (isinstance(n, bool) or not isinstance(n, int)
+                                   or not 2 <= n <= 100_000):
+            raise ValueError(f"--points must be an integer in [2, 100000], got {points!r}")
         rows = []
         for tt in _floats("t", t):
             for vv in _floats("v", v):
@@ -295,7 +297,10 @@ def theory_table(model: Model, quantity: str, *, v: ArrayLike | None = None,
         if quantity == "rate-function":
             vals = np.ravel(rate(model, ws))
             return table(["w", f"I_{kind}"], [[float(a), float(b)] for a, b in zip(ws, vals)],
-                         {f"I_{kind}": "infinite: this work rate cannot be reached"})
+                         {f"I_{kind}": lambda x: "infinite: this work rate cannot be reached"
+                          if math.isinf(x) or kind != "exact" else "not resolved: w at or "
+                          "beyond the edge of the work's support (the Legendre maximiser runs "
+                          "to |k| -> inf)"})
         if kind == "weak-noise":
             from . import weak_noise
             vals = np.ravel(weak_noise.fluctuation_relation(model, ws))

@@ -95,4 +95,24 @@ def test_shot_rate_function_cli_answers_n_a(cli):
     r = cli.invoke(main, ["theory", "rate-function", str(SHOT), "--w", "0", "--json"])
     assert r.exit_code == 0, r.output
     row = _strict(r.stdout)["rows"][0]
-    assert row["I_exact"] is None and row["null_reasons"]["I_exact"]
+    assert row["I_exact"] is None and "support" in row["null_reasons"]["I_exact"]
+
+
+# --- theory: huge numbers are refused naming the option, sizes are bounded ----------------
+# Before: --v 1e308 printed RuntimeWarnings (overflow) and "no admissible optimal path found
+# (please report ...)" with exit 1; --points 100000000 ran past a minute.
+@pytest.mark.parametrize("opt", ["--v", "--v0", "--t"])
+def test_theory_huge_numbers_are_one_line_bad_input(cli, opt):
+    args = {"--t": "1", "--v": "0.1", "--v0": "1", opt: "1e308"}
+    r = cli.invoke(main, ["theory", "action", "stick", *[x for kv in args.items() for x in kv]])
+    assert r.exit_code == 2, r.output
+    line = one_error_line(r)
+    assert opt in line and "1e+12" in line
+
+
+@pytest.mark.timeout(60)
+def test_theory_path_points_is_bounded(cli):
+    r = cli.invoke(main, ["theory", "path", "stick", "--t", "2", "--v", "0.1", "--v0", "1",
+                          "--points", "100000000"])
+    assert r.exit_code == 2, r.output
+    assert "--points" in one_error_line(r)
