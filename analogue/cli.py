@@ -278,6 +278,14 @@ def _store_dir_option(ctx, param, value):
     path = Path(value).expanduser()
     if path.exists() and not path.is_dir():
         raise click.BadParameter(f"{value!r} exists and is not a directory", param_hint="--store")
+    # a path below a file can never be created (run printed one "not writable" warning per
+    # deck, 29 lines for a quick run, and stored nothing)
+    for parent in path.absolute().parents:
+        if parent.exists():
+            if not parent.is_dir():
+                raise click.BadParameter(f"{value!r} lies below {str(parent)!r}, which is not a "
+                                         f"directory", param_hint="--store")
+            break
     return path
 
 

@@ -116,3 +116,17 @@ def test_theory_path_points_is_bounded(cli):
                           "--points", "100000000"])
     assert r.exit_code == 2, r.output
     assert "--points" in one_error_line(r)
+
+
+# --- a store below a file ---------------------------------------------------------------
+# Before: `run --store FILE/sub` warned once per deck (29 lines for a quick run) and stored
+# nothing; `store ls --store FILE/sub` listed an empty store with exit 0.
+@pytest.mark.parametrize("args", [["run", "stick", "--quick"], ["store", "ls"],
+                                  ["store", "prune", "--max-size", "0"]])
+def test_store_below_a_file_is_refused(cli, tmp_path, args):
+    f = tmp_path / "f.toml"
+    f.write_text("x = 1\n")
+    r = cli.invoke(main, [*args, "--store", str(f / "sub")])
+    assert r.exit_code == 2, r.output
+    line = one_error_line(r)
+    assert "--store" in line and "not a directory" in line
