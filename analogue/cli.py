@@ -289,6 +289,20 @@ def _store_dir_option(ctx, param, value):
     return path
 
 
+def _out_dir_option(ctx, param, value):
+    """--out below a file can never be created: bad input (exit 2) at once, not an OSError
+    ("[Errno 20] Not a directory", exit 1) after the runs."""
+    if value is None:
+        return None
+    for parent in Path(value).absolute().parents:
+        if parent.exists():
+            if not parent.is_dir():
+                raise click.BadParameter(f"{str(value)!r} lies below {str(parent)!r}, which is "
+                                         f"not a directory", param_hint="--out")
+            break
+    return value
+
+
 def _timeout_option(ctx, param, value):
     if value is None:
         return None
@@ -348,7 +362,8 @@ def run(experiment, workers, scheduler, store, timeout, quick, progress):
 
 @main.command()
 @click.argument("experiment")
-@click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=None,
+@click.option("--out", type=click.Path(file_okay=False, path_type=Path),
+              callback=_out_dir_option, default=None,
               help="Report directory (default report/<name>).")
 @_run_options
 def report(experiment, out, workers, scheduler, store, timeout, quick, progress):
@@ -364,7 +379,8 @@ def report(experiment, out, workers, scheduler, store, timeout, quick, progress)
 
 
 @main.command()
-@click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("report"),
+@click.option("--out", type=click.Path(file_okay=False, path_type=Path),
+              callback=_out_dir_option, default=Path("report"),
               show_default=True, help="Where the report goes.")
 @_run_options
 def paper(out, workers, scheduler, store, timeout, quick, progress):
@@ -378,7 +394,8 @@ def paper(out, workers, scheduler, store, timeout, quick, progress):
 
 
 @main.command()
-@click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("figures"),
+@click.option("--out", type=click.Path(file_okay=False, path_type=Path),
+              callback=_out_dir_option, default=Path("figures"),
               show_default=True)
 def figures(out):
     """Draw the paper's theory figures (Figs. 1-9, weak-noise curves) as PNG files."""
@@ -390,7 +407,8 @@ def figures(out):
 # ------------------------------------------------------------------------------- export
 @main.command()
 @click.argument("experiment")
-@click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=None,
+@click.option("--out", type=click.Path(file_okay=False, path_type=Path),
+              callback=_out_dir_option, default=None,
               help="Output directory (default export/<experiment>).")
 @click.option("--report", "report_dir", type=click.Path(path_type=Path), default=None,
               help="Report directory whose metrics.json goes to metrics.csv (default: "
@@ -593,7 +611,8 @@ def theory(quantity, experiment_arg, experiment, tau_m, delta, a, gamma, mass, e
 # -------------------------------------------------------------------------------- board
 @main.command()
 @click.argument("experiment")
-@click.option("--out", type=click.Path(file_okay=False, path_type=Path), required=True,
+@click.option("--out", type=click.Path(file_okay=False, path_type=Path),
+              callback=_out_dir_option, required=True,
               help="Directory for schematic.svg, bom.csv, board.cir, metrics.json, index.html.")
 @click.option("--quick", is_flag=True, help="Few boards, short runs (about two minutes).")
 @click.option("--workers", type=click.IntRange(1, 256), default=None,

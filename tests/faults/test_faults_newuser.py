@@ -130,3 +130,16 @@ def test_store_below_a_file_is_refused(cli, tmp_path, args):
     assert r.exit_code == 2, r.output
     line = one_error_line(r)
     assert "--store" in line and "not a directory" in line
+
+
+# --- --out below a file -------------------------------------------------------------------
+# Before: report/export/board ran and then failed with "[Errno 20] Not a directory", exit 1.
+@pytest.mark.parametrize("cmd", ["report", "export", "board", "figures", "paper"])
+def test_out_below_a_file_is_bad_input(cli, tmp_path, cmd):
+    f = tmp_path / "f.toml"
+    f.write_text("x = 1\n")
+    args = [cmd] + (["stick"] if cmd in ("report", "export", "board") else [])
+    r = cli.invoke(main, [*args, "--out", str(f / "sub")])
+    assert r.exit_code == 2, r.output
+    line = one_error_line(r)
+    assert "--out" in line and "not a directory" in line
