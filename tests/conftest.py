@@ -14,8 +14,10 @@ Markers (registered in pyproject.toml):
 """
 from __future__ import annotations
 
+import json
 import math
 import shutil
+from typing import Any
 
 import numpy as np
 import pytest
@@ -59,6 +61,31 @@ def chromium() -> str | None:
         if path:
             return path
     return None
+
+
+def toml_text(doc: dict[str, Any]) -> str:
+    """A TOML document (tomli-w is not a dependency): scalars and arrays first, then tables."""
+    def value(x):
+        if isinstance(x, bool):
+            return "true" if x else "false"
+        if isinstance(x, float):
+            return "inf" if x == math.inf else "-inf" if x == -math.inf else "nan" if x != x else repr(x)
+        if isinstance(x, int):
+            return str(x)
+        if isinstance(x, str):
+            return json.dumps(x)  # JSON string escapes are TOML basic-string escapes
+        if isinstance(x, list):
+            return "[" + ", ".join(value(v) for v in x) + "]"
+        raise TypeError(x)
+
+    def table(d, prefix):
+        lines = [f"{k} = {value(v)}" for k, v in d.items() if not isinstance(v, dict)]
+        for k, v in d.items():
+            if isinstance(v, dict):
+                name = f"{prefix}.{k}" if prefix else k
+                lines += ["", f"[{name}]", *table(v, name)]
+        return lines
+    return "\n".join(table(doc, "")) + "\n"
 
 
 # ----------------------------------------------------------------------------- fixtures

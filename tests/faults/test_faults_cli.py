@@ -1,7 +1,5 @@
 """Fault injection at the command line: every failure is one line on stderr, no traceback
 (ANALOGUE_DEBUG=1 keeps it), exit 2 for bad input and 1 for a failed run."""
-import json
-import math
 import os
 import subprocess
 import sys
@@ -13,34 +11,10 @@ import pytest
 
 from analogue.cli import main
 from analogue.circuit import experiments as E
+from conftest import toml_text
 
 ROOT = Path(__file__).resolve().parents[2]
 STICK = tomllib.loads((ROOT / "circuits" / "stick.toml").read_text())
-
-
-def toml_text(doc: dict) -> str:
-    """A TOML document (tomli-w is not a dependency): scalars and arrays first, then tables."""
-    def value(x):
-        if isinstance(x, bool):
-            return "true" if x else "false"
-        if isinstance(x, float):
-            return "inf" if x == math.inf else "-inf" if x == -math.inf else "nan" if x != x else repr(x)
-        if isinstance(x, int):
-            return str(x)
-        if isinstance(x, str):
-            return json.dumps(x)  # JSON string escapes are TOML basic-string escapes
-        if isinstance(x, list):
-            return "[" + ", ".join(value(v) for v in x) + "]"
-        raise TypeError(x)
-
-    def table(d, prefix):
-        lines = [f"{k} = {value(v)}" for k, v in d.items() if not isinstance(v, dict)]
-        for k, v in d.items():
-            if isinstance(v, dict):
-                name = f"{prefix}.{k}" if prefix else k
-                lines += ["", f"[{name}]", *table(v, name)]
-        return lines
-    return "\n".join(table(doc, "")) + "\n"
 
 
 def err_line(r) -> str:

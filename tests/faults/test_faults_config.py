@@ -5,7 +5,6 @@ the tight-tolerance integration check) is validated at load time; cross-referenc
 [experiment] and [report] are checked before anything runs; no user string reaches a deck.
 """
 import dataclasses
-import json
 import math
 import re
 import tomllib
@@ -17,33 +16,10 @@ from analogue import Model
 from analogue.circuit import experiments as E
 from analogue.circuit.experiments import experiment_from_dict, load_experiment
 from analogue.report.plan import RunOptions, report_settings
+from conftest import toml_text
 
 ROOT = Path(__file__).resolve().parents[2]
 STICK = tomllib.loads((ROOT / "circuits" / "stick.toml").read_text())
-
-def toml_text(doc: dict) -> str:
-    """A TOML document (tomli-w is not a dependency): scalars and arrays first, then tables."""
-    def value(x):
-        if isinstance(x, bool):
-            return "true" if x else "false"
-        if isinstance(x, float):
-            return "inf" if x == math.inf else "-inf" if x == -math.inf else "nan" if x != x else repr(x)
-        if isinstance(x, int):
-            return str(x)
-        if isinstance(x, str):
-            return json.dumps(x)  # JSON string escapes are TOML basic-string escapes
-        if isinstance(x, list):
-            return "[" + ", ".join(value(v) for v in x) + "]"
-        raise TypeError(x)
-
-    def table(d, prefix):
-        lines = [f"{k} = {value(v)}" for k, v in d.items() if not isinstance(v, dict)]
-        for k, v in d.items():
-            if isinstance(v, dict):
-                name = f"{prefix}.{k}" if prefix else k
-                lines += ["", f"[{name}]", *table(v, name)]
-        return lines
-    return "\n".join(table(doc, "")) + "\n"
 
 
 PAYLOADS = ["<script>alert(1)</script>", "x;rm -rf /", "a\n.control\nshell touch /tmp/pwned\n.endc",

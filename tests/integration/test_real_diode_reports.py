@@ -3,7 +3,6 @@
 user's own component values with the noise source off, so the part ratings that pass for the
 nominal circuit pass for it too."""
 import json
-import math
 import os
 import re
 import subprocess
@@ -12,34 +11,10 @@ import tomllib
 from pathlib import Path
 
 import pytest
+from conftest import toml_text
 
 ROOT = Path(__file__).resolve().parents[2]
 PAYLOAD = "<script>alert('x')</script> & \"quotes\""
-
-
-def toml_text(doc: dict) -> str:
-    """A TOML document (tomli-w is not a dependency): scalars and arrays first, then tables."""
-    def value(x):
-        if isinstance(x, bool):
-            return "true" if x else "false"
-        if isinstance(x, float):
-            return "inf" if x == math.inf else "-inf" if x == -math.inf else "nan" if x != x else repr(x)
-        if isinstance(x, int):
-            return str(x)
-        if isinstance(x, str):
-            return json.dumps(x)  # JSON string escapes are TOML basic-string escapes
-        if isinstance(x, list):
-            return "[" + ", ".join(value(v) for v in x) + "]"
-        raise TypeError(x)
-
-    def table(d, prefix):
-        lines = [f"{k} = {value(v)}" for k, v in d.items() if not isinstance(v, dict)]
-        for k, v in d.items():
-            if isinstance(v, dict):
-                name = f"{prefix}.{k}" if prefix else k
-                lines += ["", f"[{name}]", *table(v, name)]
-        return lines
-    return "\n".join(table(doc, "")) + "\n"
 
 
 def small_experiment(tmp_path: Path, diode: str) -> Path:
