@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from ..plots.style import new_figure, save
+from .figures import budget_axes
 
 __all__ = [
     "fig_member_budget",
@@ -177,28 +178,7 @@ def fig_member_budget(a, out: Path):
     comps = a.comparisons
     if not comps:
         return None
-    names = [c.observable for c in comps]
-    y = np.arange(len(comps))
-    fig, axes = new_figure(1, 1, squeeze=False, width=9.0, height=0.28 * len(comps) + 1.5)
-    ax = axes[0, 0]
-    terms = [("statistical (3 SE)", lambda c: 3 * c.circuit_stderr, "0.75"),
-             ("smoothing", lambda c: abs(c.budget.smoothing), "tab:blue"),
-             ("bandwidth", lambda c: abs(c.budget.bandwidth), "tab:green"),
-             ("integration", lambda c: abs(c.budget.integration), "tab:purple"),
-             ("circuit element", lambda c: abs(c.budget.element), "tab:red"),
-             ("sampling", lambda c: abs(c.budget.sampling), "tab:brown")]
-    left = np.zeros(len(comps))
-    for label, fn, colour in terms:
-        vals = np.array([fn(c) for c in comps])
-        ax.barh(y, vals, left=left, color=colour, label=label, height=0.6)
-        left += vals
-    dev = np.array([abs(c.circuit - c.theory) for c in comps])
-    ax.plot(dev, y, "D", color="k", ms=4, label="|circuit - reference|")
-    ax.set_yticks(y, names, fontsize=7)
-    pos = left[left > 0]
-    ax.set_xscale("symlog", linthresh=max(1e-5, float(pos.min()) if pos.size else 1e-5))
-    ax.invert_yaxis()
-    ax.set_xlabel("absolute error (observable's units)")
+    fig, ax = budget_axes(comps, "reference")
     ax.legend(fontsize=7, loc="lower right")
     ax.set_title(f"Error budget — {a.exp.name}", fontsize=10)
     path = save(fig, out / f"beyond_budget_{a.exp.name}.png")

@@ -321,6 +321,42 @@ def fig_rate_function(analysis: ExperimentAnalysis, out: Path):
 
 
 # ------------------------------------------------------------------------- error budget
+# (label, |term| of a comparison, colour): the stacked bars of every budget figure
+BUDGET_TERMS = (
+    ("statistical (3 SE)", lambda c: 3 * c.circuit_stderr, "0.75"),
+    ("smoothing", lambda c: abs(c.budget.smoothing), "tab:blue"),
+    ("bandwidth", lambda c: abs(c.budget.bandwidth), "tab:green"),
+    ("integration", lambda c: abs(c.budget.integration), "tab:purple"),
+    ("circuit element", lambda c: abs(c.budget.element), "tab:red"),
+    ("sampling", lambda c: abs(c.budget.sampling), "tab:brown"),
+)
+
+
+def budget_axes(comps, reference: str):
+    """One horizontal stacked bar per comparison (the allowed deviation, term by term; terms
+    that are zero for every row are left out of the legend) and a diamond at the actual
+    |circuit - reference|.  Shared by the paper's and the Beyond chapter's budget figures."""
+    names = [c.observable for c in comps]
+    y = np.arange(len(comps))
+    fig, axes = new_figure(1, 1, squeeze=False, width=9.0, height=0.28 * len(comps) + 1.5)
+    ax = axes[0, 0]
+    left = np.zeros(len(comps))
+    for label, fn, colour in BUDGET_TERMS:
+        vals = np.array([fn(c) for c in comps])
+        if label != "statistical (3 SE)" and not np.any(vals > 0):
+            continue
+        ax.barh(y, vals, left=left, color=colour, label=label, height=0.6)
+        left += vals
+    dev = np.array([abs(c.circuit - c.theory) for c in comps])
+    ax.plot(dev, y, "D", color="k", ms=4, label=f"|circuit - {reference}|")
+    ax.set_yticks(y, names, fontsize=7)
+    pos = left[left > 0]
+    ax.set_xscale("symlog", linthresh=max(1e-5, float(pos.min()) if pos.size else 1e-5))
+    ax.invert_yaxis()
+    ax.set_xlabel("absolute error (observable's units)")
+    return fig, ax
+
+
 def fig_budget(analysis: ExperimentAnalysis, out: Path):
     from ..study.catalogue import find
     comps = [c for c in analysis.comparisons
@@ -328,25 +364,7 @@ def fig_budget(analysis: ExperimentAnalysis, out: Path):
              and not ((o := find(c.observable)) is not None and o.entry.fit_test)]
     if not comps:
         return None
-    names = [c.observable for c in comps]
-    y = np.arange(len(comps))
-    fig, axes = new_figure(1, 1, squeeze=False, width=9.0, height=0.28 * len(comps) + 1.5)
-    ax = axes[0, 0]
-    terms = [("statistical (3 SE)", lambda c: 3 * c.circuit_stderr, "0.75"),
-             ("smoothing", lambda c: abs(c.budget.smoothing), "tab:blue"),
-             ("bandwidth", lambda c: abs(c.budget.bandwidth), "tab:green"),
-             ("integration", lambda c: abs(c.budget.integration), "tab:purple")]
-    left = np.zeros(len(comps))
-    for label, fn, colour in terms:
-        vals = np.array([fn(c) for c in comps])
-        ax.barh(y, vals, left=left, color=colour, label=label, height=0.6)
-        left += vals
-    dev = np.array([abs(c.circuit - c.theory) for c in comps])
-    ax.plot(dev, y, "D", color="k", ms=4, label="|circuit - exact|")
-    ax.set_yticks(y, names, fontsize=7)
-    ax.set_xscale("symlog", linthresh=max(1e-5, float(np.min(left[left > 0])) if np.any(left > 0) else 1e-5))
-    ax.invert_yaxis()
-    ax.set_xlabel("absolute error (observable's units)")
+    fig, ax = budget_axes(comps, "exact")
     ax.legend(fontsize=7, loc="lower right")
     ax.set_title(f"Error budget — {analysis.runs.exp.name}", fontsize=10)
     path = save(fig, out / f"budget_{analysis.runs.exp.name}.png")
