@@ -280,13 +280,18 @@ def _store_dir_option(ctx, param, value):
         raise click.BadParameter(f"{value!r} exists and is not a directory", param_hint="--store")
     # a path below a file can never be created (run printed one "not writable" warning per
     # deck, 29 lines for a quick run, and stored nothing)
-    for parent in path.absolute().parents:
+    _refuse_below_file(path, "--store")
+    return path
+
+
+def _refuse_below_file(path: Path, option: str) -> None:
+    """A directory below an existing file can never be created: bad input at once."""
+    for parent in Path(path).absolute().parents:
         if parent.exists():
             if not parent.is_dir():
-                raise click.BadParameter(f"{value!r} lies below {str(parent)!r}, which is not a "
-                                         f"directory", param_hint="--store")
-            break
-    return path
+                raise click.BadParameter(f"{str(path)!r} lies below {str(parent)!r}, which is "
+                                         f"not a directory", param_hint=option)
+            return
 
 
 def _out_dir_option(ctx, param, value):
@@ -294,12 +299,7 @@ def _out_dir_option(ctx, param, value):
     ("[Errno 20] Not a directory", exit 1) after the runs."""
     if value is None:
         return None
-    for parent in Path(value).absolute().parents:
-        if parent.exists():
-            if not parent.is_dir():
-                raise click.BadParameter(f"{str(value)!r} lies below {str(parent)!r}, which is "
-                                         f"not a directory", param_hint="--out")
-            break
+    _refuse_below_file(Path(value), "--out")
     return value
 
 
