@@ -21,8 +21,13 @@ Methods
   (Perron root of a Metzler matrix, by shifted inverse iteration on the banded form; for
   Gaussian-only members the Scharfetter-Gummel generator is symmetrisable and a symmetric
   tridiagonal solver is used), Richardson over (h, h/2); rate function by a Legendre transform
-  (concave maximisation in k).  Checked against the OU-shot closed form
-  ``lambda(k) = k F a tau + rate (1/(1 - k F tau mean) - 1)`` (4e-5 relative).  Scaling: ``I(w) = (1/gamma) sup_k [k w - lambda(k)]``
+  (concave maximisation in k over :func:`scgf_domain`).  With one-sided kicks the SCGF has a
+  pole at ``k F tau_m mean = 1``; for ``k F > 0`` it is computed after the exponential change
+  of measure of the kicks (:func:`_kick_transform`), whose grid follows the tilted law out to
+  the pole (the tilted generator on a fixed grid has spurious top-of-grid modes ~ e^{-c v}
+  there), and the rate function is asymptotically linear (:func:`rate_function_asymptote`).
+  Checked against the OU-shot closed forms ``lambda(k) = k F a tau + rate (1/(1 - k F tau
+  mean) - 1)`` and ``J(w) = (sqrt(B) - sqrt(rate))^2`` up to ``1 - k/k_pole = 1e-3``.  Scaling: ``I(w) = (1/gamma) sup_k [k w - lambda(k)]``
   as in the paper when gamma is finite; with gamma = inf (pure shot noise) the rate function
   is ``J(w) = sup_k [k w - lambda(k)]`` with ``P_tau(w) ~ exp(-tau J(w))``.
 """
@@ -38,8 +43,8 @@ from scipy import integrate, optimize, sparse
 from scipy.linalg import eigh_tridiagonal
 from scipy.sparse.linalg import splu
 
-from ..model import Model
-from .kolmogorov_feller import ShotGrid, default_spacing, shot_generator
+from ..model import Model, ShotNoise
+from .kolmogorov_feller import ShotGrid, _grid_range, default_spacing, shot_generator
 
 if TYPE_CHECKING:
     from .stationary import StationaryMoments
@@ -48,7 +53,7 @@ _Solve = Callable[[np.ndarray], np.ndarray]   # b -> x of a factorised linear sy
 
 __all__ = ["is_member", "stationary_law", "stationary_moments", "propagator", "propagator_atom",
            "scgf", "rate_function", "check_one_dimensional", "unkicked", "sample_stationary",
-           "autocorrelation"]
+           "autocorrelation", "scgf_domain", "rate_function_asymptote"]
 
 
 def is_member(model: Model) -> bool:
@@ -456,16 +461,17 @@ def _force(model: Model) -> float:
     return model.force
 
 
-def _principal(g: ShotGrid, k: float, F: float, guess: float, scale: float) -> float:
-    """Perron root of the Metzler matrix ``L_k = L + k F diag(v)`` by inverse iteration with a
-    shift ``sigma`` above it: for real sigma > lambda_max every other eigenvalue is farther
-    from sigma (|sigma - lambda_2| >= sigma - Re lambda_2 > sigma - lambda_max), so the
-    iteration converges to the Perron root; ``(sigma - L_k)^{-1}`` is applied through the
-    banded form ``N (sigma - L_k)`` (one sparse LU).  The shift starts at ``guess + scale`` and
-    is raised until the limit vector is nonnegative and below sigma."""
+def _principal(g: ShotGrid, pot: np.ndarray, guess: float, scale: float) -> float:
+    """Perron root of the Metzler matrix ``L + diag(pot)`` (``pot = k F v``: the tilted
+    generator) by inverse iteration with a shift ``sigma`` above it: for real
+    sigma > lambda_max every other eigenvalue is farther from sigma
+    (|sigma - lambda_2| >= sigma - Re lambda_2 > sigma - lambda_max), so the iteration
+    converges to the Perron root; ``(sigma - L_k)^{-1}`` is applied through the banded form
+    ``N (sigma - L_k)`` (one sparse LU).  The shift starts at ``guess + scale`` and is raised
+    until the limit vector is nonnegative and below sigma."""
     n = g.n
     N = g.premultiplier if g.premultiplier is not None else sparse.identity(n, format="csc")
-    NLk = (g.banded_L() + N @ sparse.diags(k * F * g.v)).tocsc()
+    NLk = (g.banded_L() + N @ sparse.diags(pot)).tocsc()
     margin = scale
     for _ in range(8):
         sigma = guess + margin
@@ -484,7 +490,7 @@ def _principal(g: ShotGrid, k: float, F: float, guess: float, scale: float) -> f
         if lam < sigma and x.min() >= -1e-10 * x.max():
             return float(lam)
         margin *= 4.0
-    raise RuntimeError(f"inverse iteration for the SCGF at k={k:g} did not converge")
+    raise RuntimeError(f"inverse iteration for the SCGF (shift {guess:g}) did not converge")
 
 
 def _principal_gradient(model: Model, h: float, k: float, F: float) -> float:
@@ -500,12 +506,73 @@ def _principal_gradient(model: Model, h: float, k: float, F: float) -> float:
     return float(lam[0])
 
 
+def scgf_domain(model: Model) -> tuple[float, float]:
+    """The open interval ``(k_lo, k_hi)`` of k where the SCGF is finite (+inf outside).
+
+    With shot noise and no cubic term a kick z adds ``tau_m z`` (up to terms growing at most
+    like ln z) to ``int v``, so ``E exp(k W)`` involves the kicks' moment generating function
+    ``M(c) = E e^{c z}`` at ``c = k F tau_m``: ``1/(1 - c mean)`` one-sided, ``1/(1 - c^2
+    mean^2)`` two-sided, finite only for ``c mean < 1`` (and ``|c| mean < 1``).  Exactly: with
+    ``phi = e^{c v} psi`` the tilted adjoint generator becomes a generator with kicks of rate
+    ``rate M(c)`` plus the potential ``rate (M(c) - 1) + c (f(v) + v/tau_m) + c^2/gamma``
+    (:func:`_kick_transform`), and ``f + v/tau_m = a - Delta(v) sgn v`` is bounded, so
+    ``lambda(k) = rate (M(c) - 1) + O(1)`` diverges at the pole ``c mean = 1``: the SCGF is
+    steep there, and the rate function is finite for every w, convex and asymptotically linear
+    with slope ``k_pole = 1/(F tau_m mean)`` (:func:`rate_function_asymptote`).
+    With ``cubic > 0`` a kick's displacement ``int v dv/|f(v)|`` is bounded, and the domain is
+    the whole line; Gaussian-only members have the whole line too."""
+    check_one_dimensional(model)
+    F = _force(model)
+    shot = model.shot
+    if shot is None or model.cubic > 0:
+        return -math.inf, math.inf
+    pole = 1.0 / (F * model.tau_m * shot.mean)
+    if shot.two_sided:
+        return -abs(pole), abs(pole)
+    return (-math.inf, pole) if pole > 0 else (pole, math.inf)
+
+
+def _kick_transform(model: Model, c: float) -> tuple[Model, float]:
+    """The exponential change of measure of the kicks at ``c = k F tau_m`` (one-sided,
+    ``0 < c mean < 1``): ``phi(v) = e^{c v} psi(v)`` turns ``(L^dagger + k F v) phi = lambda phi``
+    into ``(L'^dagger + V) psi = lambda psi``, L' the generator of the same member with kicks of
+    rate ``rate/u`` and mean ``mean/u`` (``u = 1 - c mean``; the tilted jump law
+    ``rho(z) e^{c z}/M(c)`` is again exponential), drift ``f + 2c/gamma``, and the potential
+    ``V = rate (1/u - 1) + c (f(v) + v/tau_m) + c^2/gamma`` (``k F = c/tau_m``; V = rate (1/u - 1)
+    in the stuck state, where f = 0 and v = 0).  Returns (the member of L', the constant
+    ``rate (1/u - 1) + c^2/gamma``).  The transformed law lives where the tilted one does (out
+    to ``~ tau_m rate mean/u^2``), and its default grid scales with ``mean/u``: the grid
+    follows the pole instead of truncating the tilted law's tail (which made the grid's
+    lambda(k) non-convex near the pole: 5.11, 4.97, 5.99 for k w - lambda at k = 7, 7.5, 8 for
+    circuits/shot.toml, w = 1)."""
+    shot = model.shot
+    assert shot is not None and not shot.two_sided
+    u = 1.0 - c * shot.mean
+    const = shot.rate * (1.0 / u - 1.0)
+    changes: dict[str, object] = {"shot": ShotNoise(shot.rate / u, shot.mean / u)}
+    if math.isfinite(model.gamma):
+        changes["a"] = model.a + 2.0 * c / model.gamma
+        const += c * c / model.gamma
+    return model.replace(**changes), const
+
+
+def _potential(model: Model, g: ShotGrid, c: float, const: float) -> np.ndarray:
+    """``V`` of :func:`_kick_transform` on the states of ``g`` (model: the original member)."""
+    pot = const + c * (model.drift(g.v) + g.v / model.tau_m)
+    if g.atom:
+        pot[-1] = const  # stuck: f = 0, v = 0
+    return np.asarray(pot, dtype=float)
+
+
 class _Scgf:
-    """lambda(k) of one member on the grids h and h/2 (built once), Richardson-combined."""
+    """lambda(k) of one member on the grids h and h/2 (built once), Richardson-combined.
+    With one-sided kicks and ``k F > 0`` on the grids of the kick-transformed member
+    (:func:`_kick_transform`, built per k); beyond the pole ``+inf``."""
 
     def __init__(self, model: Model, h: float):
         self.model, self.h = model, h
         self.F = _force(model)
+        self.domain = scgf_domain(model)
         if model.shot is not None:
             self.fine = (shot_generator(model, h), shot_generator(model, h / 2.0))
             self.order = 2.0 if math.isfinite(model.gamma) else 1.0
@@ -516,18 +583,65 @@ class _Scgf:
 
     def __call__(self, k: float) -> float:
         model, h, F = self.model, self.h, self.F
+        if not self.domain[0] < k < self.domain[1]:
+            return math.inf
         if model.shot is None:
             a = _principal_gradient(model, h, k, F)
             b = _principal_gradient(model, h / 2.0, k, F)
             return (4.0 * b - a) / 3.0
+        w: float = 2.0**self.order
+        c = k * F * model.tau_m
+        if c > 0 and not model.shot.two_sided and model.cubic == 0:
+            return self._transformed(c, w)
         # start the shift from the Gaussian approximation k <w> + k^2 F^2 D_x (a wrong start
         # only costs retries: :func:`_principal` checks what it converged to)
         guess = k * self.mean_w + k * k * self.curv
         scale = 0.1 * abs(guess) + 0.1 * (abs(k * F) * self.sd + 1.0 / model.tau_m)
-        a = _principal(self.fine[0], k, F, guess, scale)
-        b = _principal(self.fine[1], k, F, guess, scale)
-        w: float = 2.0**self.order
+        a = _principal(self.fine[0], k * F * self.fine[0].v, guess, scale)
+        b = _principal(self.fine[1], k * F * self.fine[1].v, guess, scale)
         return (w * b - a) / (w - 1.0)
+
+    def _transformed(self, c: float, w: float) -> float:
+        model = self.model
+        tm, const = _kick_transform(model, c)
+        # the transformed member's default spacing (it grows with mean/u, as the law's width
+        # does), refined as the caller refined h
+        # refined as the caller refined h.  Aligned with the attractor (as the default grid
+        # is) unless that would refine it more than twofold: near the pole the spacing grows
+        # past |v*| (Delta = 0, a tau_m = 0.5, 1/u = 1000: 12 -> 0.5, 1.5e6 states), and the
+        # transformed law lives far above v* there
+        raw, aligned = default_spacing(tm, align=False), default_spacing(tm)
+        ht = (aligned if aligned >= 0.5 * raw else raw) * self.h / default_spacing(model)
+        # the law reaches ~tau_m rate mean/u^2, the spacing grows like mean/u: the states grow
+        # like 25 rate tau_m/u.  Beyond 1.5e5 states (u < ~2e-4 rate tau_m) the spacing is
+        # coarsened to keep that: there the transformed law lives so far above v = 0 that
+        # lambda - rate (1/u - 1) = c (a - Delta) to 1e-8 already at u = 0.2 (circuits/shot.toml)
+        lo, hi = _grid_range(tm)
+        ht = max(ht, (hi - lo) / 150_000.0)
+        vals = []
+        for hh in (ht, ht / 2.0):
+            g = shot_generator(tm, hh)
+            pot = _potential(model, g, c, const)
+            # lambda <= max V (L is a generator); start just above it
+            top, spread = float(pot.max()), float(pot.max() - pot.min())
+            vals.append(_principal(g, pot, top, 1e-3 * spread + 0.1 / model.tau_m))
+        return (w * vals[1] - vals[0]) / (w - 1.0)
+
+
+def rate_function_asymptote(model: Model) -> tuple[float, float]:
+    """``(k_pole, rate)`` of the large-w branch of the rate function with one-sided kicks
+    (cubic = 0): near the pole ``lambda(k) = rate k_pole/(k_pole - k) + O(1)``, so
+    ``J(w) = k_pole w - 2 sqrt(rate k_pole w) + O(1)`` as ``k_pole w -> +inf``: asymptotically
+    linear with slope ``k_pole = 1/(F tau_m mean)``, the pole of :func:`scgf_domain` (no exactly
+    linear branch: lambda is steep, +inf at the pole, so the Legendre maximiser is interior for
+    every w).  For Delta = 0 exactly ``J(w) = (sqrt(B) - sqrt(rate))^2``,
+    ``B = (w - F a tau_m) k_pole`` (pure shot noise)."""
+    check_one_dimensional(model)
+    shot = model.shot
+    if shot is None or shot.two_sided or model.cubic > 0:
+        raise ValueError("rate_function_asymptote needs one-sided shot noise and cubic = 0 "
+                         "(otherwise the SCGF has no pole)")
+    return 1.0 / (_force(model) * model.tau_m * shot.mean), shot.rate
 
 
 def _scgf_one(model: Model, k: float, h: float) -> float:
@@ -549,8 +663,10 @@ def scgf(model: Model, k: ArrayLike, *, h: float | None = None) -> np.ndarray:
 
 def rate_function(model: Model, w: ArrayLike, *, h: float | None = None) -> np.ndarray:
     """Rate function of the work rate w (module docstring for the scaling), by the Legendre
-    transform of :func:`scgf`, maximising the concave ``k w - lambda(k)`` in k.  NaN where
-    no maximiser is found for |k| up to 2^25 times the Gaussian guess (w at or beyond the
+    transform of :func:`scgf`, maximising the concave ``k w - lambda(k)`` over k in
+    :func:`scgf_domain` (with one-sided kicks the SCGF is steep at its pole, so this is finite
+    for every large w and asymptotically linear, :func:`rate_function_asymptote`).  NaN where
+    no maximiser is found for |k| up to 2^40 times the Gaussian guess (w at or beyond the
     edge of the work's support)."""
     check_one_dimensional(model)
     F = _force(model)
@@ -577,21 +693,31 @@ def rate_function(model: Model, w: ArrayLike, *, h: float | None = None) -> np.n
         # one bounded search.  At the edge of the work's support (w = 0 with one-sided shot
         # noise) the minimiser runs to |k| -> inf, where the grid's lambda(k) is not resolved
         # (lambda(-1e4) = -1497 for circuits/shot.toml, below its bound -rate = -1): NaN, not
-        # a number from there (the former widen-and-minimise loop took minutes to return it)
-        p0, p1, f1 = 0.0, 2.0 * k0, obj(2.0 * k0)
-        # the guess can overshoot where lambda(k) diverges (exponential kicks of mean m:
-        # k F m = 1): halve until the objective is below its value at k = 0 (circuits/shot.toml,
-        # w = 1: 2 k0 = 143 > 10).  Near that pole the grid's lambda is not convex (shot, w = 1:
-        # k w - lambda = 5.11, 4.97, 5.99 at k = 7, 7.5, 8), so I there is only as good as it
-        # was before this bracket (5.109 both ways)
+        # a number from there.  Towards the pole of the SCGF (:func:`scgf_domain`) the
+        # bracket halves the distance to the pole instead of doubling k
+        lo_d, hi_d = solver.domain
+
+        def further(p: float) -> float:
+            # double p, or go half way to the edge of the SCGF's domain (the pole) if that is
+            # nearer: lambda is steep there, so the maximiser is interior for every w
+            q = 2.0 * p
+            if q >= hi_d:
+                q = p + 0.5 * (hi_d - p)
+            elif q <= lo_d:
+                q = p + 0.5 * (lo_d - p)
+            return q
+        p0, p1 = 0.0, further(k0)
+        f1 = obj(p1)
+        # the Gaussian guess can overshoot (circuits/shot.toml, w = 1: 2 k0 = 143, pole 10):
+        # halve until the objective is below its value at k = 0
         f0 = obj(0.0)
         for _ in range(40):
             if f1 < f0:
                 break
             p1 *= 0.5
             f1 = obj(p1)
-        for _ in range(24):
-            p2 = 2.0 * p1
+        for _ in range(40):
+            p2 = further(p1)
             f2 = obj(p2)
             if not f2 < f1:
                 break

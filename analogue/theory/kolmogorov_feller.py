@@ -284,9 +284,10 @@ def _grid_range(model: Model, v0s: Iterable[float] = ()) -> tuple[float, float]:
     return lo, hi
 
 
-def default_spacing(model: Model) -> float:
+def default_spacing(model: Model, align: bool = True) -> float:
     """Spacing resolving the jump mean/25, the Gaussian width/40, the Stribeck length/10 and
-    the kink length 1/(gamma (Delta(0) + |a|))/2 (when gamma is finite)."""
+    the kink length 1/(gamma (Delta(0) + |a|))/2 (when gamma is finite); for pure shot noise
+    refined by :func:`_pure_shot_spacing` (with ``align``, also aligned with the attractor)."""
     scales = []
     if model.shot is not None:
         scales.append(model.shot.mean / 25.0)
@@ -300,11 +301,11 @@ def default_spacing(model: Model) -> float:
         scales.append(model.epsilon / 8.0)
     h = min(scales)
     if model.shot is not None and not math.isfinite(model.gamma):
-        h = _pure_shot_spacing(model, h)
+        h = _pure_shot_spacing(model, h, align)
     return h
 
 
-def _pure_shot_spacing(model: Model, h: float) -> float:
+def _pure_shot_spacing(model: Model, h: float, align: bool = True) -> float:
     """Pure shot noise (cells): refine and align h with the sliding attractor ``v*``.
 
     Between kicks the flow runs into ``v*`` (the zero of the drift), so near it the density
@@ -319,7 +320,7 @@ def _pure_shot_spacing(model: Model, h: float) -> float:
     assert shot is not None
     h = min(h, shot.mean * math.sqrt(shot.rate * model.tau_m) / 40.0)
     target = abs(model.attractor)
-    if target > 0.0:
+    if align and target > 0.0:
         h = target / math.ceil(target / h)
     return h
 
