@@ -43,7 +43,6 @@ outside them naming the parameter): nonzero magnitudes of all parameters lie in
 from __future__ import annotations
 
 import math
-import numbers
 from collections.abc import Mapping
 from dataclasses import KW_ONLY, dataclass, field, replace
 from typing import Any, NamedTuple
@@ -52,9 +51,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import integrate, optimize, special
 
-from .checks import finite as _finite
-from .checks import nonnegative as _nonnegative
-from .checks import positive as _positive
+from . import checks
 
 __all__ = ["LIMIT", "VELOCITY_LIMIT", "MechanicalParameters", "Model", "ShotNoise"]
 
@@ -74,26 +71,17 @@ class MechanicalParameters(NamedTuple):
     D: float
 
 
-# ------------------------------------------------------------------ strict checks
-def _real(name: str, value, *, allow_inf: bool = False) -> float:
-    """A real number (int/float/numpy real, not bool, not str): TypeError otherwise; NaN and
-    (unless allowed) infinities raise ValueError."""
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
-        raise TypeError(f"{name} must be a real number, got {type(value).__name__} {value!r}")
-    x = float(value)
-    if math.isnan(x) or (math.isinf(x) and not (allow_inf and x > 0)):
-        raise ValueError(f"{name} must be finite, got {x!r}")
-    return x
-
-
+# ------------------------------------------------------------------ checks
 def _bounded(name: str, value, *, lower: str = "any", allow_inf: bool = False) -> float:
-    """Strict real with the sign rule ``lower`` ("positive", "nonnegative", "any") and the
-    magnitude bounds of the module docstring."""
-    x = _real(name, value, allow_inf=allow_inf)
-    if lower == "positive" and not x > 0:
-        raise ValueError(f"{name} must be > 0, got {x!r}")
-    if lower == "nonnegative" and not x >= 0:
-        raise ValueError(f"{name} must be >= 0, got {x!r}")
+    """A real number (analogue.checks: TypeError for a bool or a string) with the sign rule
+    ``lower`` ("positive", "nonnegative", "any") and the magnitude bounds of the module
+    docstring."""
+    if lower == "positive":
+        x = checks.positive(name, value, allow_inf=allow_inf)
+    elif lower == "nonnegative":
+        x = checks.nonnegative(name, value)
+    else:
+        x = checks.finite(name, value)
     if math.isinf(x):
         return x
     if abs(x) > LIMIT or (x != 0 and abs(x) < 1.0 / LIMIT):
@@ -115,9 +103,7 @@ class ShotNoise:
     def __post_init__(self) -> None:
         object.__setattr__(self, "rate", _bounded("shot.rate", self.rate, lower="positive"))
         object.__setattr__(self, "mean", _bounded("shot.mean", self.mean, lower="positive"))
-        if not isinstance(self.two_sided, (bool, np.bool_)):
-            raise TypeError(f"shot.two_sided must be a bool, got {self.two_sided!r}")
-        object.__setattr__(self, "two_sided", bool(self.two_sided))
+        object.__setattr__(self, "two_sided", checks.flag("shot.two_sided", self.two_sided))
 
     @property
     def mean_force(self) -> float:
@@ -251,11 +237,11 @@ class Model:
     def from_mechanical(cls, mass, alpha, delta_F, F, D, epsilon=0.0) -> Model:
         """Build from the paper's eq. (1) parameters: tau_m = m/alpha, Delta = Delta_F/m,
         a = F/m, gamma = m^2/D."""
-        mass = _positive("mass", mass)
-        alpha = _positive("alpha", alpha)
-        delta_F = _nonnegative("delta_F", delta_F)
-        F = _finite("F", F)
-        D = _positive("D", D)
+        mass = checks.positive("mass", mass)
+        alpha = checks.positive("alpha", alpha)
+        delta_F = checks.nonnegative("delta_F", delta_F)
+        F = checks.finite("F", F)
+        D = checks.positive("D", D)
         return cls(tau_m=mass / alpha, delta=delta_F / mass, a=F / mass, gamma=mass**2 / D,
                    mass=mass, epsilon=epsilon)
 
@@ -491,7 +477,7 @@ class Model:
         """Time for the noise-free motion from v0 to reach v = 0 (``t_a`` of eq. (31)), or
         ``inf`` if it never does.  Exact sgn law (epsilon = 0) only; for the family
         (cubic, Stribeck) the ODE is integrated numerically."""
-        v0 = _finite("v0", v0)
+        v0 = checks.finite("v0", v0)
         if v0 == 0:
             return 0.0
         s = 1.0 if v0 > 0 else -1.0
@@ -513,7 +499,7 @@ class Model:
         ``v_ss`` (eq. (14)).  With epsilon > 0 the smooth ODE is integrated numerically, and
         so is every extension (from ``x(0) = x0`` with a spring; velocity returned).
         """
-        v0 = _finite("v0", v0)
+        v0 = checks.finite("v0", v0)
         t = np.asarray(t, dtype=float)
         if np.any(t < 0) or not np.all(np.isfinite(t)):
             raise ValueError("t must be finite and >= 0")

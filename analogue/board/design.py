@@ -27,7 +27,7 @@ from dataclasses import dataclass, field, replace
 
 import eseries
 
-from ..circuit import validation
+from .. import checks
 from ..circuit.mapping import stationary_range, stationary_std
 from ..circuit.parts import get_part, thermal_voltage
 from ..model import Model
@@ -55,7 +55,7 @@ def round_to_series(value: float, series: str) -> float:
     """Nearest value of the E-series ``series`` (``E6``...``E192``)."""
     if series not in SERIES:
         raise ValueError(f"series must be one of {sorted(SERIES)}, got {series!r}")
-    value = validation.positive(value, "value")
+    value = checks.positive("value", value)
     return float(eseries.find_nearest(SERIES[series], value))
 
 
@@ -99,11 +99,11 @@ class BoardSpec:
     def __post_init__(self):
         for name in ("rails", "machine_unit", "sigma_volts", "time_scale", "capacitance", "v_set",
                      "v_force", "dac_rms", "dac_range", "bessel_fc", "ac_corner"):
-            object.__setattr__(self, name, validation.positive(getattr(self, name), name))
+            object.__setattr__(self, name, checks.positive(name, getattr(self, name)))
         for name in ("kappa", "noise_dt"):
             if getattr(self, name) is not None:
-                object.__setattr__(self, name, validation.positive(getattr(self, name), name))
-        object.__setattr__(self, "temperature", validation.finite(self.temperature, "temperature"))
+                object.__setattr__(self, name, checks.positive(name, getattr(self, name)))
+        object.__setattr__(self, "temperature", checks.finite("temperature", self.temperature))
         if not -40.0 <= self.temperature <= 125.0:
             raise ValueError(f"temperature must be in [-40, 125] C, got {self.temperature}")
         if not self.machine_unit < self.rails:

@@ -28,7 +28,7 @@ noise term exactly where the stick statistics are measured.  It is described, no
 """
 from __future__ import annotations
 
-from ..circuit import validation
+from .. import checks
 from ..circuit.parts import DiodePart
 
 __all__ = ["MOSFET_MODELS", "bridge_lines", "floating_bridge_deck", "ota_lines"]
@@ -40,14 +40,14 @@ MOSFET_MODELS = (".model pmosx PMOS(LEVEL=1 VTO=-1.8 KP=0.05 LAMBDA=0.01)",
 
 
 def _n(x, what="value") -> str:
-    return validation.spice_number(x, what)
+    return checks.spice_number(what, x)
 
 
 def diode_model_line(name: str, part: DiodePart, is_scale: float = 1.0, temp_shift: float = 0.0) -> str:
     params = dict(part.model)
     params["IS"] = params.get("IS", 1e-14) * is_scale
     text = " ".join(f"{k}={_n(v, k)}" for k, v in params.items())
-    return f".model {validation.check_name(name, 'diode model name')} D({text})"
+    return f".model {checks.identifier('diode model name', name)} D({text})"
 
 
 def bridge_lines(prefix: str, a: str, b: str, *, part: DiodePart, diode_models, r_s_top: float,
@@ -57,7 +57,7 @@ def bridge_lines(prefix: str, a: str, b: str, *, part: DiodePart, diode_models, 
     with its two current sources (op-amp subcircuits ``opamp_top``/``opamp_bot``, supplies
     ``vcc``/``vee``).  ``diode_models``: four model names (D1 top->a, D2 top->b, D3 a->bot,
     D4 b->bot), so that each diode can carry its own mismatch."""
-    p = validation.check_name(prefix, "prefix")
+    p = checks.identifier("prefix", prefix)
     top, bot = f"{p}top", f"{p}bot"
     d1, d2, d3, d4 = diode_models
     lines = [f"D{p}1 {top} {a} {d1}", f"D{p}2 {top} {b} {d2}",
@@ -86,7 +86,7 @@ def ota_lines(prefix: str, sj: str, out: str, *, i_abc: float, k: float, vos: fl
     V(out) + vos)/(2 V_T))`` into ``sj`` (behavioural; ``asymmetry`` is the relative mismatch
     of the output mirrors).  Bipolar input pair: width 2 V_T at the OTA input."""
     from ..circuit.parts import thermal_voltage
-    p = validation.check_name(prefix, "prefix")
+    p = checks.identifier("prefix", prefix)
     vt2 = 2.0 * thermal_voltage(temperature_k)
     arg = f"({_n(k, 'k')}*v({out})+{_n(vos, 'vos')})/{_n(vt2)}"
     return [(f"B{p}ota 0 {sj} i={_n(i_abc, 'i_abc')}*(1+{_n(asymmetry, 'asymmetry')}*"

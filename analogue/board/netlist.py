@@ -16,7 +16,7 @@ The initial velocity is set with ``.ic`` on the output and the integrator's gain
 ``uic``: ngspice then solves the operating point of the current sources, the Bessel filter and
 the bridge with the integrator held, which is what a reset switch across ``C`` followed by an
 initial-condition drive does on the bench).  No ``.control`` block; every number is formatted
-by :func:`analogue.circuit.validation.spice_number`.
+by :func:`analogue.checks.spice_number`.
 """
 from __future__ import annotations
 
@@ -25,7 +25,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..circuit import validation
+from .. import checks
 from ..circuit.parts import get_part
 from . import friction, noise_chain, opamp
 from .design import BoardDesign
@@ -93,7 +93,7 @@ class BoardDeck:
 
 
 def _n(x, what="value") -> str:
-    return validation.spice_number(x, what)
+    return checks.spice_number(what, x)
 
 
 def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: float,
@@ -126,8 +126,8 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
     if np.max(np.abs(v0)) * design.kappa > design.spec.machine_unit * (1 + 1e-9):
         raise ValueError(f"v0: |v0| up to {np.max(np.abs(v0)):.3g} exceeds the machine unit "
                          f"({design.spec.machine_unit / design.kappa:.3g} at kappa={design.kappa:.3g} V)")
-    t_end = validation.positive(t_end, "t_end")
-    sample_dt = validation.positive(sample_dt, "sample_dt")
+    t_end = checks.positive("t_end", t_end)
+    sample_dt = checks.positive("sample_dt", sample_dt)
     theta, ts = design.theta, design.noise_ts
     n_samples = int(np.ceil(t_end * theta / ts)) + 2
     noise_dir = Path(noise_dir)
@@ -136,7 +136,7 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
     b = board
     temp_k = b.temperature + 273.15
 
-    lines = [f"board {validation.check_name(design.spec.opamp, 'opamp')} {part.name}",
+    lines = [f"board {checks.identifier('opamp', design.spec.opamp)} {part.name}",
              (f"* analogue board deck: kappa={_n(design.kappa)} V/unit theta={_n(theta)} s "
              f"TS={_n(ts)} s seed={int(seed)}")]
     include = None

@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 from scipy import integrate, signal
 
-from ..circuit import validation
+from .. import checks
 from .design import BoardDesign
 
 __all__ = [
@@ -49,7 +49,7 @@ SAFE_PATH = re.compile(r"/[A-Za-z0-9_./+-]+")
 
 
 def _n(x, what="value") -> str:
-    return validation.spice_number(x, what)
+    return checks.spice_number(what, x)
 
 
 def standard_normals(seed: int, replica: int, n: int) -> np.ndarray:
@@ -101,8 +101,8 @@ def check_path(path) -> str:
 
 def dac_lines(prefix: str, node: str, path, sha256: str) -> list[str]:
     """XSPICE filesource (zero-order hold) reading ``path``, driving ``node``."""
-    p = validation.check_name(prefix, "prefix")
-    node = validation.check_name(node, "node")
+    p = checks.identifier("prefix", prefix)
+    node = checks.identifier("node", node)
     if re.fullmatch(r"[0-9a-f]{64}", sha256 or "") is None:
         raise ValueError("sha256 must be 64 hex digits")
     f = check_path(path)
@@ -115,7 +115,7 @@ def dac_lines(prefix: str, node: str, path, sha256: str) -> list[str]:
 def bessel_lines(prefix: str, inp: str, out: str, design: BoardDesign, opamp: str,
                  values: dict | None = None) -> list[str]:
     """Unity-gain Sallen-Key Bessel low-pass from ``inp`` to ``out`` (op-amp ``opamp``)."""
-    p = validation.check_name(prefix, "prefix")
+    p = checks.identifier("prefix", prefix)
     v = values or design.values
     return [f"R{p}b1 {inp} {p}b1 {_n(v['R_B1'])}", f"R{p}b2 {p}b1 {p}b2 {_n(v['R_B2'])}",
             f"C{p}b1 {p}b1 {out} {_n(v['C_B1'])}", f"C{p}b2 {p}b2 0 {_n(v['C_B2'])}",

@@ -23,7 +23,7 @@ import re
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
 
-from ..circuit import validation
+from .. import checks
 
 __all__ = [
     "OPAMPS",
@@ -65,15 +65,15 @@ class OpAmp:
     source: str = ""
 
     def __post_init__(self):
-        validation.check_name(self.name, "op-amp name")
+        checks.identifier("op-amp name", self.name)
         for f in fields(self):
             if f.name in ("name", "source"):
                 continue
             value = getattr(self, f.name)
             if f.name in ("vos", "vos_drift", "ib", "ios"):
-                object.__setattr__(self, f.name, validation.finite(value, f.name))
+                object.__setattr__(self, f.name, checks.finite(f.name, value))
             else:
-                object.__setattr__(self, f.name, validation.positive(value, f.name))
+                object.__setattr__(self, f.name, checks.positive(f.name, value))
 
     @property
     def gm(self) -> float:
@@ -90,7 +90,7 @@ class OpAmp:
     def at_temperature(self, celsius: float) -> OpAmp:
         """The same part at ``celsius``: offset drifts linearly, bias currents double every
         ``ib_doubling`` kelvin (JFET gate leakage)."""
-        dt = validation.finite(celsius, "celsius") - 25.0
+        dt = checks.finite("celsius", celsius) - 25.0
         k = 2.0 ** (dt / self.ib_doubling)
         return replace(self, vos=self.vos + self.vos_drift * dt, ib=self.ib * k, ios=self.ios * k)
 
@@ -124,7 +124,7 @@ def get_opamp(name: str) -> OpAmp:
 
 
 def _n(x, what="value") -> str:
-    return validation.spice_number(x, what)
+    return checks.spice_number(what, x)
 
 
 def subcircuit(p: OpAmp, name: str | None = None) -> str:
@@ -134,7 +134,7 @@ def subcircuit(p: OpAmp, name: str | None = None) -> str:
     inside a ``.subckt`` is local to it)."""
     if not isinstance(p, OpAmp):
         raise TypeError(f"p must be an OpAmp, got {type(p).__name__}")
-    name = validation.check_name(name or p.name, "subcircuit name")
+    name = checks.identifier("subcircuit name", name or p.name)
     return "\n".join([
         f".subckt {name} inp inn vcc vee out",
         f"Vos inp ip1 dc {_n(p.vos, 'vos')}",
@@ -176,7 +176,7 @@ def vendor_model_path(path, subckt: str) -> Path:
     machine (nothing of it enters this repository)."""
     if not isinstance(path, (str, Path)):
         raise TypeError(f"vendor model path must be a str or Path, got {type(path).__name__}")
-    subckt = validation.check_name(subckt, "vendor subcircuit name")
+    subckt = checks.identifier("vendor subcircuit name", subckt)
     p = Path(path).expanduser().resolve()
     if _SAFE_PATH.fullmatch(str(p)) is None:
         raise ValueError(f"vendor model path must contain only letters, digits and _ . / + -, "

@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from ..circuit import validation
+from .. import checks
 from ..circuit.parts import get_part, thermal_voltage
 from ..model import Model
 from . import opamp
@@ -66,8 +66,8 @@ class Tolerances:
     def __post_init__(self):
         for name in ("r_tol", "r_tempco", "c_tol", "c_tempco", "filter_c_tol", "ac_c_tol",
                      "ref_tol", "diode_is", "temp_range"):
-            object.__setattr__(self, name, validation.nonnegative(getattr(self, name), name))
-        object.__setattr__(self, "temperature", validation.finite(self.temperature, "temperature"))
+            object.__setattr__(self, name, checks.nonnegative(name, getattr(self, name)))
+        object.__setattr__(self, "temperature", checks.finite("temperature", self.temperature))
         bad = [c for c in self.enabled if c not in CLASSES]
         if bad:
             raise ValueError(f"enabled must be a subset of {CLASSES}, got {bad}")

@@ -62,8 +62,9 @@ import numpy as np
 from .. import model as _model_module
 from ..model import Model
 from ..report.plan import ReportSettings, report_settings_from_dict
-from . import validation
-from .mapping import FIXED_TRTOL, CircuitMapping, CircuitSpec, map_model
+from .. import checks
+from .mapping import (FIXED_TRTOL, CircuitMapping, CircuitSpec, check_mapping_values,
+                      check_spec_ranges, map_model)
 from .netlist import Deck, build_deck
 
 __all__ = ["Experiment", "load_experiment", "experiment_from_dict", "regenerate_netlists",
@@ -229,16 +230,10 @@ def _require(section: dict, required: set, prefix: str, where: str) -> None:
         raise ValueError(f"{where}: missing required key {prefix}.{missing[0]}")
 
 
-def _int(value, what: str, lo: int, hi: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
-        raise ValueError(f"{what} must be an integer in [{lo}, {hi}], got {value!r}")
-    return value
-
-
-def _floats(value, what: str, allow_empty: bool = True) -> tuple:
+def _floats(what: str, value, *, allow_empty: bool = True) -> tuple:
     if not isinstance(value, list) or (not allow_empty and not value):
         raise ValueError(f"{what} must be a {'non-empty ' if not allow_empty else ''}list of numbers")
-    return tuple(validation.finite(x, f"{what}[{i}]") for i, x in enumerate(value))
+    return tuple(checks.finite(f"{what}[{i}]", x) for i, x in enumerate(value))
 
 
 def _nested_class(cls, key: str):
@@ -343,7 +338,7 @@ def _check_plan(exp: Experiment, where: str) -> None:
         raise ValueError(f"{where}: {exc}") from None
     for kind, m in plan.items():
         try:
-            validation.check_mapping_values(m, kind)
+            check_mapping_values(m, kind)
         except ValueError as exc:
             raise ValueError(f"{where}: {exc}") from None
     longest = max(exp.t_end, st_full.stationary_t_end)
@@ -368,7 +363,7 @@ def experiment_from_dict(data: dict, where: str = "experiment", source: Path | N
                          f"{', '.join(sorted(_TOP_KEYS))})")
     if "name" not in data:
         raise ValueError(f"{where}: missing required key name")
-    name = validation.check_name(data["name"], f"{where}: name")
+    name = checks.identifier(f"{where}: name", data["name"])
     description = data.get("description", "")
     if not isinstance(description, str):
         raise ValueError(f"{where}: description must be a string")
@@ -379,32 +374,32 @@ def experiment_from_dict(data: dict, where: str = "experiment", source: Path | N
 
     cdata = _table(data, "circuit", circuit_keys(), where)
     spec = _build(CircuitSpec, "circuit", cdata, where)
-    validation.check_spec_ranges(spec, f"{where}: circuit")
+    check_spec_ranges(spec, f"{where}: circuit")
 
     edata = _table(data, "experiment", _EXPERIMENT_KEYS, where)
     _require(edata, _EXPERIMENT_REQUIRED, "experiment", where)
-    v0 = _floats(edata["v0"], f"{where}: experiment.v0", allow_empty=False)
-    replicas = _int(edata.get("replicas", 100), f"{where}: experiment.replicas", 1, 100_000)
-    t_end = validation.positive(edata["t_end"], f"{where}: experiment.t_end")
-    sample_dt = validation.positive(edata["sample_dt"], f"{where}: experiment.sample_dt")
+    v0 = _floats(f"{where}: experiment.v0", edata["v0"], allow_empty=False)
+    replicas = checks.integer(f"{where}: experiment.replicas", edata.get("replicas", 100), minimum=1, maximum=100_000)
+    t_end = checks.positive(f"{where}: experiment.t_end", edata["t_end"])
+    sample_dt = checks.positive(f"{where}: experiment.sample_dt", edata["sample_dt"])
     if sample_dt > t_end:
         raise ValueError(f"{where}: experiment.sample_dt must be <= t_end={t_end}, got {sample_dt}")
-    seed = _int(edata.get("seed", 1), f"{where}: experiment.seed", 0, 2**31 - 1)
-    burn_in = validation.nonnegative(edata.get("burn_in", 0.0), f"{where}: experiment.burn_in")
+    seed = checks.integer(f"{where}: experiment.seed", edata.get("seed", 1), minimum=0, maximum=2**31 - 1)
+    burn_in = checks.nonnegative(f"{where}: experiment.burn_in", edata.get("burn_in", 0.0))
     if burn_in >= t_end:
         raise ValueError(f"{where}: experiment.burn_in must be < t_end={t_end}, got {burn_in}")
-    times = _floats(edata.get("histogram_times", []), f"{where}: experiment.histogram_times")
+    times = _floats(f"{where}: experiment.histogram_times", edata.get("histogram_times", []))
     for t in times:
         if not 0 < t <= t_end:
             raise ValueError(f"{where}: experiment.histogram_times must lie in (0, t_end={t_end}], got {t}")
-    taus = _floats(edata.get("work_taus", []), f"{where}: experiment.work_taus")
+    taus = _floats(f"{where}: experiment.work_taus", edata.get("work_taus", []))
     for tau in taus:
         if not 0 < tau <= t_end - burn_in:
             raise ValueError(f"{where}: experiment.work_taus must lie in (0, t_end - burn_in="
                              f"{t_end - burn_in}], got {tau}")
 
     ndata = _table(data, "netlist", _NETLIST_KEYS, where)
-    netlist_replicas = _int(ndata.get("replicas", 4), f"{where}: netlist.replicas", 1, 64)
+    netlist_replicas = checks.integer(f"{where}: netlist.replicas", ndata.get("replicas", 4), minimum=1, maximum=64)
 
     report = report_settings_from_dict(data.get("report"), where)
 
@@ -419,7 +414,7 @@ def experiment_from_dict(data: dict, where: str = "experiment", source: Path | N
 def _names_in(directory: Path) -> list[str]:
     if not directory.is_dir():
         return []
-    return sorted(p.stem for p in directory.glob("*.toml") if validation.NAME_PATTERN.fullmatch(p.stem))
+    return sorted(p.stem for p in directory.glob("*.toml") if checks.NAME_PATTERN.fullmatch(p.stem))
 
 
 def _standard_dir() -> Path:
@@ -434,7 +429,7 @@ def experiment_names() -> list[str]:
 
 def standard_circuit(name: str) -> Path:
     """The TOML file of the standard experiment ``name`` (package data or the checkout)."""
-    name = validation.check_name(name, "experiment name")
+    name = checks.identifier("experiment name", name)
     path = _standard_dir() / f"{name}.toml"
     if not path.is_file():
         raise ValueError(f"experiment name must be one of {experiment_names()}, got {name!r}")
@@ -443,7 +438,7 @@ def standard_circuit(name: str) -> Path:
 
 def resolve_experiment(name: str) -> Path:
     """``./circuits/<name>.toml`` if it exists, else the standard experiment ``name``."""
-    name = validation.check_name(name, "experiment name")
+    name = checks.identifier("experiment name", name)
     local = Path.cwd() / "circuits" / f"{name}.toml"
     if local.is_file():
         return local
@@ -493,7 +488,7 @@ def load_experiment(path_or_name) -> Experiment:
     if isinstance(path_or_name, Path):
         path = path_or_name
     elif isinstance(path_or_name, str):
-        if validation.NAME_PATTERN.fullmatch(path_or_name):
+        if checks.NAME_PATTERN.fullmatch(path_or_name):
             path, by_name = resolve_experiment(path_or_name), True
         else:
             path = Path(path_or_name)

@@ -86,12 +86,13 @@ from ..model import Model
 # the stationary closed forms live with the stationary law (theory); re-exported here for
 # the mapping's callers (board, tests)
 from ..theory.stationary import CENTRAL_BIN, central_bin_bias, stationary_std  # noqa: F401
-from . import validation
+from .. import checks
 from .parts import IDEAL_IS, DiodePart, get_part, ideal_diode, thermal_voltage, PARTS
 from . import nonlinear as nl
 
 __all__ = ["CircuitSpec", "CircuitMapping", "map_model", "COULOMB_KINDS", "DIODES",
-           "CUBIC_KINDS", "velocity_range", "velocity_std"]
+           "CUBIC_KINDS", "velocity_range", "velocity_std", "SPEC_RANGES", "check_spec_ranges",
+           "check_mapping_values"]
 
 COULOMB_KINDS = ("diode-bridge", "behavioural", "behavioural-sgn")
 CUBIC_KINDS = ("behavioural", "diode-network")
@@ -207,41 +208,39 @@ class CircuitSpec:
         if self.method is not None and self.method not in METHODS:
             raise ValueError(f"method must be one of {METHODS} or None (chosen by measurement), "
                              f"got {self.method!r}")
-        s = validation.positive(self.smoothing, "smoothing")
+        s = checks.positive("smoothing", self.smoothing)
         if not s < 1:
             raise ValueError(f"smoothing must be in (0, 1) (fraction of sqrt(tau_m/gamma)), got {s!r}")
         object.__setattr__(self, "smoothing", s)
         for name in ("time_scale", "capacitance", "abstol", "bias_tolerance"):
-            object.__setattr__(self, name, validation.positive(getattr(self, name), name))
+            object.__setattr__(self, name, checks.positive(name, getattr(self, name)))
         if self.reltol is not None:
-            object.__setattr__(self, "reltol", validation.positive(self.reltol, "reltol"))
+            object.__setattr__(self, "reltol", checks.positive("reltol", self.reltol))
             if not self.reltol < 0.1:
                 raise ValueError(f"reltol must be in (0, 0.1) or None (chosen by measurement), "
                                  f"got {self.reltol!r}")
         if self.trtol is not None:
-            t = validation.positive(self.trtol, "trtol")
+            t = checks.positive("trtol", self.trtol)
             if not 1.0 <= t <= 100.0:
                 raise ValueError(f"trtol must be in [1, 100] or None (chosen by measurement), "
                                  f"got {self.trtol!r}")
             object.__setattr__(self, "trtol", t)
         for name in ("volts_per_velocity", "noise_dt", "max_step", "vntol"):
             if getattr(self, name) is not None:
-                object.__setattr__(self, name, validation.positive(getattr(self, name), name))
-        if not isinstance(self.allow_bias, bool):
-            raise ValueError(f"allow_bias must be True or False, got {self.allow_bias!r}")
+                object.__setattr__(self, name, checks.positive(name, getattr(self, name)))
+        object.__setattr__(self, "allow_bias", checks.flag("allow_bias", self.allow_bias))
         if self.cubic_element not in CUBIC_KINDS:
             raise ValueError(f"cubic_element must be one of {CUBIC_KINDS}, got {self.cubic_element!r}")
         if self.cubic_diode not in DIODES:
             raise ValueError(f"cubic_diode must be one of {DIODES}, got {self.cubic_diode!r}")
-        b = self.cubic_branches
-        if isinstance(b, bool) or not isinstance(b, int) or not 1 <= b <= 16:
-            raise ValueError(f"cubic_branches must be an integer in [1, 16], got {b!r}")
-        object.__setattr__(self, "inductor_q", validation.positive(self.inductor_q, "inductor_q"))
+        object.__setattr__(self, "cubic_branches",
+                           checks.integer("cubic_branches", self.cubic_branches, minimum=1, maximum=16))
+        object.__setattr__(self, "inductor_q", checks.positive("inductor_q", self.inductor_q))
         if self.inductor_resistance is not None:
             object.__setattr__(self, "inductor_resistance",
-                               validation.nonnegative(self.inductor_resistance, "inductor_resistance"))
+                               checks.nonnegative("inductor_resistance", self.inductor_resistance))
         if self.shot_width is not None:
-            object.__setattr__(self, "shot_width", validation.positive(self.shot_width, "shot_width"))
+            object.__setattr__(self, "shot_width", checks.positive("shot_width", self.shot_width))
 
     def replace(self, **changes) -> CircuitSpec:
         return replace(self, **changes)
@@ -843,12 +842,53 @@ def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
     return mapping
 
 
+# Ranges of the circuit choices a deck can be built from.  Outside them the derived component
+# values leave the range ngspice computes with (time_scale = 1e300 gives R = 1e307 ohm and
+# currents of 1e-307 A, far below abstol; 1e-300 overflows the currents), so they are refused
+# naming the parameter.  Wide on purpose: a picosecond to 1000 s per model time unit, a
+# femtofarad to a kilofarad, a microvolt to a kilovolt per unit velocity.
+SPEC_RANGES = {
+    "time_scale": (1e-12, 1e3),
+    "capacitance": (1e-15, 1e3),
+    "volts_per_velocity": (1e-6, 1e3),
+}
+
+
+def check_spec_ranges(spec: CircuitSpec, where: str = "circuit") -> None:
+    """Refuse circuit choices outside :data:`SPEC_RANGES` (ValueError naming the parameter)."""
+    for name, (lo, hi) in SPEC_RANGES.items():
+        value = getattr(spec, name, None)
+        if value is not None:
+            checks.in_range(f"{where}.{name}", value, lo, hi,
+                            why="the derived component values would leave the range ngspice "
+                                "computes with")
+
+
+# Component values (CircuitMapping.table() rows) that must be > 0 when present in the deck.
+_POSITIVE = ("theta", "kappa", "C", "R", "R_total", "noise_TS", "noise_gain", "C_x", "g_x", "vntol")
+_TINY = 1e-300  # below this a "positive" value is an underflow, not a component
+
+
+def check_mapping_values(mapping: CircuitMapping, what: str = "circuit") -> None:
+    """Every derived component value finite, and the positive ones not underflowed: a value
+    that overflowed or underflowed is refused naming it and the circuit choices it comes from."""
+    spec = mapping.spec
+    inputs = (f"time_scale={spec.time_scale:g}, capacitance={spec.capacitance:g}, "
+              f"volts_per_velocity={mapping.kappa:g}, noise_dt={mapping.noise_dt:g}")
+    for name, value, unit, _ in mapping.table():
+        x = float(value)
+        if not math.isfinite(x) or (name in _POSITIVE and not abs(x) >= _TINY):
+            raise ValueError(f"{what} circuit: {name}={x:g} {unit} is out of range (derived from "
+                             f"{inputs} and the model); change circuit.time_scale, "
+                             f"circuit.capacitance or the [model] values")
+
+
 def stationary_range(model: Model, level: float = SWING_LEVEL) -> tuple[float, float]:
     """The interval where the stationary density (eq. (6)) is within ``exp(-level)`` of its
     peak: ``gamma (U(v) - U_min) <= level``.  U is convex with ``U'' >= 1/tau_m``, so the ends
     lie within ``sqrt(2 tau_m level/gamma)`` of the minimum, which brackets the root search.
     Returns ``(lo, hi)``."""
-    level = validation.positive(level, "level")
+    level = checks.positive("level", level)
     v_min = model.potential_minimum()
     u_min = float(model.potential(v_min))
     # (1 + 1e-3): where U is exactly quadratic the bound is attained, and rounding must not

@@ -39,7 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 from PySpice.Spice.Netlist import Circuit, SubCircuit
 
-from . import validation
+from .. import checks
 from .mapping import CircuitMapping
 from .nonlinear import DiodeNetwork, branch_current
 from .parts import DiodePart, bridge_node_voltages
@@ -94,7 +94,7 @@ def _cubic_network(mapping: CircuitMapping) -> DiodeNetwork:
 
 
 def _spice_value(x, what="value") -> str:
-    return validation.spice_number(x, what)
+    return checks.spice_number(what, x)
 
 
 def bridge_subcircuit(mapping: CircuitMapping) -> SubCircuit:
@@ -231,11 +231,11 @@ def build_deck(mapping: CircuitMapping, *, replicas: int, v0, t_end: float, seed
     """
     if not isinstance(mapping, CircuitMapping):
         raise ValueError(f"mapping must be a CircuitMapping, got {type(mapping).__name__}")
-    title = validation.check_name(title, "title")
+    title = checks.identifier("title", title)
     replicas = _check_int(replicas, "replicas", 1, 100_000)
     seed = _check_int(seed, "seed", 0, _SEED_MAX)
-    t_end = validation.positive(t_end, "t_end")
-    sample_dt = validation.positive(sample_dt, "sample_dt")
+    t_end = checks.positive("t_end", t_end)
+    sample_dt = checks.positive("sample_dt", sample_dt)
     if not sample_dt <= t_end:
         raise ValueError(f"sample_dt must be in (0, t_end={t_end}], got {sample_dt!r}")
     try:
@@ -341,7 +341,7 @@ def bridge_dc_deck(mapping: CircuitMapping, v_max: float, points: int = 201) -> 
     law of the bridge (or B-source) directly."""
     if not isinstance(mapping, CircuitMapping):
         raise ValueError(f"mapping must be a CircuitMapping, got {type(mapping).__name__}")
-    v_max = validation.positive(v_max, "v_max")
+    v_max = checks.positive("v_max", v_max)
     points = _check_int(points, "points", 3, 100_001)
     element = mapping.coulomb_element
     if element is None:
@@ -372,7 +372,7 @@ def cubic_dc_deck(mapping: CircuitMapping, v_max: float, points: int = 201) -> s
     network) from ``-v_max`` to ``v_max`` volts; the element's current is ``-i(vs)``."""
     if not isinstance(mapping, CircuitMapping):
         raise ValueError(f"mapping must be a CircuitMapping, got {type(mapping).__name__}")
-    v_max = validation.positive(v_max, "v_max")
+    v_max = checks.positive("v_max", v_max)
     points = _check_int(points, "points", 3, 100_001)
     if mapping.cubic_element is None:
         raise ValueError("mapping has no cubic element to sweep (cubic = 0); map a model with cubic > 0")

@@ -29,11 +29,11 @@ import uuid
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field, is_dataclass
-from numbers import Integral, Real
 from typing import TYPE_CHECKING, Any, Literal, Protocol, overload, runtime_checkable
 
 import numpy as np
 
+from .. import checks
 from ..checks import ArgumentTypeError
 from ..ensemble import Ensemble
 from ..model import Model
@@ -75,46 +75,6 @@ DEFAULT_TIMEOUT = 3600.0
 _SEED_MAX = 2**31 - 1
 
 
-# ----------------------------------------------------------------------------- validation
-def _int(name, value, lo, hi=None) -> int:
-    """An int in [lo, hi]; bools, floats and strings are refused (TypeError), not coerced."""
-    if isinstance(value, bool) or not isinstance(value, Integral):
-        raise ArgumentTypeError(f"{name} must be an integer >= {lo}"
-                                + (f" and <= {hi}" if hi else "") + f", got {value!r}")
-    value = int(value)
-    if value < lo or (hi is not None and value > hi):
-        raise ValueError(f"{name} must be an integer >= {lo}" + (f" and <= {hi}" if hi else "")
-                         + f", got {value}")
-    return value
-
-
-def _real(name, value, *, positive=True) -> float:
-    """A finite float (> 0 if ``positive``); bools and strings are refused (TypeError)."""
-    if isinstance(value, bool) or not isinstance(value, Real):
-        raise ArgumentTypeError(f"{name} must be a finite real number > 0, got {value!r}")
-    try:
-        value = float(value)
-    except OverflowError:  # an int beyond the float range
-        value = math.inf
-    if not math.isfinite(value) or (positive and not value > 0):
-        raise ValueError(f"{name} must be a finite real number > 0, got {value!r}")
-    return value
-
-
-def _bool(name, value, *, allow_none=False) -> bool | None:
-    if value is None and allow_none:
-        return None
-    if not isinstance(value, bool):
-        raise ArgumentTypeError(f"{name} must be True or False"
-                                + (" or None (auto)" if allow_none else "") + f", got {value!r}")
-    return value
-
-
-def _flag(name: str, value: object) -> bool:
-    """True or False, nothing else (TypeError naming ``name``)."""
-    return bool(_bool(name, value))
-
-
 def _grid_intervals(t_end: float, sample_dt: float, dt_label: str = "") -> int:
     """Number of sample intervals t_end/sample_dt, refused (one line, naming both) when it is
     not a finite count that fits in memory: checked before any array is made."""
@@ -134,8 +94,8 @@ def time_grid(t_end, sample_dt) -> np.ndarray:
     """Uniform grid ``0, sample_dt, ..., t_end`` (model units); t_end must be a whole number of
     sample intervals (to 1e-6 relative), and the grid must fit in memory (see
     :mod:`analogue.circuit.limits`)."""
-    t_end = _real("t_end", t_end)
-    sample_dt = _real("sample_dt", sample_dt)
+    t_end = checks.positive("t_end", t_end)
+    sample_dt = checks.positive("sample_dt", sample_dt)
     if sample_dt > t_end:
         raise ValueError(f"sample_dt must be <= t_end (= {t_end!r}), got {sample_dt!r}")
     n = _grid_intervals(t_end, sample_dt)
@@ -148,7 +108,7 @@ def time_grid(t_end, sample_dt) -> np.ndarray:
 def deck_seeds(seed: int, n_decks: int) -> list[int]:
     """ngspice seeds (1 .. 2**31-1) of decks 0..n_decks-1, from SeedSequence(seed, spawn_key
     (1, b)): a fixed function of (seed, b), independent of scheduling."""
-    seed = _int("seed", seed, 0)
+    seed = checks.integer("seed", seed, minimum=0)
     out = []
     for b in range(n_decks):
         word = np.random.SeedSequence(seed, spawn_key=(1, b)).generate_state(1, np.uint32)[0]
@@ -356,7 +316,7 @@ def _progress_mode(progress, n_run: int) -> str | None:
     for but stderr is a file or pipe: logs stay readable) or None."""
     if progress is None:
         return "bar" if n_run > 1 and sys.stderr.isatty() else None
-    if not _bool("progress", progress):
+    if not checks.flag("progress", progress):
         return None
     return "bar" if sys.stderr.isatty() else "line"
 
@@ -464,8 +424,8 @@ def run_decks(decks: Sequence[Deck], times: ArrayLike, v0: ArrayLike, *,
     v0 = np.asarray(v0, dtype=float)
     if workers is None:
         workers = os.cpu_count() or 1
-    workers = _int("workers", workers, 1)
-    timeout = _real("timeout", timeout)
+    workers = checks.integer("workers", workers, minimum=1)
+    timeout = checks.positive("timeout", timeout)
     _check_scheduler(scheduler)
     _check_executor(executor)
     if executor is not None and scheduler is not None:
@@ -769,22 +729,22 @@ def simulate(model: Model, *, v0: float | ArrayLike | Literal["stationary"], t_e
     """
     if not isinstance(model, Model):
         raise ArgumentTypeError(f"model must be an analogue.Model, got {type(model).__name__}")
-    replicas = _int("replicas", replicas, 1)
-    seed = _int("seed", seed, 0)
-    t_end = _real("t_end", t_end)
+    replicas = checks.integer("replicas", replicas, minimum=1)
+    seed = checks.integer("seed", seed, minimum=0)
+    t_end = checks.positive("t_end", t_end)
     dt_label = ""
     if sample_dt is None:
         sample_dt = _default_sample_dt(model, t_end)
         dt_label = " (default: tau_m/100)"
-    sample_dt = _real("sample_dt", sample_dt)
+    sample_dt = checks.positive("sample_dt", sample_dt)
     _grid_intervals(t_end, sample_dt, dt_label)  # a count that fits, before anything else
     if workers is not None:
-        workers = _int("workers", workers, 1)
+        workers = checks.integer("workers", workers, minimum=1)
     per_deck = replicas_per_deck
     if per_deck is not None:
-        per_deck = _int("replicas_per_deck", per_deck, 1)
-    timeout = _real("timeout", timeout)
-    progress = _bool("progress", progress, allow_none=True)
+        per_deck = checks.integer("replicas_per_deck", per_deck, minimum=1)
+    timeout = checks.positive("timeout", timeout)
+    progress = checks.optional_flag("progress", progress, none_means="auto")
     if label is None:
         where = v0 if isinstance(v0, str) else (f"{float(np.asarray(v0)):g}" if np.ndim(v0) == 0
                                                 else "given")
@@ -795,8 +755,8 @@ def simulate(model: Model, *, v0: float | ArrayLike | Literal["stationary"], t_e
     elif not label.isprintable() or len(label) > 100:
         raise ValueError(f"label must be a printable str of at most 100 characters, got "
                          f"{label!r}")
-    return_noise = _flag("return_noise", return_noise)
-    return_records = _flag("return_records", return_records)
+    return_noise = checks.flag("return_noise", return_noise)
+    return_records = checks.flag("return_records", return_records)
     if return_noise and return_records:
         raise ValueError("return_noise and return_records cannot both be True")
     if return_noise:
