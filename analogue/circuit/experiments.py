@@ -371,6 +371,14 @@ def experiment_from_dict(data: dict, where: str = "experiment", source: Path | N
     mdata = _table(data, "model", model_keys(), where)
     _require(mdata, _required(Model), "model", where)
     model = _build(Model, "model", mdata, where)
+    if not model.is_noisy:
+        # Refused here, not after the circuit has run: an experiment compares noisy runs with
+        # the stationary law and the propagator, which the noise-free model does not have (its
+        # motion is the noise-free run every experiment already makes, paper Fig. 1).
+        raise ValueError(f"{where}: model.gamma = inf with no [model.shot] table is the "
+                         f"noise-free model (no stationary law or propagator to compare the "
+                         f"circuit with): set model.gamma to a finite value > 0 or add a "
+                         f"[model.shot] table (rate > 0, mean > 0)")
 
     cdata = _table(data, "circuit", circuit_keys(), where)
     spec = _build(CircuitSpec, "circuit", cdata, where)

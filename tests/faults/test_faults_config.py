@@ -231,6 +231,30 @@ def test_gamma_inf_is_passed_to_model_not_refused_by_the_loader():
         assert model_error in str(exc.value)
 
 
+def test_noise_free_toml_is_refused_at_load_not_after_the_runs(tmp_path, cli, monkeypatch):
+    """gamma = inf and no [model.shot]: the noise-free model has no stationary law or
+    propagator.  Before, `analogue run` simulated the circuit (8 decks per v0) and only then
+    failed in the theory; now the file is refused when it is loaded, naming both keys."""
+    from analogue.cli import main
+    d = doc(model={"gamma": math.inf})
+    assert "shot" not in d["model"]
+    with pytest.raises(ValueError) as exc:
+        experiment_from_dict(d, where="quiet.toml")
+    msg = one_line(exc)
+    assert msg.startswith("quiet.toml: ") and "model.gamma = inf" in msg and "[model.shot]" in msg
+    assert "finite value > 0" in msg
+    path = write(tmp_path, d, "quiet.toml")
+    store = tmp_path / "store"
+    monkeypatch.setenv("ANALOGUE_STORE", str(store))
+    r = cli.invoke(main, ["run", str(path), "--quick", "--store", str(store)])
+    assert r.exit_code == 2 and "model.gamma = inf" in r.output, r.output
+    assert not store.exists() or not any(f.is_file() for f in store.rglob("*")), "nothing ran"
+    # either noise on makes it an experiment again
+    assert experiment_from_dict(doc(model={"gamma": 5.0})).model.gamma == 5.0
+    shot = doc(model={"gamma": math.inf, "shot": {"rate": 1.0, "mean": 0.5}})
+    assert experiment_from_dict(shot).model.is_noisy
+
+
 def test_nested_shot_table_becomes_shot_noise():
     import analogue
     shot_cls = getattr(analogue, "ShotNoise", None)
