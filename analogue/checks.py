@@ -19,17 +19,21 @@ from __future__ import annotations
 import math
 import re
 from numbers import Integral
+from typing import TypeVar
 
 import numpy as np
 
 __all__ = ["ArgumentTypeError", "NAME_PATTERN", "finite", "finite_array", "flag", "identifier",
-           "in_range", "integer", "nonnegative", "optional_flag", "positive", "real",
+           "in_range", "instance", "integer", "nonnegative", "optional_flag", "positive", "real",
            "spice_number"]
 
 
 class ArgumentTypeError(TypeError, ValueError):
     """An argument of the wrong type (a TypeError).  Also a ValueError, because these were
     reported as ValueError before and callers may catch that."""
+
+
+T = TypeVar("T")
 
 
 # ----------------------------------------------------------------------------- numbers
@@ -72,13 +76,14 @@ def nonnegative(name: str, value: object) -> float:
     return x
 
 
-def in_range(name: str, value: object, low: float, high: float, *, why: str = "") -> float:
-    """A finite real number in the closed interval ``[low, high]``; ``why`` (e.g. "the
-    derived component values would leave ...") is appended to the message in parentheses."""
+def in_range(name: str, value: object, low: float, high: float, *, closed: bool = True,
+             why: str = "") -> float:
+    """A finite real number in ``[low, high]`` (``(low, high)`` if not ``closed``); ``why``
+    (e.g. "the derived component values would leave ...") is appended to the message."""
     x = real(name, value)
-    if not low <= x <= high:
-        raise ValueError(f"{name} must be in [{low:g}, {high:g}], got {x!r}"
-                         + (f" ({why})" if why else ""))
+    if not (low <= x <= high if closed else low < x < high):
+        interval = f"[{low:g}, {high:g}]" if closed else f"({low:g}, {high:g})"
+        raise ValueError(f"{name} must be in {interval}, got {x!r}" + (f" ({why})" if why else ""))
     return x
 
 
@@ -116,6 +121,14 @@ def optional_flag(name: str, value: object, *, none_means: str) -> bool | None:
         raise ArgumentTypeError(f"{name} must be a bool (True or False) or None "
                                 f"({none_means}), got {value!r}")
     return bool(value)
+
+
+def instance(name: str, value: object, kind: type[T], *, description: str) -> T:
+    """``value`` if it is an instance of ``kind`` (``description`` says what in the message:
+    "an analogue.Model"), else :class:`ArgumentTypeError`."""
+    if not isinstance(value, kind):
+        raise ArgumentTypeError(f"{name} must be {description}, got {type(value).__name__}")
+    return value
 
 
 def finite_array(name: str, value: object) -> np.ndarray:

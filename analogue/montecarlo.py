@@ -32,7 +32,7 @@ import numbers
 
 import numpy as np
 
-from .checks import ArgumentTypeError
+from . import checks
 from .ensemble import Ensemble
 from .model import Model
 from .theory.stationary import sample_stationary
@@ -96,16 +96,6 @@ def standard_noise(seed, replicas: int, n_steps: int) -> np.ndarray:
     ``seed`` (an int or SeedSequence): passing them as ``noise=`` reproduces the seeded run."""
     _, rng, _ = _streams(seed)
     return rng.standard_normal((int(n_steps), int(replicas))).T
-
-
-def _positive_float(name, value) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a real number > 0, got {value!r}") from None
-    if not (math.isfinite(x) and x > 0):
-        raise ValueError(f"{name} must be finite and > 0, got {value!r}")
-    return x
 
 
 def _ratio(name_num, num, name_den, den) -> int:
@@ -176,17 +166,14 @@ def simulate_sde(model: Model, *, v0, t_end: float, replicas: int, seed=None, dt
     scheme, noise ("seeded" or "given"), v0, model parameters; ``noise``: the given ``noise``
     array (with ``meta["noise_dt"] = dt``), None when seeded.
     """
-    if not isinstance(model, Model):
-        raise ArgumentTypeError(f"model must be an analogue.Model, got {type(model).__name__}")
+    checks.instance("model", model, Model, description="an analogue.Model")
     scheme = _ALIASES.get(scheme, scheme) if isinstance(scheme, str) else scheme
     if scheme not in SCHEMES:
         raise ValueError(f"scheme must be one of {SCHEMES} (or an alias), got {scheme!r}")
-    t_end = _positive_float("t_end", t_end)
-    if isinstance(replicas, (bool, np.bool_)) or not isinstance(replicas, numbers.Integral) or replicas < 1:
-        raise ValueError(f"replicas must be an int >= 1, got {replicas!r}")
-    replicas = int(replicas)
-    dt = None if dt is None else _positive_float("dt", dt)
-    sample_dt = None if sample_dt is None else _positive_float("sample_dt", sample_dt)
+    t_end = checks.positive("t_end", t_end)
+    replicas = checks.integer("replicas", replicas, minimum=1)
+    dt = None if dt is None else checks.positive("dt", dt)
+    sample_dt = None if sample_dt is None else checks.positive("sample_dt", sample_dt)
     if sample_dt is not None and sample_dt > t_end * (1 + 1e-12):
         raise ValueError(f"sample_dt={sample_dt!r} must be <= t_end={t_end!r}")
     dt, per, n_steps = _time_grid(model, t_end, dt, sample_dt)
@@ -209,7 +196,7 @@ def simulate_sde(model: Model, *, v0, t_end: float, replicas: int, seed=None, dt
         if v0 != "stationary":
             raise ValueError(f"v0 must be a number, an array (replicas,), or 'stationary', got {v0!r}")
         v = sample_stationary(model, replicas, seed=init_rng)
-        v0_meta = "stationary"
+        v0_meta: float | str = "stationary"
     else:
         try:
             v = np.broadcast_to(np.asarray(v0, dtype=float), (replicas,)).copy()

@@ -117,9 +117,7 @@ class BoardSpec:
             raise ValueError(f"bessel_fc must be in (0, 0.5] (fraction of the DAC rate), got {self.bessel_fc}")
         if not self.ac_corner < 0.2:
             raise ValueError(f"ac_corner must be in (0, 0.2), got {self.ac_corner}")
-        if isinstance(self.dac_bits, bool) or not isinstance(self.dac_bits, int) \
-                or not 8 <= self.dac_bits <= 24:
-            raise ValueError(f"dac_bits must be an integer in [8, 24], got {self.dac_bits!r}")
+        object.__setattr__(self, "dac_bits", checks.integer("dac_bits", self.dac_bits, minimum=8, maximum=24))
         for name, allowed in (("resistor_series", ("E24", "E96", "E192")),
                               ("capacitor_series", ("E6", "E12", "E24"))):
             if getattr(self, name) not in allowed:
@@ -237,11 +235,9 @@ def design_board(model: Model, spec: BoardSpec | None = None, v0=()) -> BoardDes
     ``v0``: initial velocities the experiment starts from (they must fit the machine unit).
     Raises ValueError naming the parameter when the model cannot be scaled inside the rails.
     """
-    if not isinstance(model, Model):
-        raise TypeError(f"model must be an analogue.Model, got {type(model).__name__}")
-    spec = BoardSpec() if spec is None else spec
-    if not isinstance(spec, BoardSpec):
-        raise TypeError(f"spec must be a BoardSpec, got {type(spec).__name__}")
+    checks.instance("model", model, Model, description="an analogue.Model")
+    spec = checks.instance("spec", BoardSpec() if spec is None else spec, BoardSpec,
+                           description="a BoardSpec")
     if model.delta <= 0:
         raise ValueError("model.delta must be > 0 for the board (its friction element is the bridge)")
     for name, off in (("cubic", model.cubic == 0), ("stribeck", model.stribeck is None),

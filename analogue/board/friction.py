@@ -39,14 +39,13 @@ MOSFET_MODELS = (".model pmosx PMOS(LEVEL=1 VTO=-1.8 KP=0.05 LAMBDA=0.01)",
                  ".model nmosx NMOS(LEVEL=1 VTO=1.8 KP=0.05 LAMBDA=0.01)")
 
 
-def _n(x, what="value") -> str:
-    return checks.spice_number(what, x)
+_n = checks.spice_number  # a deck number: _n(name, value)
 
 
 def diode_model_line(name: str, part: DiodePart, is_scale: float = 1.0, temp_shift: float = 0.0) -> str:
     params = dict(part.model)
     params["IS"] = params.get("IS", 1e-14) * is_scale
-    text = " ".join(f"{k}={_n(v, k)}" for k, v in params.items())
+    text = " ".join(f"{k}={_n(k, v)}" for k, v in params.items())
     return f".model {checks.identifier('diode model name', name)} D({text})"
 
 
@@ -64,16 +63,16 @@ def bridge_lines(prefix: str, a: str, b: str, *, part: DiodePart, diode_models, 
              f"D{p}3 {a} {bot} {d3}", f"D{p}4 {b} {bot} {d4}"]
     if part.rp:
         for i, (x, y) in enumerate(((top, a), (top, b), (a, bot), (b, bot)), 1):
-            lines.append(f"R{p}p{i} {x} {y} {_n(part.rp)}")
+            lines.append(f"R{p}p{i} {x} {y} {_n('rp', part.rp)}")
     lines += [
         # sourcing: V(ref) = Vcc - v_set, op-amp forces V(s) = V(ref): I = v_set/R_S
-        f"V{p}rt vcc {p}rt dc {_n(v_set_top, 'v_set')}",
-        f"R{p}st vcc {p}st {_n(r_s_top, 'R_S')}",
+        f"V{p}rt vcc {p}rt dc {_n('v_set', v_set_top)}",
+        f"R{p}st vcc {p}st {_n('R_S', r_s_top)}",
         f"X{p}ut {p}rt {p}st vcc vee {p}gt {opamp_top}",
         f"M{p}t {top} {p}gt {p}st {p}st pmosx",
         # sinking: V(ref) = Vee + v_set
-        f"V{p}rb {p}rb vee dc {_n(v_set_bot, 'v_set')}",
-        f"R{p}sb {p}sb vee {_n(r_s_bot, 'R_S')}",
+        f"V{p}rb {p}rb vee dc {_n('v_set', v_set_bot)}",
+        f"R{p}sb {p}sb vee {_n('R_S', r_s_bot)}",
         f"X{p}ub {p}rb {p}sb vcc vee {p}gb {opamp_bot}",
         f"M{p}b {bot} {p}gb {p}sb {p}sb nmosx",
     ]
@@ -88,8 +87,8 @@ def ota_lines(prefix: str, sj: str, out: str, *, i_abc: float, k: float, vos: fl
     from ..circuit.parts import thermal_voltage
     p = checks.identifier("prefix", prefix)
     vt2 = 2.0 * thermal_voltage(temperature_k)
-    arg = f"({_n(k, 'k')}*v({out})+{_n(vos, 'vos')})/{_n(vt2)}"
-    return [(f"B{p}ota 0 {sj} i={_n(i_abc, 'i_abc')}*(1+{_n(asymmetry, 'asymmetry')}*"
+    arg = f"({_n('k', k)}*v({out})+{_n('vos', vos)})/{_n('vt2', vt2)}"
+    return [(f"B{p}ota 0 {sj} i={_n('i_abc', i_abc)}*(1+{_n('asymmetry', asymmetry)}*"
             f"tanh(1e3*{arg}))*tanh({arg})")]
 
 
@@ -103,17 +102,18 @@ def floating_bridge_deck(*, i_delta: float, i_force: float, r: float, c: float, 
     ``I = i_delta * clip(V_across/headroom, 0, 1)`` from ``p`` to ``n``."""
     from ..circuit.parts import get_part
     part = get_part("1N4148")
-    model = " ".join(f"{k}={_n(v, k)}" for k, v in part.model)
+    model = " ".join(f"{k}={_n(k, v)}" for k, v in part.model)
     # orientation of analogue.circuit.netlist: D1 v->p, D2 0->p, D3 n->v, D4 n->0 and the
     # source driving current from p to n; it absorbs power only while V(p) > V(n).
     if regulator:
-        src = f"Breg p n i={_n(i_delta)}*min(max((v(p)-v(n))/{_n(headroom)},0),1)"
+        src = f"Breg p n i={_n('i_delta', i_delta)}*min(max((v(p)-v(n))/{_n('headroom', headroom)},0),1)"
     else:
-        src = f"Ireg p n dc {_n(i_delta)}"
+        src = f"Ireg p n dc {_n('i_delta', i_delta)}"
     return "\n".join([
         "floating bridge", f".model d4148 D({model})",
-        f"C1 v 0 {_n(c)}", f"R1 v 0 {_n(r)}", f"IF 0 v dc {_n(i_force)}",
+        f"C1 v 0 {_n('c', c)}", f"R1 v 0 {_n('r', r)}", f"IF 0 v dc {_n('i_force', i_force)}",
         "D1 v p d4148", "D2 0 p d4148", "D3 n v d4148", "D4 n 0 d4148", src,
-        f".ic v(v)={_n(v0)}",
+        f".ic v(v)={_n('v0', v0)}",
         ".options reltol=1e-4",
-        f".tran {_n(t_end / 2000)} {_n(t_end)} 0 {_n(t_end / 2000)}", ".save v(v) v(p) v(n)", ".end", ""])
+        f".tran {_n('tstep', t_end / 2000)} {_n('t_end', t_end)} 0 {_n('tmax', t_end / 2000)}",
+        ".save v(v) v(p) v(n)", ".end", ""])

@@ -92,8 +92,7 @@ class BoardDeck:
     to_model_noise: float = 1.0
 
 
-def _n(x, what="value") -> str:
-    return checks.spice_number(what, x)
+_n = checks.spice_number  # a deck number: _n(name, value)
 
 
 def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: float,
@@ -137,8 +136,8 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
     temp_k = b.temperature + 273.15
 
     lines = [f"board {checks.identifier('opamp', design.spec.opamp)} {part.name}",
-             (f"* analogue board deck: kappa={_n(design.kappa)} V/unit theta={_n(theta)} s "
-             f"TS={_n(ts)} s seed={int(seed)}")]
+             (f"* analogue board deck: kappa={_n('kappa', design.kappa)} V/unit theta={_n('theta', theta)} s "
+             f"TS={_n('ts', ts)} s seed={int(seed)}")]
     include = None
     if vendor is not None:
         if not (isinstance(vendor, tuple) and len(vendor) == 2):
@@ -155,16 +154,16 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
     for name, scale in zip(dmodels, b.diode_is):
         lines.append(friction.diode_model_line(name, part, is_scale=scale))
     lines += list(friction.MOSFET_MODELS)
-    lines += [f"Vcc vcc 0 dc {_n(b.rails)}", f"Vee vee 0 dc {_n(-b.rails)}",
-              f"Vf f 0 dc {_n(b.v_force, 'v_force')}"]
+    lines += [f"Vcc vcc 0 dc {_n('rails', b.rails)}", f"Vee vee 0 dc {_n('rails', -b.rails)}",
+              f"Vf f 0 dc {_n('v_force', b.v_force)}"]
     files, ic = [], []
     val_ = b.values
     for j in range(v0.size):
         r = first_replica + j
         sj, o = f"sj{j}", f"o{j}"
         lines += [f"XU{j} 0 {sj} vcc vee {o} opa_int",
-                  f"C{j}m {sj} {o} {_n(val_['C'], 'C')}",
-                  f"R{j}v {sj} {o} {_n(val_['R'], 'R')}"]
+                  f"C{j}m {sj} {o} {_n('C', val_['C'])}",
+                  f"R{j}v {sj} {o} {_n('R', val_['R'])}"]
         if friction_kind == "bridge":
             lines += friction.bridge_lines(
                 f"b{j}", sj, o, part=part, diode_models=dmodels, r_s_top=val_["R_S_top"],
@@ -173,29 +172,29 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
         else:
             lines += friction.ota_lines(f"b{j}", sj, o, temperature_k=temp_k, **(ota or {}))
         if np.isfinite(val_["R_F"]):
-            lines.append(f"R{j}f f {sj} {_n(val_['R_F'], 'R_F')}")
+            lines.append(f"R{j}f f {sj} {_n('R_F', val_['R_F'])}")
         volts = (np.zeros(n_samples) if noise_off
                  else noise_chain.dac_sequence(design, seed, r, n_samples))
         path, sha = noise_chain.write_dac_file(noise_dir, volts, ts)
         files.append(str(path))
         lines += noise_chain.dac_lines(f"n{j}", f"d{j}", path, sha)
         lines += noise_chain.bessel_lines(f"n{j}", f"d{j}", f"bo{j}", design, "opa_bf", val_)
-        lines += [f"C{j}ac bo{j} ac{j} {_n(val_['C_AC'], 'C_AC')}",
-                  f"R{j}n ac{j} {sj} {_n(val_['R_N'], 'R_N')}"]
+        lines += [f"C{j}ac bo{j} ac{j} {_n('C_AC', val_['C_AC'])}",
+                  f"R{j}n ac{j} {sj} {_n('R_N', val_['R_N'])}"]
         spring = "R_K" in val_
         if spring:
             # position integrator (reset = the .ic below) and inverter; spring current
             # -V(x)/R_K into the virtual ground
             lines += [f"XU{j}x 0 sx{j} vcc vee ox{j} opa_int",
-                      f"R{j}x {o} sx{j} {_n(val_['R_X'], 'R_X')}",
-                      f"C{j}x sx{j} ox{j} {_n(val_['C_X'], 'C_X')}",
+                      f"R{j}x {o} sx{j} {_n('R_X', val_['R_X'])}",
+                      f"C{j}x sx{j} ox{j} {_n('C_X', val_['C_X'])}",
                       f"XU{j}i 0 si{j} vcc vee oi{j} opa_int",
-                      f"R{j}i1 ox{j} si{j} {_n(val_['R_I'], 'R_I')}",
-                      f"R{j}i2 si{j} oi{j} {_n(val_['R_I'], 'R_I')}",
-                      f"R{j}k oi{j} {sj} {_n(val_['R_K'], 'R_K')}"]
+                      f"R{j}i1 ox{j} si{j} {_n('R_I', val_['R_I'])}",
+                      f"R{j}i2 si{j} oi{j} {_n('R_I', val_['R_I'])}",
+                      f"R{j}k oi{j} {sj} {_n('R_K', val_['R_K'])}"]
             vx = design.x_volts * design.model.x0
-            ic.append(f"v(ox{j})={_n(vx)} v(xu{j}x.g)={_n(vx)} v(sx{j})=0 "
-                      f"v(oi{j})={_n(-vx)} v(xu{j}i.g)={_n(-vx)} v(si{j})=0")
+            ic.append(f"v(ox{j})={_n('vx', vx)} v(xu{j}x.g)={_n('vx', vx)} v(sx{j})=0 "
+                      f"v(oi{j})={_n('vx', -vx)} v(xu{j}i.g)={_n('vx', -vx)} v(si{j})=0")
         vo = -design.kappa * v0[j]
         # the virtual ground's own equilibrium, -vos - V(out)/a0: holding it at 0 through the
         # operating point would charge the AC-coupling capacitor to the offset, which then
@@ -203,10 +202,10 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
         # force error of 0.01 for vos = 4 mV)
         amp = b.opamps["int"]
         v_sj = -amp.vos - vo / amp.a0
-        ic.append(f"v({o})={_n(vo)} v(xu{j}.g)={_n(vo)} v({sj})={_n(v_sj)}")
+        ic.append(f"v({o})={_n('vo', vo)} v(xu{j}.g)={_n('vo', vo)} v({sj})={_n('v_sj', v_sj)}")
     lines.append(".ic " + " ".join(ic))
-    lines.append(f".options reltol={_n(reltol)} abstol=1e-12 vntol=1e-7 method=gear "
-                 f"temp={_n(b.temperature)} tnom=27")
+    lines.append(f".options reltol={_n('reltol', reltol)} abstol=1e-12 vntol=1e-7 method=gear "
+                 f"temp={_n('temperature', b.temperature)} tnom=27")
     spring = "R_K" in val_
     v_names = [f"v(o{j})" for j in range(v0.size)]
     x_names = [f"v(ox{j})" for j in range(v0.size)] if spring else None
@@ -214,7 +213,8 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
     if not save_all:
         lines.append(".save " + " ".join(v_names + (x_names or [])))
     max_step = ts / 2.0
-    lines.append(f".tran {_n(sample_dt * theta)} {_n(t_end * theta)} 0 {_n(max_step)}")
+    lines.append(f".tran {_n('tstep', sample_dt * theta)} {_n('tstop', t_end * theta)} 0 "
+                 f"{_n('max_step', max_step)}")
     lines.append(".end")
     text = "\n".join(lines) + "\n"
     if include is not None:   # the validated vendor text (no .control/.include/shell lines)

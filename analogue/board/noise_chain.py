@@ -48,15 +48,12 @@ __all__ = [
 SAFE_PATH = re.compile(r"/[A-Za-z0-9_./+-]+")
 
 
-def _n(x, what="value") -> str:
-    return checks.spice_number(what, x)
+_n = checks.spice_number  # a deck number: _n(name, value)
 
 
 def standard_normals(seed: int, replica: int, n: int) -> np.ndarray:
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed must be an integer >= 0, got {seed!r}")
-    if isinstance(replica, bool) or not isinstance(replica, (int, np.integer)) or replica < 0:
-        raise ValueError(f"replica must be an integer >= 0, got {replica!r}")
+    seed = checks.integer("seed", seed, minimum=0)
+    replica = checks.integer("replica", replica, minimum=0)
     rng = np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(int(replica),)))
     return rng.standard_normal(int(n))
 
@@ -117,8 +114,8 @@ def bessel_lines(prefix: str, inp: str, out: str, design: BoardDesign, opamp: st
     """Unity-gain Sallen-Key Bessel low-pass from ``inp`` to ``out`` (op-amp ``opamp``)."""
     p = checks.identifier("prefix", prefix)
     v = values or design.values
-    return [f"R{p}b1 {inp} {p}b1 {_n(v['R_B1'])}", f"R{p}b2 {p}b1 {p}b2 {_n(v['R_B2'])}",
-            f"C{p}b1 {p}b1 {out} {_n(v['C_B1'])}", f"C{p}b2 {p}b2 0 {_n(v['C_B2'])}",
+    return [f"R{p}b1 {inp} {p}b1 {_n('R_B1', v['R_B1'])}", f"R{p}b2 {p}b1 {p}b2 {_n('R_B2', v['R_B2'])}",
+            f"C{p}b1 {p}b1 {out} {_n('C_B1', v['C_B1'])}", f"C{p}b2 {p}b2 0 {_n('C_B2', v['C_B2'])}",
             f"X{p}ubf {p}b2 {out} vcc vee {out} {opamp}"]
 
 

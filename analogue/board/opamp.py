@@ -123,8 +123,7 @@ def get_opamp(name: str) -> OpAmp:
         raise ValueError(f"op-amp must be one of {sorted(OPAMPS)}, got {name!r}") from None
 
 
-def _n(x, what="value") -> str:
-    return checks.spice_number(what, x)
+_n = checks.spice_number  # a deck number: _n(name, value)
 
 
 def subcircuit(p: OpAmp, name: str | None = None) -> str:
@@ -137,22 +136,22 @@ def subcircuit(p: OpAmp, name: str | None = None) -> str:
     name = checks.identifier("subcircuit name", name or p.name)
     return "\n".join([
         f".subckt {name} inp inn vcc vee out",
-        f"Vos inp ip1 dc {_n(p.vos, 'vos')}",
-        f"Ibp ip1 0 dc {_n(p.ib + 0.5 * p.ios, 'ib')}",
-        f"Ibn inn 0 dc {_n(p.ib - 0.5 * p.ios, 'ib')}",
-        f"Rin ip1 inn {_n(p.rin, 'rin')}",
+        f"Vos inp ip1 dc {_n('vos', p.vos)}",
+        f"Ibp ip1 0 dc {_n('ib', p.ib + 0.5 * p.ios)}",
+        f"Ibn inn 0 dc {_n('ib', p.ib - 0.5 * p.ios)}",
+        f"Rin ip1 inn {_n('rin', p.rin)}",
         # transconductance with slew limiting (tail current i_max)
-        f"Bgm 0 g i={_n(p.i_max)}*tanh({_n(p.gm / p.i_max)}*(v(ip1)-v(inn)))",
-        f"R1 g 0 {_n(R1)}",
-        f"C1 g 0 {_n(p.c1, 'c1')}",
+        f"Bgm 0 g i={_n('i_max', p.i_max)}*tanh({_n('gm / i_max', p.gm / p.i_max)}*(v(ip1)-v(inn)))",
+        f"R1 g 0 {_n('R1', R1)}",
+        f"C1 g 0 {_n('c1', p.c1)}",
         # rail clamps referenced to the supply pins
-        f"Vhp vcc chp dc {_n(p.headroom, 'headroom')}",
-        f"Vhn chn vee dc {_n(p.headroom, 'headroom')}",
+        f"Vhp vcc chp dc {_n('headroom', p.headroom)}",
+        f"Vhn chn vee dc {_n('headroom', p.headroom)}",
         f"Dhp g chp {CLAMP_MODEL}",
         f"Dhn chn g {CLAMP_MODEL}",
         f".model {CLAMP_MODEL} D(IS=1e-14 N=0.2)",
         "Ebuf o1 0 g 0 1",
-        f"Rout o1 out {_n(p.rout, 'rout')}",
+        f"Rout o1 out {_n('rout', p.rout)}",
         f".ends {name}",
     ])
 

@@ -78,11 +78,9 @@ class Tolerances:
 
 def draw_board(design: BoardDesign, tol: Tolerances, seed: int, board: int) -> BoardInstance:
     """Board number ``board`` of the Monte Carlo with master seed ``seed``."""
-    if not isinstance(tol, Tolerances):
-        raise TypeError(f"tol must be Tolerances, got {type(tol).__name__}")
-    for name, x in (("seed", seed), ("board", board)):
-        if isinstance(x, bool) or not isinstance(x, (int, np.integer)) or x < 0:
-            raise ValueError(f"{name} must be an integer >= 0, got {x!r}")
+    checks.instance("tol", tol, Tolerances, description="Tolerances")
+    seed = checks.integer("seed", seed, minimum=0)
+    board = checks.integer("board", board, minimum=0)
     rng = np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(int(board), 13)))
     on = set(tol.enabled)
     nom = nominal_instance(design)

@@ -637,8 +637,7 @@ def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
     inductor ``L = theta^2/(spring C)`` from the velocity node to ground (series resistance
     ``R_s``), ``shot`` -> a seeded PWL pulse source, ``gamma = inf`` -> no Gaussian source.
     """
-    if not isinstance(model, Model):
-        raise ValueError(f"model must be an analogue.Model, got {type(model).__name__}")
+    checks.instance("model", model, Model, description="an analogue.Model")
     spec = CircuitSpec() if spec is None else spec
     if not isinstance(spec, CircuitSpec):
         raise ValueError(f"spec must be a CircuitSpec, got {type(spec).__name__}")

@@ -93,8 +93,7 @@ def _cubic_network(mapping: CircuitMapping) -> DiodeNetwork:
     return mapping.cubic_network
 
 
-def _spice_value(x, what="value") -> str:
-    return checks.spice_number(what, x)
+_spice_value = checks.spice_number  # a deck number: _spice_value(name, value)
 
 
 def bridge_subcircuit(mapping: CircuitMapping) -> SubCircuit:
@@ -109,25 +108,25 @@ def bridge_subcircuit(mapping: CircuitMapping) -> SubCircuit:
         # Stribeck: the source follows Delta(V_t) (behavioural: see analogue.circuit.nonlinear)
         sub.BehavioralSource("delta", "p", "n", current_expression=_amplitude_expr(mapping, "t"))
     else:
-        sub.I("delta", "p", "n", _spice_value(mapping.i_delta, "I_Delta"))
+        sub.I("delta", "p", "n", _spice_value("I_Delta", mapping.i_delta))
     part = _bridge_part(mapping)
     if part.rp:
         # The vendor models' parallel resistor across each diode.
-        sub.R("p1", "t", "p", _spice_value(part.rp, "rp"))
-        sub.R("p2", sub.gnd, "p", _spice_value(part.rp, "rp"))
-        sub.R("p3", "n", "t", _spice_value(part.rp, "rp"))
-        sub.R("p4", "n", sub.gnd, _spice_value(part.rp, "rp"))
+        sub.R("p1", "t", "p", _spice_value("rp", part.rp))
+        sub.R("p2", sub.gnd, "p", _spice_value("rp", part.rp))
+        sub.R("p3", "n", "t", _spice_value("rp", part.rp))
+        sub.R("p4", "n", sub.gnd, _spice_value("rp", part.rp))
     return sub
 
 
 def _amplitude_expr(m: CircuitMapping, node: str) -> str:
     """Friction amplitude as a B-source expression of V(node): ``I_Delta`` or, with the
     Stribeck law, ``I_Delta + I_s exp(-|V|/V_s)``."""
-    base = _spice_value(m.i_delta, "I_Delta")
+    base = _spice_value("I_Delta", m.i_delta)
     if m.stribeck_volts <= 0:
         return base
-    return (f"{base}+{_spice_value(m.i_stribeck, 'I_Stribeck')}*exp(-abs(V({node}))/"
-            f"{_spice_value(m.stribeck_volts, 'V_s')})")
+    return (f"{base}+{_spice_value('I_Stribeck', m.i_stribeck)}*exp(-abs(V({node}))/"
+            f"{_spice_value('V_s', m.stribeck_volts)})")
 
 
 def _friction_expr(m: CircuitMapping, law: str, node: str = "v") -> str:
@@ -135,7 +134,7 @@ def _friction_expr(m: CircuitMapping, law: str, node: str = "v") -> str:
     if m.stribeck_volts > 0:
         amp = f"({amp})"
     if law == "tanh":
-        return f"{amp}*tanh(V({node})/{_spice_value(m.eps_volts, 'eps_V')})"
+        return f"{amp}*tanh(V({node})/{_spice_value('eps_V', m.eps_volts)})"
     return f"{amp}*sgn(V({node}))"
 
 
@@ -145,12 +144,12 @@ def cubic_subcircuit(mapping: CircuitMapping) -> SubCircuit:
     net = _cubic_network(mapping)
     sub = SubCircuit("cubicnet", "t")
     for j, (r, e) in enumerate(zip(net.resistors, net.biases)):
-        sub.R(f"{j}p", "t", f"a{j}", _spice_value(r, f"R_cubic{j}"))
+        sub.R(f"{j}p", "t", f"a{j}", _spice_value(f"R_cubic{j}", r))
         sub.D(f"{j}p", f"a{j}", f"b{j}", model=_CUBIC_MODEL)
-        sub.V(f"{j}p", f"b{j}", sub.gnd, _spice_value(e, f"E_cubic{j}"))
-        sub.R(f"{j}n", "t", f"c{j}", _spice_value(r, f"R_cubic{j}"))
+        sub.V(f"{j}p", f"b{j}", sub.gnd, _spice_value(f"E_cubic{j}", e))
+        sub.R(f"{j}n", "t", f"c{j}", _spice_value(f"R_cubic{j}", r))
         sub.D(f"{j}n", f"d{j}", f"c{j}", model=_CUBIC_MODEL)
-        sub.V(f"{j}n", f"d{j}", sub.gnd, _spice_value(-e, f"E_cubic{j}"))
+        sub.V(f"{j}n", f"d{j}", sub.gnd, _spice_value(f"E_cubic{j}", -e))
     return sub
 
 
@@ -169,13 +168,14 @@ def replica_subcircuit(mapping: CircuitMapping) -> SubCircuit:
     """One replica: pins :func:`replica_pins` (v, x, nz for the paper's model)."""
     m = mapping
     sub = SubCircuit("replica", *replica_pins(m))
-    sub.C("m", "v", sub.gnd, _spice_value(m.capacitance, "C"))
-    sub.R("visc", "v", sub.gnd, _spice_value(m.resistance, "R"))
-    sub.I("force", sub.gnd, "v", _spice_value(m.i_force, "I_F"))  # current flows 0 -> source -> v
+    sub.C("m", "v", sub.gnd, _spice_value("C", m.capacitance))
+    sub.R("visc", "v", sub.gnd, _spice_value("R", m.resistance))
+    sub.I("force", sub.gnd, "v", _spice_value("I_F", m.i_force))  # current flows 0 -> source -> v
     if m.gaussian_noise:
-        sub.VCCS("noise", sub.gnd, "v", "nz", sub.gnd, _spice_value(m.noise_gain, "noise_gain"))
+        sub.VCCS("noise", sub.gnd, "v", "nz", sub.gnd, _spice_value("noise_gain", m.noise_gain))
         sub.V("noise", "nz", sub.gnd,
-              f"dc 0 trrandom(2 {_spice_value(m.noise_ts, 'noise_ts')} 0 {_spice_value(m.noise_stddev, 'noise_stddev')} 0)")
+              f"dc 0 trrandom(2 {_spice_value('noise_ts', m.noise_ts)} 0 "
+              f"{_spice_value('noise_stddev', m.noise_stddev)} 0)")
     element = m.coulomb_element
     if element == "diode-bridge":
         sub.X("coulomb", "bridge", "v")
@@ -185,39 +185,31 @@ def replica_subcircuit(mapping: CircuitMapping) -> SubCircuit:
         sub.BehavioralSource("coulomb", "v", sub.gnd, current_expression=_friction_expr(m, "sgn"))
     if m.cubic_element == "behavioural":
         sub.BehavioralSource("cubic", "v", sub.gnd,
-                             current_expression=f"{_spice_value(m.g3, 'g3')}*V(v)*V(v)*V(v)")
+                             current_expression=f"{_spice_value('g3', m.g3)}*V(v)*V(v)*V(v)")
     elif m.cubic_element == "diode-network":
         sub.X("cubic", "cubicnet", "v")
     if m.inductance > 0:
         # L (initial current = spring force at x0) -- R_L -- 0 V sense source -- ground
         end = "ls" if m.inductor_rs > 0 else "lg"
-        sub.raw_spice += (f"Lspring v {end} {_spice_value(m.inductance, 'L')} "
-                          f"ic={_spice_value(m.inductor_ic, 'I_L0')}\n")
+        sub.raw_spice += (f"Lspring v {end} {_spice_value('L', m.inductance)} "
+                          f"ic={_spice_value('I_L0', m.inductor_ic)}\n")
         if m.inductor_rs > 0:
-            sub.R("leak", "ls", "lg", _spice_value(m.inductor_rs, "R_L"))
+            sub.R("leak", "ls", "lg", _spice_value("R_L", m.inductor_rs))
         sub.V("sense", "lg", sub.gnd, "0")
-        sub.CCVS("xs", "xs", sub.gnd, "vsense", _spice_value(m.x_spring_gain, "H_x"))
-    sub.VCCS("x", sub.gnd, "x", "v", sub.gnd, _spice_value(m.g_x, "g_x"))
-    sub.C("x", "x", sub.gnd, _spice_value(m.cap_x, "C_x"))
+        sub.CCVS("xs", "xs", sub.gnd, "vsense", _spice_value("H_x", m.x_spring_gain))
+    sub.VCCS("x", sub.gnd, "x", "v", sub.gnd, _spice_value("g_x", m.g_x))
+    sub.C("x", "x", sub.gnd, _spice_value("C_x", m.cap_x))
     return sub
 
 
 def _pwl_lines(name: str, node: str, times, currents) -> list[str]:
     """A pwl current source into ``node``, 6 pairs per continuation line."""
-    pairs = [f"{_spice_value(t, 'pwl time')} {_spice_value(i, 'pwl current')}" for t, i in zip(times, currents)]
+    pairs = [f"{_spice_value('pwl time', t)} {_spice_value('pwl current', i)}" for t, i in zip(times, currents)]
     out = [f"I{name} 0 {node} pwl("]
     for k in range(0, len(pairs), 6):
         out.append("+ " + " ".join(pairs[k:k + 6]))
     out.append("+ )")
     return out
-
-
-def _check_int(value, what, lo, hi) -> int:
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
-        raise ValueError(f"{what} must be an integer in [{lo}, {hi}], got {value!r}")
-    if not lo <= int(value) <= hi:
-        raise ValueError(f"{what} must be an integer in [{lo}, {hi}], got {value!r}")
-    return int(value)
 
 
 def build_deck(mapping: CircuitMapping, *, replicas: int, v0, t_end: float, seed: int,
@@ -232,8 +224,8 @@ def build_deck(mapping: CircuitMapping, *, replicas: int, v0, t_end: float, seed
     if not isinstance(mapping, CircuitMapping):
         raise ValueError(f"mapping must be a CircuitMapping, got {type(mapping).__name__}")
     title = checks.identifier("title", title)
-    replicas = _check_int(replicas, "replicas", 1, 100_000)
-    seed = _check_int(seed, "seed", 0, _SEED_MAX)
+    replicas = checks.integer("replicas", replicas, minimum=1, maximum=100_000)
+    seed = checks.integer("seed", seed, minimum=0, maximum=_SEED_MAX)
     t_end = checks.positive("t_end", t_end)
     sample_dt = checks.positive("sample_dt", sample_dt)
     if not sample_dt <= t_end:
@@ -268,12 +260,12 @@ def build_deck(mapping: CircuitMapping, *, replicas: int, v0, t_end: float, seed
     circuit = Circuit(title)
     bridge = mapping.coulomb_element == "diode-bridge"
     if bridge:
-        circuit.model(_MODEL_NAME, "D", **{k: _spice_value(v, k)
+        circuit.model(_MODEL_NAME, "D", **{k: _spice_value(k, v)
                                            for k, v in _bridge_part(mapping).model})
         circuit.subcircuit(bridge_subcircuit(mapping))
     net = mapping.cubic_network
     if net is not None:
-        circuit.model(_CUBIC_MODEL, "D", **{k: _spice_value(v, k) for k, v in net.part.model})
+        circuit.model(_CUBIC_MODEL, "D", **{k: _spice_value(k, v) for k, v in net.part.model})
         circuit.subcircuit(cubic_subcircuit(mapping))
     circuit.subcircuit(replica_subcircuit(mapping))
     pins = replica_pins(mapping)
@@ -291,7 +283,7 @@ def build_deck(mapping: CircuitMapping, *, replicas: int, v0, t_end: float, seed
             lines += _pwl_lines(f"shot{i}", f"v{i}", times, amps)
         kicks = tuple((t_k + 0.5 * w, z_k) for t_k, z_k in starts)
     volts = mapping.kappa * v0
-    ic = [f"v(v{i})={_spice_value(volts[i], 'v0')} v(x{i})=0" for i in range(replicas)]
+    ic = [f"v(v{i})={_spice_value('v0', volts[i])} v(x{i})=0" for i in range(replicas)]
     if bridge:
         # uic skips the operating point, so the bridge's inner nodes need consistent starting
         # values too (else D1 starts forward biased by the whole of V and the first step fails).
@@ -303,7 +295,8 @@ def build_deck(mapping: CircuitMapping, *, replicas: int, v0, t_end: float, seed
             vn = np.array([b[0] for _, b in vpn])
         else:
             vp, vn = bridge_node_voltages(_bridge_part(mapping), mapping.i_delta, volts)
-        ic += [f"v(xr{i}.xcoulomb.p)={_spice_value(vp[i])} v(xr{i}.xcoulomb.n)={_spice_value(vn[i])}"
+        ic += [f"v(xr{i}.xcoulomb.p)={_spice_value('ic', vp[i])} "
+               f"v(xr{i}.xcoulomb.n)={_spice_value('ic', vn[i])}"
                for i in range(replicas)]
     if net is not None:
         # consistent inner nodes of the breakpoint branches: V - R i (and V + R i mirrored)
@@ -311,11 +304,12 @@ def build_deck(mapping: CircuitMapping, *, replicas: int, v0, t_end: float, seed
             for j, (r, e) in enumerate(zip(net.resistors, net.biases)):
                 ip = float(branch_current(net.part, r, e, volts[i]))
                 im = float(branch_current(net.part, r, e, -volts[i]))
-                ic.append(f"v(xr{i}.xcubic.a{j})={_spice_value(volts[i] - r * ip)} "
-                          f"v(xr{i}.xcubic.c{j})={_spice_value(volts[i] + r * im)}")
+                ic.append(f"v(xr{i}.xcubic.a{j})={_spice_value('ic', volts[i] - r * ip)} "
+                          f"v(xr{i}.xcubic.c{j})={_spice_value('ic', volts[i] + r * im)}")
     lines.append(".ic " + " ".join(ic))
-    lines.append(f".options seed={seed} reltol={_spice_value(mapping.reltol)} abstol={_spice_value(spec.abstol)} "
-                 f"vntol={_spice_value(mapping.vntol)} trtol={_spice_value(mapping.trtol)} method={mapping.method} "
+    lines.append(f".options seed={seed} reltol={_spice_value('reltol', mapping.reltol)} "
+                 f"abstol={_spice_value('abstol', spec.abstol)} vntol={_spice_value('vntol', mapping.vntol)} "
+                 f"trtol={_spice_value('trtol', mapping.trtol)} method={mapping.method} "
                  f"temp=27 tnom=27")
     vectors = {"v": [f"v(v{i})" for i in range(replicas)],
                "x": [f"v(x{i})" for i in range(replicas)],
@@ -325,7 +319,8 @@ def build_deck(mapping: CircuitMapping, *, replicas: int, v0, t_end: float, seed
         vectors["x_spring"] = [f"v(xs{i})" for i in range(replicas)]
         saved += vectors["x_spring"]
     lines.append(".save " + " ".join(saved))
-    lines.append(f".tran {_spice_value(sample_dt * theta)} {_spice_value(t_end * theta)} 0 {_spice_value(max_step * theta)} uic")
+    lines.append(f".tran {_spice_value('tstep', sample_dt * theta)} {_spice_value('tstop', t_end * theta)} 0 "
+                 f"{_spice_value('tmax', max_step * theta)} uic")
     lines.append(".end")
     text = "\n".join(lines) + "\n"
     return Deck(text=text, vectors=vectors, to_model_v=mapping.to_model_v,
@@ -342,14 +337,14 @@ def bridge_dc_deck(mapping: CircuitMapping, v_max: float, points: int = 201) -> 
     if not isinstance(mapping, CircuitMapping):
         raise ValueError(f"mapping must be a CircuitMapping, got {type(mapping).__name__}")
     v_max = checks.positive("v_max", v_max)
-    points = _check_int(points, "points", 3, 100_001)
+    points = checks.integer("points", points, minimum=3, maximum=100_001)
     element = mapping.coulomb_element
     if element is None:
         raise ValueError("mapping has no Coulomb element to sweep (Delta = 0: the circuit is built "
                          "without one); map a model with Delta > 0")
     circuit = Circuit("bridgedc")
     if element == "diode-bridge":
-        circuit.model(_MODEL_NAME, "D", **{k: _spice_value(v, k) for k, v in _bridge_part(mapping).model})
+        circuit.model(_MODEL_NAME, "D", **{k: _spice_value(k, v) for k, v in _bridge_part(mapping).model})
         circuit.subcircuit(bridge_subcircuit(mapping))
         circuit.X("coulomb", "bridge", "t")
     elif element == "behavioural":
@@ -363,7 +358,8 @@ def bridge_dc_deck(mapping: CircuitMapping, v_max: float, points: int = 201) -> 
     lines = [str(circuit).rstrip("\n"),
              # tight tolerances: the test compares with the closed form to 1e-5 of I_Delta
              ".options reltol=1e-9 abstol=1e-18 vntol=1e-12 temp=27 tnom=27",
-             f".dc vs {_spice_value(-v_max)} {_spice_value(v_max + 0.5 * step)} {_spice_value(step)}", ".end"]
+             f".dc vs {_spice_value('v_max', -v_max)} {_spice_value('dc stop', v_max + 0.5 * step)} "
+             f"{_spice_value('dc step', step)}", ".end"]
     return "\n".join(lines) + "\n"
 
 
@@ -373,21 +369,22 @@ def cubic_dc_deck(mapping: CircuitMapping, v_max: float, points: int = 201) -> s
     if not isinstance(mapping, CircuitMapping):
         raise ValueError(f"mapping must be a CircuitMapping, got {type(mapping).__name__}")
     v_max = checks.positive("v_max", v_max)
-    points = _check_int(points, "points", 3, 100_001)
+    points = checks.integer("points", points, minimum=3, maximum=100_001)
     if mapping.cubic_element is None:
         raise ValueError("mapping has no cubic element to sweep (cubic = 0); map a model with cubic > 0")
     circuit = Circuit("cubicdc")
     if mapping.cubic_element == "diode-network":
-        circuit.model(_CUBIC_MODEL, "D", **{k: _spice_value(v, k)
+        circuit.model(_CUBIC_MODEL, "D", **{k: _spice_value(k, v)
                                               for k, v in _cubic_network(mapping).part.model})
         circuit.subcircuit(cubic_subcircuit(mapping))
         circuit.X("cubic", "cubicnet", "t")
     else:
         circuit.BehavioralSource("cubic", "t", circuit.gnd,
-                                 current_expression=f"{_spice_value(mapping.g3, 'g3')}*V(t)*V(t)*V(t)")
+                                 current_expression=f"{_spice_value('g3', mapping.g3)}*V(t)*V(t)*V(t)")
     circuit.V("s", "t", circuit.gnd, "dc 0")
     step = 2.0 * v_max / (points - 1)
     lines = [str(circuit).rstrip("\n"),
              ".options reltol=1e-9 abstol=1e-18 vntol=1e-12 temp=27 tnom=27",
-             f".dc vs {_spice_value(-v_max)} {_spice_value(v_max + 0.5 * step)} {_spice_value(step)}", ".end"]
+             f".dc vs {_spice_value('v_max', -v_max)} {_spice_value('dc stop', v_max + 0.5 * step)} "
+             f"{_spice_value('dc step', step)}", ".end"]
     return "\n".join(lines) + "\n"

@@ -727,8 +727,7 @@ def simulate(model: Model, *, v0: float | ArrayLike | Literal["stationary"], t_e
     mapping's budget) and ``"kicks"`` (shot noise): per replica ``(times, jumps)`` of the kicks that drove it (model units; times are
     the pulse centres), so a Monte Carlo can be driven by the same realisation.
     """
-    if not isinstance(model, Model):
-        raise ArgumentTypeError(f"model must be an analogue.Model, got {type(model).__name__}")
+    checks.instance("model", model, Model, description="an analogue.Model")
     replicas = checks.integer("replicas", replicas, minimum=1)
     seed = checks.integer("seed", seed, minimum=0)
     t_end = checks.positive("t_end", t_end)

@@ -26,6 +26,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from .. import checks
 from .store import RunStore, open_store
 
 __all__ = [
@@ -245,10 +246,10 @@ def prune(store=None, *, experiments=(), unindexed: bool = False,
             or quarantine):
         raise ValueError("prune needs a criterion: experiments, unindexed, older_than_days, "
                          "max_bytes or quarantine")
-    if older_than_days is not None and not older_than_days >= 0:
-        raise ValueError(f"older_than_days must be >= 0, got {older_than_days!r}")
-    if max_bytes is not None and (isinstance(max_bytes, bool) or max_bytes < 0):
-        raise ValueError(f"max_bytes must be >= 0, got {max_bytes!r}")
+    if older_than_days is not None:
+        older_than_days = checks.nonnegative("older_than_days", older_than_days)
+    if max_bytes is not None:
+        checks.nonnegative("max_bytes", max_bytes)
     st = open_store(store)
     owners, indexes = _entry_owners(st)
     unknown = [n for n in experiments if n not in indexes]

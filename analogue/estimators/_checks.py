@@ -1,34 +1,16 @@
-"""Input validation and binning helpers shared by the estimators (no physics here)."""
+"""Ensemble-record helpers shared by the estimators: the record itself, its burn-in and time
+indices, bin edges and counts (no physics here; the argument checks are analogue.checks)."""
 from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..checks import finite as finite  # re-exported for the estimators
-from ..checks import nonnegative as nonnegative
-from ..checks import positive as positive
+from .. import checks
 from ..ensemble import Ensemble
 
 
 def ensemble(obj: object) -> Ensemble:
-    if not isinstance(obj, Ensemble):
-        raise ValueError(f"ensemble must be an analogue.Ensemble, got {type(obj).__name__}")
-    return obj
-
-
-def confidence(value: float) -> float:
-    c = finite("confidence", value)
-    if not 0 < c < 1:
-        raise ValueError(f"confidence must be in (0, 1), got {c!r}")
-    return c
-
-
-def positive_int(name: str, value: object, minimum: int = 1) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
-    if value < minimum:
-        raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
-    return int(value)
+    return checks.instance("ensemble", obj, Ensemble, description="an analogue.Ensemble")
 
 
 def uniform_dt(ens: Ensemble) -> float:
@@ -44,7 +26,7 @@ def uniform_dt(ens: Ensemble) -> float:
 
 def burn_in_index(ens: Ensemble, burn_in: float, min_samples: int = 2) -> int:
     """Index of the first sample with ``t >= t[0] + burn_in`` (burn_in is a duration)."""
-    b = nonnegative("burn_in", burn_in)
+    b = checks.nonnegative("burn_in", burn_in)
     duration = float(ens.t[-1] - ens.t[0])
     i0 = int(np.searchsorted(ens.t, ens.t[0] + b - 1e-9 * max(duration, 1.0), side="left"))
     if ens.t.size - i0 < min_samples:
@@ -55,7 +37,7 @@ def burn_in_index(ens: Ensemble, burn_in: float, min_samples: int = 2) -> int:
 
 def time_index(ens: Ensemble, name: str, time: float) -> int:
     """Grid index nearest ``time``; the time must lie on the record (within half a step)."""
-    tt = finite(name, time)
+    tt = checks.finite(name, time)
     half = 0.5 * (ens.dt if ens.t.size > 1 else 0.0)
     if not ens.t[0] - half <= tt <= ens.t[-1] + half:
         raise ValueError(f"{name} must be in [{float(ens.t[0])!r}, {float(ens.t[-1])!r}], "
@@ -72,7 +54,7 @@ def edges(bins: int | ArrayLike, value_range: tuple[float, float] | None,
         if e.size < 2 or not np.all(np.isfinite(e)) or not np.all(np.diff(e) > 0):
             raise ValueError("bins given as edges must be >= 2 finite, strictly increasing values")
         return e
-    nb = positive_int("bins", bins)
+    nb = checks.integer("bins", bins, minimum=1)
     if value_range is None:
         d = np.asarray(data, dtype=float)
         d = d[np.isfinite(d)]
@@ -81,7 +63,7 @@ def edges(bins: int | ArrayLike, value_range: tuple[float, float] | None,
         lo, hi = float(d.min()), float(d.max())
     else:
         try:
-            lo, hi = (finite("range[0]", value_range[0]), finite("range[1]", value_range[1]))
+            lo, hi = (checks.finite("range[0]", value_range[0]), checks.finite("range[1]", value_range[1]))
         except (TypeError, IndexError):
             raise ValueError(f"range must be a pair (low, high), got {value_range!r}") from None
         if not lo < hi:

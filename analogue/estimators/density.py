@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .. import checks
 from ..ensemble import Ensemble
 from . import _checks
 from .intervals import clopper_pearson_interval, student_interval, wilson_interval
@@ -68,7 +69,7 @@ def transition_density(ensemble: Ensemble, t: float, bins: int | ArrayLike = 50,
     binomial ``sqrt(p (1 - p) / n) / width``.
     """
     ens = _checks.ensemble(ensemble)
-    c = _checks.confidence(confidence)
+    c = checks.in_range("confidence", confidence, 0, 1, closed=False)
     if method not in ("wilson", "clopper-pearson"):
         raise ValueError(f"method must be 'wilson' or 'clopper-pearson', got {method!r}")
     i = _checks.time_index(ens, "t", t)
@@ -103,8 +104,8 @@ def stationary_density(ensemble: Ensemble, burn_in: float = 0.0, bins: int | Arr
     full batch are dropped.
     """
     ens = _checks.ensemble(ensemble)
-    c = _checks.confidence(confidence)
-    nbatch = _checks.positive_int("batches_per_replica", batches_per_replica)
+    c = checks.in_range("confidence", confidence, 0, 1, closed=False)
+    nbatch = checks.integer("batches_per_replica", batches_per_replica, minimum=1)
     i0 = _checks.burn_in_index(ens, burn_in)
     data = ens.v[:, i0:]
     length = data.shape[1] // nbatch

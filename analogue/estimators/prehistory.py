@@ -17,6 +17,7 @@ from typing import Any, cast
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .. import checks
 from ..ensemble import Ensemble
 from . import _checks
 
@@ -105,14 +106,14 @@ def prehistory(ensemble: Ensemble, v_target: float, t_target: float, window: flo
     ``analogue.theory.weak_noise.optimal_path``.
     """
     ens = _checks.ensemble(ensemble)
-    vt = _checks.finite("v_target", v_target)
-    win = _checks.positive("window", window)
+    vt = checks.finite("v_target", v_target)
+    win = checks.positive("window", window)
     i = _checks.time_index(ens, "t_target", t_target)
     q = _quantile_pair(quantiles)
     if lookback is None:
         j0 = 0
     else:
-        lb = _checks.nonnegative("lookback", lookback)
+        lb = checks.nonnegative("lookback", lookback)
         j0 = int(np.searchsorted(ens.t, ens.t[i] - lb - 1e-9 * max(lb, 1.0), side="left"))
     sel = np.flatnonzero(np.abs(ens.v[:, i] - vt) < win)
     if sel.size == 0:
@@ -152,14 +153,14 @@ def stationary_prehistory(ensemble: Ensemble, v_target: float, window: float, lo
     than the velocity correlation time.
     """
     ens = _checks.ensemble(ensemble)
-    vt = _checks.finite("v_target", v_target)
-    win = _checks.positive("window", window)
+    vt = checks.finite("v_target", v_target)
+    win = checks.positive("window", window)
     q = _quantile_pair(quantiles)
     dt = _checks.uniform_dt(ens)
-    k = int(round(_checks.positive("lookback", lookback) / dt))
+    k = int(round(checks.positive("lookback", lookback) / dt))
     if k < 1:
         raise ValueError(f"lookback must be >= the sample interval dt={dt!r}, got {lookback!r}")
-    block_time = 10 * k * dt if cluster_time is None else _checks.positive("cluster_time", cluster_time)
+    block_time = 10 * k * dt if cluster_time is None else checks.positive("cluster_time", cluster_time)
     block = max(1, int(round(block_time / dt)))
     i0 = _checks.burn_in_index(ens, burn_in, min_samples=k + 2)
     inside = np.abs(ens.v - vt) < win

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .. import checks
 from ..ensemble import Ensemble
 from . import _checks
 
@@ -74,7 +75,7 @@ _FFT_BLOCK = 1 << 22  # complex values per FFT batch (~64 MB)
 def integrated_autocorrelation_time(series: ArrayLike, c: float = 5.0) -> AutocorrelationTime:
     """Integrated autocorrelation time (in samples) of a stationary series, 1-D ``(n,)`` or
     several independent replicas ``(replicas, n)`` pooled (see module docstring)."""
-    c = _checks.positive("c", c)
+    c = checks.positive("c", c)
     y = np.atleast_2d(np.asarray(series, dtype=float))
     if y.ndim != 2 or y.shape[1] < 2:
         raise ValueError("series must be (n,) or (replicas, n) with n >= 2")

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import integrate, special
 
+from .. import checks
 from ..ensemble import Ensemble
 from ..model import Model
 from . import _checks
@@ -45,7 +46,7 @@ class StickStatistics:
 def stick_statistics(ensemble: Ensemble, threshold: float, burn_in: float = 0.0) -> StickStatistics:
     """Stick fraction and episode durations after ``burn_in`` (a duration from t[0])."""
     ens = _checks.ensemble(ensemble)
-    th = _checks.positive("threshold", threshold)
+    th = checks.positive("threshold", threshold)
     dt = _checks.uniform_dt(ens)
     i0 = _checks.burn_in_index(ens, burn_in)
     stuck = np.abs(ens.v[:, i0:]) < th
@@ -96,14 +97,8 @@ def stick_fraction_theory(model: Model, threshold: float) -> float:
     the integral is a difference of normal CDFs.  With epsilon > 0 it is integrated
     numerically.
     """
-    if not isinstance(model, Model):
-        raise ValueError(f"model must be an analogue.Model, got {type(model).__name__}")
-    try:
-        th = float(threshold)
-    except (TypeError, ValueError):
-        raise ValueError(f"threshold must be a real number > 0, got {threshold!r}") from None
-    if not th > 0 or math.isnan(th):
-        raise ValueError(f"threshold must be > 0, got {threshold!r}")
+    checks.instance("model", model, Model, description="an analogue.Model")
+    th = checks.positive("threshold", threshold, allow_inf=True)
     if math.isinf(th):
         return 1.0
     g, tau = model.gamma, model.tau_m

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import checks
 from ..ensemble import Ensemble
 from . import _checks
 
@@ -53,7 +54,7 @@ def transport(ensemble: Ensemble, burn_in: float = 0.0, fit_from: float | None =
         raise ValueError("transport needs >= 2 independent replicas")
     if not np.all(np.isfinite(x)):
         raise ValueError("ensemble positions after burn_in must be finite")
-    start = 0.5 * float(t[-1]) if fit_from is None else _checks.nonnegative("fit_from", fit_from)
+    start = 0.5 * float(t[-1]) if fit_from is None else checks.nonnegative("fit_from", fit_from)
     sel = t >= start - 1e-9 * max(float(t[-1]), 1.0)
     if np.count_nonzero(sel) < 3:
         raise ValueError(f"fit_from must leave >= 3 samples to fit, got {start!r} with a record "

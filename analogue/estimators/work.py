@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .. import checks
 from ..ensemble import Ensemble
 from . import _checks
 from .intervals import student_interval
@@ -26,7 +27,7 @@ __all__ = ["WorkDistribution", "FluctuationRatio", "RateFunctionEstimate", "Line
 
 
 def _lag(ens: Ensemble, tau: float) -> tuple[int, float]:
-    tau = _checks.positive("tau", tau)
+    tau = checks.positive("tau", tau)
     dt = _checks.uniform_dt(ens)
     k = int(round(tau / dt))
     if k < 1 or abs(k * dt - tau) > 1e-6 * max(tau, dt):
@@ -46,11 +47,11 @@ def work_rate_samples(ensemble: Ensemble, tau: float, force: float, burn_in: flo
     honest errors possible.
     """
     ens = _checks.ensemble(ensemble)
-    force = _checks.finite("force", force)
+    force = checks.finite("force", force)
     k, dt = _lag(ens, tau)
     i0 = _checks.burn_in_index(ens, burn_in)
     if overlap:
-        step = 1 if stride is None else _checks.positive_int("stride", stride)
+        step = 1 if stride is None else checks.integer("stride", stride, minimum=1)
     else:
         if stride is not None:
             raise ValueError("stride must be None when overlap=False (windows are back to back)")
@@ -116,7 +117,7 @@ def work_distribution(ensemble: Ensemble, tau: float, force: float, bins: int | 
     much the windows overlap; the band is Student-t with ``replicas - 1`` degrees of freedom.
     """
     ens = _checks.ensemble(ensemble)
-    c = _checks.confidence(confidence)
+    c = checks.in_range("confidence", confidence, 0, 1, closed=False)
     w = work_rate_samples(ens, tau, force, burn_in=burn_in, overlap=overlap, stride=stride)
     R, nw = w.shape
     if R < 2:
@@ -194,10 +195,10 @@ class FluctuationRatio:
 def _tau_gamma(dist: object, tau: float, gamma: float) -> tuple[float, float]:
     if not isinstance(dist, WorkDistribution):
         raise ValueError(f"dist must be a WorkDistribution, got {type(dist).__name__}")
-    g = _checks.positive("gamma", gamma)
+    g = checks.positive("gamma", gamma)
     if tau is None:
         return dist.tau, g
-    t = _checks.positive("tau", tau)
+    t = checks.positive("tau", tau)
     if abs(t - dist.tau) > 1e-6 * dist.tau:
         raise ValueError(f"tau must match the distribution's tau={dist.tau!r}, got {t!r}")
     return t, g
@@ -214,7 +215,7 @@ def fluctuation_ratio(dist: WorkDistribution, tau: float, gamma: float,
     distribution's (pass None to take it from ``dist``).
     """
     tau, gamma = _tau_gamma(dist, tau, gamma)
-    mc = _checks.positive_int("min_replicas", min_replicas)
+    mc = checks.integer("min_replicas", min_replicas, minimum=1)
     e = dist.edges
     scale = float(np.max(np.abs(e)))
     if not np.allclose(e, -e[::-1], rtol=0, atol=1e-9 * scale):
@@ -258,7 +259,7 @@ def empirical_rate_function(dist: WorkDistribution, tau: float, gamma: float,
     (so the error at the minimum bin is 0 and the others include its uncertainty).  ``tau``
     must equal the distribution's (None takes it from ``dist``)."""
     tau, gamma = _tau_gamma(dist, tau, gamma)
-    mc = _checks.positive_int("min_replicas", min_replicas)
+    mc = checks.integer("min_replicas", min_replicas, minimum=1)
     keep = np.flatnonzero(dist.contributing >= mc)
     if keep.size == 0:
         raise ValueError(f"no bin is reached by >= min_replicas={mc} replicas")

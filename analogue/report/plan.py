@@ -29,6 +29,8 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from .. import checks
+
 if TYPE_CHECKING:  # the experiment module imports this one (Experiment.report)
     from ..circuit.experiments import Experiment
 
@@ -87,20 +89,17 @@ class ReportSettings:
     def __post_init__(self):
         for name, lo in (("stationary_replicas", MIN_STATIONARY_REPLICAS),
                          ("check_replicas", MIN_CHECK_REPLICAS)):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= 100_000:
-                raise ValueError(f"report.{name} must be an integer in [{lo}, 100000], got {v!r}")
+            object.__setattr__(self, name, checks.integer(f"report.{name}", getattr(self, name),
+                                                          minimum=lo, maximum=100_000))
         for name in ("stationary_t_end", "stick_threshold", "prehistory_window"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not (math.isfinite(v) and v > 0):
-                raise ValueError(f"report.{name} must be a finite number > 0, got {v!r}")
-        b = self.stationary_burn_in
+            object.__setattr__(self, name, checks.positive(f"report.{name}", getattr(self, name)))
+        b = checks.finite("report.stationary_burn_in", self.stationary_burn_in)
         # --quick halves the stationary length: the burn-in must leave data in both sizes
-        if not (isinstance(b, (int, float)) and not isinstance(b, bool) and math.isfinite(b)
-                and 0 <= b < self.stationary_t_end / 2):
+        if not 0 <= b < self.stationary_t_end / 2:
             raise ValueError(f"report.stationary_burn_in must be in [0, stationary_t_end/2) = "
                              f"[0, {self.stationary_t_end / 2:g}) (--quick halves "
                              f"stationary_t_end), got {b!r}")
+        object.__setattr__(self, "stationary_burn_in", b)
         for name, sizes in (("prehistory", (2, 3)), ("work_paths", (2,))):
             items = getattr(self, name)
             ok = isinstance(items, (list, tuple)) and all(

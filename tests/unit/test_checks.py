@@ -60,6 +60,22 @@ def test_in_range_is_closed_and_says_why():
         checks.in_range("c", 1001, 1e-15, 1e3, why="too big")
 
 
+def test_in_range_open_interval():
+    assert checks.in_range("confidence", 0.95, 0, 1, closed=False) == 0.95
+    for bad in (0, 1, 1.5):
+        with pytest.raises(ValueError, match=r"^confidence must be in \(0, 1\), got "):
+            checks.in_range("confidence", bad, 0, 1, closed=False)
+
+
+def test_instance_names_the_parameter_and_the_type():
+    from analogue import Model
+    m = Model(1.0, 0.5, 0.2, 10.0)
+    assert checks.instance("model", m, Model, description="an analogue.Model") is m
+    with pytest.raises(TypeError, match=r"^model must be an analogue.Model, got dict$") as exc:
+        checks.instance("model", {"tau_m": 1.0}, Model, description="an analogue.Model")
+    assert isinstance(exc.value, ValueError)
+
+
 @pytest.mark.parametrize("value, kwargs, error, message", [
     (2.0, dict(minimum=1), TypeError, "n must be an integer >= 1, got 2.0"),
     (True, dict(minimum=0), TypeError, "n must be an integer >= 0, got True"),
@@ -116,4 +132,5 @@ def test_every_public_check_takes_name_then_value():
         if inspect.isfunction(f):
             params = list(inspect.signature(f).parameters.values())
             assert [p.name for p in params[:2]] == ["name", "value"], fname
-            assert all(p.kind is p.KEYWORD_ONLY for p in params[2:] if p.name not in ("low", "high")), fname
+            positional = ("low", "high", "kind")  # in_range's interval, instance's type
+            assert all(p.kind is p.KEYWORD_ONLY for p in params[2:] if p.name not in positional), fname
