@@ -2,9 +2,11 @@
 
 One analysis for every extension the paper proposes (cubic viscous law, Stribeck law, spring,
 shot noise), used by ``analogue report <member>`` and by the chapter "Beyond the paper" of
-``analogue paper``.  The analysis is *data*: a list of :class:`ObservableSpec` (label ->
-estimator on an ensemble, theory on a model, budget terms), evaluated once into a
-:class:`MemberAnalysis` that the figures (:mod:`analogue.report.family_figures`) only draw.
+``analogue paper``.  The observables, their estimators, exact readings, Monte Carlo reference
+(the spring) and circuit-element terms are entries of the catalogue
+(:mod:`analogue.study.catalogue`, :func:`~analogue.study.catalogue.member_observables`); this
+module runs the circuits and references, fills the budgets, and evaluates everything once into
+a :class:`MemberAnalysis` that the figures (:mod:`analogue.report.family_figures`) only draw.
 
 References
 ----------
@@ -32,28 +34,26 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from typing import SupportsFloat
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from scipy import integrate
 
 from ..circuit.experiments import Experiment, load_experiment, standard_circuit
 from ..ensemble import Ensemble
 from ..model import Model
+from ..study import catalogue as C
 from ..study.seeds import SeedPlan
 from .budget import SE_MULTIPLIER, held_noise_pair
 from .metrics import Budget, Comparison, compare
-from ..estimators import transport, work_rate_samples
-from .observables import jackknife_difference, stationary_label, subset, transition_label
+from ..estimators import work_rate_samples
+from .observables import jackknife_difference, subset
 
 __all__ = [
     "MEMBERS",
     "STICK_THRESHOLD",
     "MemberAnalysis",
     "MemberSizes",
-    "ObservableSpec",
     "analyse_member",
     "is_member_experiment",
     "member_sizes",
@@ -61,10 +61,8 @@ __all__ = [
 
 MEMBERS = ("cubic", "stribeck", "spring", "shot")
 
-# |v| below this (model units) counts as stuck.  The circuit's diode bridge holds a stuck
-# object at v = epsilon atanh(a/Delta) (shot: 0.01 atanh(0.4) = 0.0042), never at 0: the window
-# must contain that; the theory counts the atom plus the continuous mass inside the window.
-STICK_THRESHOLD = 0.05
+# |v| below this (model units) counts as stuck (analogue.study.catalogue.MEMBER_STICK_WINDOW)
+STICK_THRESHOLD = C.MEMBER_STICK_WINDOW
 # work window of the circuit's finite-tau rate-function estimate (figure only: at quick sizes
 # its windows overlap strongly and its error is not a clean jackknife)
 WORK_TAU = 4.0
@@ -106,19 +104,6 @@ def member_sizes(exp: Experiment, quick: bool) -> MemberSizes:
 def is_member_experiment(exp: Experiment) -> bool:
     """An experiment on a family member (anything but the paper's model)."""
     return not exp.model.is_paper
-
-
-@dataclass(frozen=True)
-class ObservableSpec:
-    """One comparison: ``estimator(ensemble) -> float`` (circuit, and Monte Carlo or budget
-    pairs), ``theory(model) -> float`` (exact numerics; None when the reference is a Monte
-    Carlo ensemble), ``element`` (relative circuit-element error, times |theory|), note."""
-
-    label: str
-    estimator: Callable[[Ensemble], float]
-    theory: Callable[[Model], float] | None = None
-    element: float = 0.0
-    note: str = ""
 
 
 @dataclass
@@ -172,60 +157,16 @@ def _jk(fn, ens: Ensemble, groups: int = 16) -> tuple[float, float]:
     return full, float(np.sqrt((g - 1) / g * np.sum((reps - reps.mean()) ** 2)))
 
 
-def _stationary_specs(exp: Experiment, burn_in: float) -> list[ObservableSpec]:
-    """Stationary observables of a 1-D member, labelled as the paper's experiments label
-    theirs ('mean v', 'var v', 'P(v>0)', 'stick fraction'), plus 'P(v=0)' for shot noise."""
-    from ..theory import family
+def _estimators(exp: Experiment, observables) -> dict:
+    """``{label: estimator(ensemble) -> float}`` of the catalogue's observables on this
+    member's ensembles (circuit, Monte Carlo, budget pairs)."""
     m = exp.model
-    bias = exp.mapping().bias
-    thr = STICK_THRESHOLD
-    shot = m.shot is not None and not math.isfinite(m.gamma)
-    rel = {"cubic": bias.get("cubic_variance", 0.0),
-           "shot": bias.get("shot_pulse", 0.0) + bias.get("shot_edge", 0.0)
-           + bias.get("shot_overlap", 0.0)}
-    el = rel["cubic"] + (rel["shot"] if m.shot is not None else 0.0)
 
-    def window(model: Model) -> float:
-        v, dens, atom = family.stationary_law(model, h=_h(exp))
-        inside = np.abs(v) < thr
-        return atom + float(np.sum(dens[inside]) * (v[1] - v[0]))
-
-    def above(model: Model) -> float:
-        v, dens, _ = family.stationary_law(model, h=_h(exp))
-        return float(np.sum(dens[v >= thr]) * (v[1] - v[0]))
-
-    mom = lambda model: family.stationary_moments(model, h=_h(exp))
-    specs = [
-        ObservableSpec(stationary_label("mean v"), lambda e: float(_after(e, burn_in).mean()),
-                       lambda model: mom(model).mean, el),
-        ObservableSpec(stationary_label("var v"), lambda e: float(_after(e, burn_in).var()),
-                       lambda model: mom(model).variance, el),
-    ]
-    if shot:
-        specs += [
-            ObservableSpec("P(v=0)", lambda e: float(np.mean(np.abs(_after(e, burn_in)) < thr)),
-                           window, el,
-                           f"stuck: |v| < {thr:g} (the bridge holds a stuck object at "
-                           "epsilon atanh(a/Delta), not 0); theory: the atom P(v = 0) plus the "
-                           "continuous mass in the window"),
-            ObservableSpec(f"P(v>{thr:g})", lambda e: float(np.mean(_after(e, burn_in) >= thr)),
-                           above, el, "moving forward (above the stick window)")]
-    else:
-        specs += [
-            ObservableSpec(stationary_label("P(v>0)"), lambda e: float(np.mean(_after(e, burn_in) > 0)),
-                           lambda model: mom(model).p_positive, el),
-            ObservableSpec(stationary_label("stick fraction"),
-                           lambda e: float(np.mean(np.abs(_after(e, burn_in)) < thr)), window, el,
-                           f"|v| < {thr:g}")]
-    if m.a != 0 and not shot:
-        # the work rate function's curvature at <w>: I''(<w>) = 1/(2 gamma F^2 D_x)
-        specs.append(ObservableSpec(
-            stationary_label("diffusion D_x"),
-            lambda e: float(transport(e, burn_in=burn_in).diffusion),
-            lambda model: mom(model).diffusion, el,
-            "Green-Kubo D_x of the exact generator; fixes the curvature of the work rate "
-            "function at <w>"))
-    return specs
+    def bind(o: C.Observable) -> Callable[[Ensemble], float]:
+        return lambda e: C.estimate(o, e, burn_in=exp.burn_in, threshold=STICK_THRESHOLD,
+                                    force=m.force, position=_position(e) if m.spring > 0 else None,
+                                    model=m, friction=e.meta.get("_model_eff", m))
+    return {o.label: bind(o) for o in observables}
 
 
 def _h(exp: Experiment) -> float:
@@ -235,135 +176,29 @@ def _h(exp: Experiment) -> float:
     return default_spacing(exp.model)
 
 
-def _transition_specs(exp: Experiment, v0: float, times) -> list[ObservableSpec]:
-    """Moments of v(t) from v0 at several times against the exact propagator (density + atom)."""
+def _stationary_theory(exp: Experiment, model: Model, observables) -> dict:
+    """Exact stationary values (family numerics at the ideal model's grid spacing)."""
     from ..theory import family
-    m = exp.model
-    shot = m.shot is not None and not math.isfinite(m.gamma)
-    cache: dict = {}
-
-    def law(model: Model):
-        key = id(model)
-        if key not in cache:
-            lo = min(v0, model.potential_minimum() if model.is_gradient else 0.0) - 12 * model.velocity_scale
-            hi = max(v0, model.attractor) + 12 * model.velocity_scale + (
-                12 * model.shot.mean if model.shot is not None else 0.0)
-            v = np.linspace(lo, hi, 4001)
-            f = family.propagator(model, v, np.asarray(times, float), v0, h=_h(exp))
-            atom = (family.propagator_atom(model, np.asarray(times, float), v0, h=_h(exp))
-                    if model.shot is not None else np.zeros(len(times)))
-            cache[key] = (v, f, np.atleast_1d(atom))
-        return cache[key]
-
-    def moment(model: Model, i: int, what: str) -> float:
-        v, f, atom = law(model)
-        fi, a = f[i], float(atom[i])
-        mass = integrate.trapezoid(fi, v)
-        tot = mass + a
-        mean = integrate.trapezoid(v * fi, v) / tot
-        if what == "mean":
-            return mean
-        if what == "var":
-            return (integrate.trapezoid(v * v * fi, v) + 0.0) / tot - mean * mean
-        if what == "stuck":
-            inside = np.abs(v) < STICK_THRESHOLD
-            return (a + integrate.trapezoid(np.where(inside, fi, 0.0), v)) / tot
-        return integrate.trapezoid(np.where(v < 0, fi, 0.0), v) / tot  # P(v<0)
-
-    def at_time(t: float, reduce: Callable[[np.ndarray], SupportsFloat]
-                ) -> Callable[[Ensemble], float]:
-        return lambda e: float(reduce(e.at(t)))
-
-    def theory_at(i: int, what: str) -> Callable[[Model], float]:
-        return lambda model: float(moment(model, i, what))
-
-    out = []
-    for i, t in enumerate(times):
-        out += [ObservableSpec(transition_label("mean v", t, v0), at_time(t, np.mean), theory_at(i, "mean")),
-                ObservableSpec(transition_label("var v", t, v0), at_time(t, lambda x: np.var(x, ddof=1)),
-                               theory_at(i, "var"))]
-        if shot:
-            out.append(ObservableSpec(
-                transition_label("P(v=0)", t, v0),
-                at_time(t, lambda x: np.mean(np.abs(x) < STICK_THRESHOLD)),
-                theory_at(i, "stuck"), note=f"|v| < {STICK_THRESHOLD:g}"))
-        else:
-            out.append(ObservableSpec(transition_label("P(v<0)", t, v0), at_time(t, lambda x: np.mean(x < 0)),
-                                      theory_at(i, "neg")))
-    return out
+    h = _h(exp)
+    return C.stationary_theory(model, family.stationary_moments(model, h=h),
+                               threshold=STICK_THRESHOLD, work_variance={},
+                               law=family.stationary_law(model, h=h), observables=observables)
 
 
-# ------------------------------------------------------------------------------ spring
-def _first_swing(ens: Ensemble) -> tuple[np.ndarray, np.ndarray]:
-    """Per replica: the time the first swing ends (v returns to 0 from below after leaving
-    rest: half a period of the damped oscillation) and |x| there (the first amplitude).
-    Released from x0 > 0 at rest, the object moves with v < 0 first."""
-    x = _position(ens)
-    v = ens.v
-    n = v.shape[0]
-    t_half = np.full(n, np.nan)
-    amp = np.full(n, np.nan)
-    for r in range(n):
-        moving = np.flatnonzero(v[r] < -0.05)
-        if moving.size == 0:
-            continue
-        j0 = moving[0]
-        back = np.flatnonzero(v[r, j0:] >= 0.0)
-        if back.size == 0:
-            continue
-        j = j0 + back[0]
-        t_half[r], amp[r] = ens.t[j], abs(x[r, j])
-    return t_half, amp
+def _transition_theory(exp: Experiment, model: Model, v0: float, times, observables) -> dict:
+    """Exact values at each time from the propagator (density + the atom at v = 0)."""
+    from ..theory import family
+    lo = min(v0, model.potential_minimum() if model.is_gradient else 0.0) - 12 * model.velocity_scale
+    hi = max(v0, model.attractor) + 12 * model.velocity_scale + (
+        12 * model.shot.mean if model.shot is not None else 0.0)
+    dv = (hi - lo) / 4000
+    v = dv * np.arange(math.floor(lo / dv), math.ceil(hi / dv) + 1)   # v = 0 on a node
+    ts = np.asarray(times, float)
+    f = family.propagator(model, v, ts, v0, h=_h(exp))
+    atom = (np.atleast_1d(family.propagator_atom(model, ts, v0, h=_h(exp)))
+            if model.shot is not None else np.zeros(len(ts)))
+    return C.transition_theory(v, f, v0, times, atom=atom, observables=observables)
 
-
-def _spring_specs(exp: Experiment, burn_in: float) -> list[ObservableSpec]:
-    b = exp.mapping().bias
-    rel_v, rel_x = b.get("spring_leak_var_v", 0.0), b.get("spring_leak_var_x", 0.0)
-
-    def xs(e):
-        i0 = int(np.searchsorted(e.t, e.t[0] + burn_in - 1e-12))
-        return _position(e)[:, i0:]
-
-    def t_half(e):
-        t, _ = _first_swing(e)
-        return float(np.nanmean(t))
-
-    def amp(e):
-        _, a = _first_swing(e)
-        return float(np.nanmean(a))
-
-    return [
-        ObservableSpec(stationary_label("mean v"), lambda e: float(_after(e, burn_in).mean()), None, 0.0),
-        ObservableSpec(stationary_label("var v"), lambda e: float(_after(e, burn_in).var()), None, rel_v),
-        ObservableSpec(stationary_label("mean x"), lambda e: float(xs(e).mean()), None, 0.0),
-        ObservableSpec(stationary_label("var x"), lambda e: float(xs(e).var()), None, rel_x),
-        ObservableSpec("half period (first swing)", t_half, None, 0.0,
-                       "time from release to the end of the first swing (v back to 0)"),
-        ObservableSpec("amplitude (first swing)", amp, None, 0.0,
-                       "|x| where the first swing ends"),
-    ]
-
-
-def _spring_identities(exp: Experiment, burn_in: float) -> list[ObservableSpec]:
-    """The stationary identities, theory exactly 0: <v> = 0 and the force balance."""
-    m = exp.model
-
-    def residual(e):
-        i0 = int(np.searchsorted(e.t, e.t[0] + burn_in - 1e-12))
-        v = e.v[:, i0:]
-        x = _position(e)[:, i0:]
-        model = e.meta.get("_model_eff", m)
-        return float(m.spring * x.mean() - m.a + np.mean(model.coulomb(v))
-                     + m.cubic * np.mean(v ** 3))
-
-    return [
-        ObservableSpec("identity <v> = 0", lambda e: float(_after(e, burn_in).mean()),
-                       lambda model: 0.0),
-        ObservableSpec("identity spring <x> - a + <Delta(v) sgn v> + cubic <v^3> = 0", residual,
-                       lambda model: 0.0, note="the circuit's own friction law Delta(v) "
-                       "tanh(v/epsilon) in <Delta(v) sgn v>; time averages after the burn-in "
-                       "(the identity holds exactly in the stationary state)"),
-    ]
 
 
 # ------------------------------------------------------------------------------ runs
@@ -393,14 +228,7 @@ def _measured(pairs: dict, label: str) -> float:
     return abs(d) + SE_MULTIPLIER * se if label in pairs else 0.0
 
 
-def _budget(spec: ObservableSpec, theory: float, smoothing: float, band: dict,
-            integ: dict | None = None) -> Budget:
-    return Budget(smoothing=smoothing, bandwidth=_measured(band, spec.label),
-                  integration=_measured(integ or {}, spec.label),
-                  element=spec.element * abs(theory))
-
-
-def _paired(specs, a: Ensemble, b: Ensemble) -> dict:
+def _paired(fns: dict, a: Ensemble, b: Ensemble) -> dict:
     """``{label: (estimator(a) - estimator(b), jackknife se)}`` for paired ensembles (row i of
     a and b share their noise), e.g. the integration check against the nominal run.  Refused
     unless a retraces b (same noise): otherwise the difference would be noise, not a bias."""
@@ -412,16 +240,15 @@ def _paired(specs, a: Ensemble, b: Ensemble) -> dict:
     g = max(2, min(8, n // 2))
     labels = np.arange(n) % g
     out = {}
-    for s in specs:
-        full = s.estimator(a) - s.estimator(b)
-        reps = np.array([s.estimator(_xs_subset(a, np.flatnonzero(labels != j)))
-                         - s.estimator(_xs_subset(b, np.flatnonzero(labels != j)))
-                         for j in range(g)])
-        out[s.label] = (float(full), float(np.sqrt((g - 1) / g * np.sum((reps - reps.mean()) ** 2))))
+    for label, fn in fns.items():
+        full = fn(a) - fn(b)
+        reps = np.array([fn(_xs_subset(a, np.flatnonzero(labels != j)))
+                         - fn(_xs_subset(b, np.flatnonzero(labels != j))) for j in range(g)])
+        out[label] = (float(full), float(np.sqrt((g - 1) / g * np.sum((reps - reps.mean()) ** 2))))
     return out
 
 
-def _band(exp: Experiment, specs, v0, t_end: float, replicas: int, seed: int) -> dict:
+def _band(exp: Experiment, fns: dict, v0, t_end: float, replicas: int, seed: int) -> dict:
     """Held minus white noise Monte Carlo on common increments (Gaussian members only)."""
     m = exp.mapping()
     if not math.isfinite(exp.model.gamma):
@@ -433,7 +260,7 @@ def _band(exp: Experiment, specs, v0, t_end: float, replicas: int, seed: int) ->
     for e in (held, white):
         e.meta["_x0"] = exp.model.x0
         e.meta["_model_eff"] = m.model_effective
-    fn = lambda e: {s.label: s.estimator(e) for s in specs}
+    fn = lambda e: {label: f(e) for label, f in fns.items()}
     return jackknife_difference(fn, held, white)
 
 
@@ -474,29 +301,33 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
         mc_eff = simulate_sde(m_eff, v0=0.0, t_end=sizes.stationary_t_end,
                               replicas=sizes.mc_replicas, seed=seed + 1, sample_dt=sizes.sample_dt)
         mc_eff.meta["_x0"], mc_eff.meta["_model_eff"] = m.x0, m_eff
-        specs = _spring_specs(exp, burn)
-        integ = _paired(specs + _spring_identities(exp, burn), chk, first)
-        for s in specs:
-            c, se = _jk(s.estimator, circ)
-            r, se_r = _jk(s.estimator, mc)
-            smooth = s.estimator(mc_eff) - r   # same noise: epsilon's effect, paired
-            se_tot = math.hypot(se, se_r)
-            b = Budget(smoothing=smooth, element=s.element * abs(r),
-                       integration=_measured(integ, s.label))
-            res.comparisons.append(compare(name, s.label, c, se_tot, r, "exact", b,
-                                           f"reference: Monte Carlo ({sizes.mc_replicas} "
-                                           "replicas, same release); SE = circuit and Monte "
-                                           "Carlo SEs in quadrature. " + s.note))
-        for s in _spring_identities(exp, burn):
-            c, se = _jk(s.estimator, circ)
-            mc_val = s.estimator(mc_eff)  # the Monte Carlo's own departure (finite time)
-            b = Budget(sampling=abs(mc_val), integration=_measured(integ, s.label),
-                       element=exp.mapping().bias.get("spring_creep", 0.0) * m.velocity_scale)
-            res.comparisons.append(compare(name, s.label, c, se, 0.0, "exact", b,
-                                           "sampling = the same average on the Monte Carlo "
-                                           "(finite time after release). " + s.note))
-        th, ah = _first_swing(circ)
-        tm, am = _first_swing(mc)
+        obs = C.member_observables(m)
+        fns = _estimators(exp, obs)
+        integ = _paired(fns, chk, first)
+        bias = exp.mapping().bias
+        for o in obs:
+            fn, label = fns[o.label], o.label
+            c, se = _jk(fn, circ)
+            if C.reference_of(o, m) == "exact":
+                # an identity: exactly 0 in the stationary state; the same average on the
+                # Monte Carlo (finite time after the release) bounds its departure
+                mc_val = fn(mc_eff)
+                ref = float(o.entry.exact())
+                b = Budget(sampling=abs(mc_val), integration=_measured(integ, label),
+                           element=C.element_error(o, bias, m, ref))
+                note = "sampling = the same average on the Monte Carlo (finite time after release). "
+            else:
+                ref, se_r = _jk(fn, mc)
+                smooth = fn(mc_eff) - ref   # same noise: epsilon's effect, paired
+                se = math.hypot(se, se_r)
+                b = Budget(smoothing=smooth, element=C.element_error(o, bias, m, ref),
+                           integration=_measured(integ, label))
+                note = (f"reference: Monte Carlo ({sizes.mc_replicas} replicas, same release); "
+                        "SE = circuit and Monte Carlo SEs in quadrature. ")
+            res.comparisons.append(compare(name, label, c, se, ref, "exact", b,
+                                           note + o.entry.description))
+        th, ah = C.first_swing(circ.t, circ.v, _position(circ))
+        tm, am = C.first_swing(mc.t, mc.v, _position(mc))
         k = math.sqrt(m.spring)
         res.facts.update(omega_undamped_half_period=math.pi / k,
                          circuit_half_period=float(np.nanmean(th)),
@@ -528,47 +359,52 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
     tick(f"{name}: transition circuit run from v0 = {v00:g} ({sizes.transition_replicas} replicas)")
     trans = _circuit(exp, v0=v00, t_end=max(times), replicas=sizes.transition_replicas,
                      seed=seed + 3, sizes=sizes, opts=opts)
-    tick(f"{name}: exact theory")
-    stat_specs = _stationary_specs(exp, burn)
-    pure_shot = m.shot is not None and not math.isfinite(m.gamma)
-    stat_smoothing: dict = {}
     tick(f"{name}: integration check (first {CHECK_REPLICAS} stationary replicas, 100x tighter)")
     chk = _circuit(exp, v0=v0_stat[:CHECK_REPLICAS], t_end=sizes.stationary_t_end,
                    replicas=CHECK_REPLICAS, seed=seed, sizes=sizes, opts=opts,
                    spec=exp.check_spec(), per_deck=CHECK_REPLICAS)
-    integ = _paired(stat_specs, chk, _xs_subset(stat, np.arange(CHECK_REPLICAS)))
-    for specs, ens, v0_band, T in (
-            (stat_specs, stat, family.sample_stationary(m, 128, seed + 4),
-             sizes.stationary_t_end),
-            (_transition_specs(exp, v00, times), trans, v00, max(times))):
-        band = _band(exp, specs, v0_band, T, 128 if np.ndim(v0_band) else 256, seed + 5)
-        for s in specs:
-            c, se = _jk(s.estimator, ens)
-            assert s.theory is not None  # stationary and transition specs have exact theory
-            th_model = float(s.theory(m))
-            kind = s.label.split(" at t=")[0]
-            if pure_shot and " at t=" in s.label:
+    tick(f"{name}: exact theory")
+    obs = C.member_observables(m, v0=v00, times=times)
+    stat_obs = [o for o in obs if o.run == C.STATIONARY]
+    trans_obs = [o for o in obs if o.run == C.TRANSITION]
+    exact = {**_stationary_theory(exp, m, stat_obs),
+             **_transition_theory(exp, m, v00, times, trans_obs)}
+    exact_eff = _stationary_theory(exp, m_eff, stat_obs)
+    pure_shot = C.model_class(m) == C.SHOT_MEMBER
+    if not pure_shot:
+        exact_eff.update(_transition_theory(exp, m_eff, v00, times, trans_obs))
+    integ = _paired(_estimators(exp, stat_obs), chk, _xs_subset(stat, np.arange(CHECK_REPLICAS)))
+    bias = exp.mapping().bias
+    for run_obs, ens, v0_band, T in (
+            (stat_obs, stat, family.sample_stationary(m, 128, seed + 4), sizes.stationary_t_end),
+            (trans_obs, trans, v00, max(times))):
+        fns = _estimators(exp, run_obs)
+        band = _band(exp, fns, v0_band, T, 128 if np.ndim(v0_band) else 256, seed + 5)
+        for o in run_obs:
+            c, se = _jk(fns[o.label], ens)
+            th_model = float(exact[o.label])
+            note = o.entry.description
+            if pure_shot and o.run == C.TRANSITION:
                 # Without Gaussian noise the smoothed model's stuck state is a delta at
                 # v = eps atanh(a/Delta), which the interpolated propagator density misses
                 # (measured: total mass 0.67 at t = 1, shot.toml); the smoothing acts where the
                 # object is stuck, so the stationary law's change stands in (noted in the row)
-                th_eff = th_model + stat_smoothing.get(kind, 0.0)
+                smoothing = exact_eff[o.kind] - exact[o.kind] if o.kind in exact_eff else 0.0
+                note += "; smoothing term: the stationary law's change at the circuit's epsilon"
             else:
-                th_eff = float(s.theory(m_eff))
-                stat_smoothing[kind] = th_eff - th_model
-            if (s.label.startswith("P(") or "fraction" in s.label) and (
-                    " at t=" in s.label or c in (0.0, 1.0)):
+                smoothing = float(exact_eff[o.label]) - th_model
+            if o.entry.probability and (o.run == C.TRANSITION or c in (0.0, 1.0)):
                 # one sample per replica (transition): binomial; a time average estimated
                 # as 0 or 1 still has an error ~ 1/n
                 n = ens.replicas
                 p = (c * n + 1) / (n + 2)
                 se = max(se, math.sqrt(p * (1 - p) / n))
-            b = _budget(s, th_model, th_eff - th_model, band, integ if ens is stat else {})
-            note = s.note if ens is stat else (s.note + "; " if s.note else "") + (
-                "integration checked on the stationary run only")
-            if pure_shot and " at t=" in s.label:
-                note += "; smoothing term: the stationary law's change at the circuit's epsilon"
-            res.comparisons.append(compare(name, s.label, c, se, th_model, "exact", b, note))
+            b = Budget(smoothing=smoothing, bandwidth=_measured(band, o.label),
+                       integration=_measured(integ, o.label) if ens is stat else 0.0,
+                       element=C.element_error(o, bias, m, th_model))
+            if ens is trans:
+                note += "; integration checked on the stationary run only"
+            res.comparisons.append(compare(name, o.label, c, se, th_model, "exact", b, note))
 
     # figure data: histograms and exact laws (computed here: the figures only draw)
     v, dens, atom = family.stationary_law(m, h=_h(exp) / 2)

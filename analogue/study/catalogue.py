@@ -5,6 +5,12 @@ one, its weak-noise theory.
 Adding an observable is one :class:`Kind` in :data:`KINDS`: the report's estimates
 (:func:`transition_values`, :func:`stationary_values`), its exact and weak-noise values
 (:func:`transition_theory`, :func:`stationary_theory`) and its label all follow from it.
+Each kind names the model classes it applies to (:func:`model_class`: the paper's model, a
+one-dimensional family member with Gaussian noise, pure shot noise, the spring), so the
+chapter "Beyond the paper" (:mod:`analogue.report.beyond`) reads its observables
+(:func:`member_observables`), their estimators, exact readings, Monte Carlo reference (the
+spring) and circuit-element budget terms from the same table; adding a model class is one
+class name on the kinds it shares.
 
 Labels (the ``observable`` field of ``metrics.json``) are stable: ``"<kind> at t=<t> from
 v0=<v0>"`` for the transition run, ``"<kind>"`` or ``"<kind> (tau=<tau>)"`` for the
@@ -16,6 +22,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 from scipy import integrate
@@ -24,12 +31,44 @@ from ..ensemble import Ensemble
 from ..model import Model
 
 __all__ = ["KINDS", "Kind", "Observable", "TRANSITION", "STATIONARY", "density_moments",
+           "PAPER", "GAUSSIAN_MEMBER", "SHOT_MEMBER", "SPRING_MEMBER", "MEMBER_STICK_WINDOW",
+           "LawMoments", "law_moments", "StationarySample", "StationaryTheory", "first_swing",
+           "model_class", "member_observables", "reference_of", "stationary_sample",
            "transition_observables", "stationary_observables", "transition_values",
            "stationary_values", "transition_theory", "stationary_theory", "transition_label", "stationary_label",
-           "kind_of", "find", "planned_comparisons"]
+           "kind_of", "find", "planned_comparisons", "estimate", "element_error", "no_exact"]
 
 TRANSITION = "transition"
 STATIONARY = "stationary"
+
+# model classes (:func:`model_class`): which kinds apply, and what the reference is
+PAPER = "paper"                      # the paper's model: exact and weak-noise theory
+GAUSSIAN_MEMBER = "gaussian member"  # 1-D family member with Gaussian noise (cubic, Stribeck)
+SHOT_MEMBER = "shot member"          # 1-D, pure shot noise (gamma = inf): an atom at v = 0
+SPRING_MEMBER = "spring member"      # state (x, v): the Monte Carlo is the reference
+_MEMBERS = frozenset({GAUSSIAN_MEMBER, SHOT_MEMBER})
+_ALL_1D = frozenset({PAPER, GAUSSIAN_MEMBER, SHOT_MEMBER})
+
+# |v| below this (model units) counts as stuck on the family members.  The circuit's diode
+# bridge holds a stuck object at v = epsilon atanh(a/Delta) (shot: 0.01 atanh(0.4) = 0.0042),
+# never at 0: the window must contain that; the theory counts the atom plus the continuous
+# mass inside the window.
+MEMBER_STICK_WINDOW = 0.05
+
+
+def model_class(model: Model) -> str:
+    """The class of ``model`` that decides its observables and reference: ``PAPER``,
+    ``SPRING_MEMBER`` (spring > 0), ``SHOT_MEMBER`` (shot noise without Gaussian noise) or
+    ``GAUSSIAN_MEMBER`` (any other 1-D member)."""
+    if not isinstance(model, Model):
+        raise TypeError(f"model must be an analogue.Model, got {type(model).__name__}")
+    if model.is_paper:
+        return PAPER
+    if model.spring > 0:
+        return SPRING_MEMBER
+    if model.shot is not None and not math.isfinite(model.gamma):
+        return SHOT_MEMBER
+    return GAUSSIAN_MEMBER
 
 
 def transition_label(kind: str, t: float, v0: float) -> str:
@@ -46,19 +85,84 @@ def stationary_label(kind: str, tau: float | None = None) -> str:
 @dataclass(frozen=True, eq=False)
 class StationarySample:
     """What the stationary estimators read: one ensemble after its burn-in (work rates
-    computed once per window)."""
+    computed once per window).  Spring members add the position of every replica over the
+    whole path (``position``: the circuit's inductor read-back or the Monte Carlo's x0 + x),
+    the nominal ``model`` and the friction law the data obey (``friction``: the circuit's
+    tanh-smoothed law) for the stationary identities."""
 
     ens: Ensemble
     v: np.ndarray               # velocities after the burn-in (replicas x samples)
     burn_in: float
     threshold: float
     force: float
+    position: np.ndarray | None = None
+    model: Model | None = None
+    friction: Model | None = None
     _work: dict = field(default_factory=dict, repr=False)
 
     def work(self, tau: float) -> np.ndarray:
         if tau not in self._work:
             self._work[tau] = _work_rates(self, tau)
         return self._work[tau]
+
+    @property
+    def x(self) -> np.ndarray:
+        """Positions after the burn-in (spring members)."""
+        if self.position is None:
+            raise ValueError("this observable needs the position (a spring member's sample)")
+        return self.position[:, self.ens.v.shape[1] - self.v.shape[1]:]
+
+
+def stationary_sample(ens: Ensemble, *, burn_in: float, threshold: float, force: float,
+                      position: np.ndarray | None = None, model: Model | None = None,
+                      friction: Model | None = None) -> StationarySample:
+    """The part of ``ens`` after ``burn_in`` (the first sample at t >= t0 + burn_in)."""
+    i0 = int(np.searchsorted(ens.t, ens.t[0] + burn_in - 1e-12))
+    return StationarySample(ens=ens, v=ens.v[:, i0:], burn_in=burn_in, threshold=threshold,
+                            force=force, position=position, model=model, friction=friction)
+
+
+def first_swing(t: np.ndarray, v: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per replica: the time the first swing ends (v returns to 0 from below after leaving
+    rest, v < -0.05: half a period of the damped oscillation) and |x| there (the first
+    amplitude); NaN for a replica that never completes it.  Released from x0 > 0 at rest, the
+    object moves with v < 0 first."""
+    n = v.shape[0]
+    t_half = np.full(n, np.nan)
+    amp = np.full(n, np.nan)
+    for r in range(n):
+        moving = np.flatnonzero(v[r] < -0.05)
+        if moving.size == 0:
+            continue
+        j0 = moving[0]
+        back = np.flatnonzero(v[r, j0:] >= 0.0)
+        if back.size == 0:
+            continue
+        j = j0 + back[0]
+        t_half[r], amp[r] = t[j], abs(x[r, j])
+    return t_half, amp
+
+
+def _half_period(s: StationarySample, tau=None) -> float:
+    assert s.position is not None  # spring kinds: the sample carries the position
+    return float(np.nanmean(first_swing(s.ens.t, s.ens.v, s.position)[0]))
+
+
+def _amplitude(s: StationarySample, tau=None) -> float:
+    assert s.position is not None
+    return float(np.nanmean(first_swing(s.ens.t, s.ens.v, s.position)[1]))
+
+
+def _force_balance(s: StationarySample, tau=None) -> float:
+    """spring <x> - a + <Delta(v) sgn v> + cubic <v^3>: the ensemble average of dv/dt, zero
+    in the stationary state (<v> = 0 there, so the viscous term drops); <Delta(v) sgn v>
+    with the friction law the data obey."""
+    m = s.model
+    if m is None:
+        raise ValueError("the force-balance identity needs the sample's model")
+    law = s.friction if s.friction is not None else m
+    return float(m.spring * s.x.mean() - m.a + np.mean(law.coulomb(s.v))
+                 + m.cubic * np.mean(s.v ** 3))
 
 
 def _diffusion(s: StationarySample, tau=None) -> float:
@@ -81,28 +185,89 @@ def _chi2_per_dof(samples, v, f) -> tuple[float, float]:
 def density_moments(v: np.ndarray, f: np.ndarray) -> tuple[float, float, float]:
     """Mean, variance and P(v <= 0) of a density ``f`` on the uniform grid ``v`` (trapezoid;
     the node at v = 0 counts half), normalised on the grid."""
-    norm = integrate.trapezoid(f, v)
-    f = f / norm
+    m = law_moments(v, f)
+    return m.mean, m.variance, m.p_negative
+
+
+class LawMoments(NamedTuple):
+    """What the transition kinds read from a law f(v, t | v0) (+ an atom at v = 0)."""
+
+    mean: float
+    variance: float
+    p_negative: float           # P(v < 0) (the atom excluded)
+    p_stuck: float              # P(|v| < MEMBER_STICK_WINDOW), the atom included
+
+
+def law_moments(v: np.ndarray, f: np.ndarray, atom: float = 0.0,
+                window: float = MEMBER_STICK_WINDOW) -> LawMoments:
+    """Moments of the law ``f`` (continuous part, on the uniform grid ``v``; trapezoid) plus
+    ``atom`` at v = 0 (shot noise: the object at rest), normalised on the grid: total mass =
+    integral of f + atom.  Probabilities read the cumulative trapezoid integral, linearly
+    interpolated at 0 and +-window (with v = 0 on a node, P(v < 0) is the trapezoid integral
+    up to that node: the paper's convention, the node at 0 counting half)."""
+    tot = integrate.trapezoid(f, v) + atom
+    f = f / tot
+    a = atom / tot
     mean = integrate.trapezoid(v * f, v)
-    var = integrate.trapezoid((v - mean) ** 2 * f, v)
-    neg = (integrate.trapezoid(np.where(v <= 0, f, 0.0), v)
-           - 0.5 * f[np.argmin(np.abs(v))] * (v[1] - v[0]))
-    return mean, var, neg
+    var = integrate.trapezoid((v - mean) ** 2 * f, v) + a * mean * mean
+    cdf = integrate.cumulative_trapezoid(f, v, initial=0.0)
+    neg = np.interp(0.0, v, cdf)
+    stuck = a + np.interp(window, v, cdf) - np.interp(-window, v, cdf)
+    return LawMoments(float(mean), float(var), float(neg), float(stuck))
 
 
 @dataclass(frozen=True, eq=False)
 class StationaryTheory:
-    """What the exact stationary values read."""
+    """What the exact stationary values read.  ``law``: the grid's stationary law
+    ``(v, density, atom)`` of a family member (:func:`analogue.theory.family.stationary_law`);
+    window probabilities are then read from it (Riemann sum, plus the atom)."""
 
     model: Model
     moments: object             # analogue.theory.stationary.StationaryMoments
     threshold: float
     work_variance: dict         # tau -> exact Var(w)
+    law: tuple | None = None
+
+
+def _window_mass(th: StationaryTheory) -> float:
+    assert th.law is not None
+    v, dens, atom = th.law
+    return float(atom + np.sum(dens[np.abs(v) < th.threshold]) * (v[1] - v[0]))
 
 
 def _stick_theory(th: StationaryTheory, tau=None) -> float:
+    if th.law is not None:
+        return _window_mass(th)
     from ..estimators import stick_fraction_theory
     return float(stick_fraction_theory(th.model, th.threshold))
+
+
+def _above_theory(th: StationaryTheory, tau=None) -> float:
+    assert th.law is not None
+    v, dens, _ = th.law
+    return float(np.sum(dens[v >= th.threshold]) * (v[1] - v[0]))
+
+
+def no_exact(*_args, **_kw) -> float:
+    """The exact theory of a kind without one (the spring's state (x, v) has no exact
+    stationary law here): the reference is the Monte Carlo (:func:`reference_of`)."""
+    raise LookupError("this observable has no exact theory: its reference is the Monte Carlo")
+
+
+# ----------------------------------------------------------------- circuit-element terms
+# relative circuit-element errors of the family's circuits (analogue.circuit.mapping bias
+# keys; each present only when its extension is on): a stationary observable of a 1-D member
+# carries the cubic network's variance error and the shot pulses' width/edge/overlap terms
+_ONE_D_TERMS = ("cubic_variance", "shot_pulse", "shot_edge", "shot_overlap")
+
+
+def _relative(*keys: str) -> Callable:
+    return lambda bias, model, ref: sum(bias.get(k, 0.0) for k in keys) * abs(ref)
+
+
+def _creep(bias, model, ref) -> float:
+    # the leaky inductor lets a stuck object creep: a velocity bias (absolute)
+    return bias.get("spring_creep", 0.0) * model.velocity_scale
 
 
 # -------------------------------------------------------------------------------- kinds
@@ -112,7 +277,7 @@ class Kind:
 
     ``estimator``: transition kinds take the velocities at time t (one per replica);
     stationary kinds take a :class:`StationarySample` and the window ``tau`` (or None).
-    ``exact``: transition kinds take ``density_moments`` of the exact f(v, t | v0);
+    ``exact``: transition kinds take the :class:`LawMoments` of the exact f(v, t | v0);
     stationary kinds a :class:`StationaryTheory` and ``tau``.  ``weak_noise``: the same
     reading of the paper's saddle-point propagator (eqs. (46)-(51)), compared in the report
     where ``compare_weak_noise``."""
@@ -121,7 +286,7 @@ class Kind:
     run: str                    # TRANSITION or STATIONARY
     params: tuple               # ("t", "v0"), ("tau",) or ()
     estimator: Callable
-    exact: Callable
+    exact: Callable             # no_exact: the reference is the Monte Carlo (spring members)
     weak_noise: Callable | None = None
     compare_weak_noise: bool = False
     description: str = ""
@@ -131,46 +296,100 @@ class Kind:
     # a probability (estimated as a fraction of replicas: an estimate of 0 or 1 from n
     # replicas still has an error ~ 1/n)
     probability: bool = False
+    # the model classes (model_class) the kind applies to, and a further condition
+    classes: frozenset = frozenset({PAPER})
+    applies: Callable[[Model], bool] | None = None
+    # an identity: its value is exactly ``exact`` in the stationary state for every class
+    # (the spring's references are otherwise the Monte Carlo)
+    identity: bool = False
+    # absolute circuit-element error: (mapping bias dict, model, reference value) -> float
+    element: Callable | None = None
 
+
+_ONE_D = _relative(*_ONE_D_TERMS)
 
 KINDS: tuple[Kind, ...] = (
     # transition run: f(v, t | v0) (paper Fig. 6, eqs. (46)-(51)); in label order
     Kind("mean v", TRANSITION, ("t", "v0"), lambda v: float(np.mean(v)),
-         exact=lambda m: m[0], weak_noise=lambda m: m[0], compare_weak_noise=True,
-         description="mean velocity at t from v0"),
+         exact=lambda m: m.mean, weak_noise=lambda m: m.mean, compare_weak_noise=True,
+         description="mean velocity at t from v0", classes=_ALL_1D),
     Kind("var v", TRANSITION, ("t", "v0"), lambda v: float(np.var(v, ddof=1)),
-         exact=lambda m: m[1], weak_noise=lambda m: m[1],
-         description="velocity variance at t from v0 (unbiased over replicas)"),
+         exact=lambda m: m.variance, weak_noise=lambda m: m.variance,
+         description="velocity variance at t from v0 (unbiased over replicas)", classes=_ALL_1D),
     Kind("P(v<0)", TRANSITION, ("t", "v0"), lambda v: float(np.mean(v < 0)),
-         exact=lambda m: m[2], weak_noise=lambda m: m[2], probability=True,
-         description="probability of a negative velocity at t from v0"),
+         exact=lambda m: m.p_negative, weak_noise=lambda m: m.p_negative, probability=True,
+         description="probability of a negative velocity at t from v0",
+         classes=frozenset({PAPER, GAUSSIAN_MEMBER})),
     Kind("histogram chi2/dof", TRANSITION, ("t", "v0"), lambda v, grid, f: _chi2_per_dof(v, grid, f),
          exact=lambda m=None: 1.0, fit_test=True,
          description="Pearson chi^2 per degree of freedom of the circuit velocities at t "
                      "against the exact f(v, t | v0) at the circuit's epsilon, ~20 "
                      "equal-probability bins; (value, standard error sqrt(2/dof))"),
+    Kind("P(v=0)", TRANSITION, ("t", "v0"),
+         lambda v: float(np.mean(np.abs(v) < MEMBER_STICK_WINDOW)),
+         exact=lambda m: m.p_stuck, probability=True, classes=frozenset({SHOT_MEMBER}),
+         description=f"stuck at t from v0: |v| < {MEMBER_STICK_WINDOW:g}; theory: the atom "
+                     "plus the continuous mass in the window"),
     # stationary run (eq. (6), eqs. (3), (52), Green-Kubo); in label order
     Kind("mean v", STATIONARY, (), lambda s, tau=None: float(s.v.mean()),
-         exact=lambda th, tau=None: th.moments.mean, description="stationary mean velocity"),
+         exact=lambda th, tau=None: th.moments.mean, description="stationary mean velocity",
+         classes=_ALL_1D | {SPRING_MEMBER}, element=_ONE_D),
     Kind("var v", STATIONARY, (), lambda s, tau=None: float(s.v.var()),
          exact=lambda th, tau=None: th.moments.variance,
-         description="stationary velocity variance"),
+         description="stationary velocity variance", classes=_ALL_1D | {SPRING_MEMBER},
+         element=_relative(*_ONE_D_TERMS, "spring_leak_var_v")),
     Kind("P(v>0)", STATIONARY, (), lambda s, tau=None: float(np.mean(s.v > 0)),
          exact=lambda th, tau=None: th.moments.p_positive, probability=True,
-         description="stationary probability of a positive velocity"),
+         description="stationary probability of a positive velocity",
+         classes=frozenset({PAPER, GAUSSIAN_MEMBER}), element=_ONE_D),
     Kind("stick fraction", STATIONARY, (),
          lambda s, tau=None: float(np.mean(np.abs(s.v) < s.threshold)), exact=_stick_theory,
+         probability=True,
          description="stationary P(|v| < threshold), threshold = report.stick_threshold "
-                     "sqrt(tau_m/gamma)"),
+                     f"sqrt(tau_m/gamma) (family members: {MEMBER_STICK_WINDOW:g})",
+         classes=frozenset({PAPER, GAUSSIAN_MEMBER}), element=_ONE_D),
     Kind("diffusion D_x", STATIONARY, (), _diffusion,
          exact=lambda th, tau=None: th.moments.diffusion,
-         description="position diffusion coefficient (Green-Kubo)"),
+         description="position diffusion coefficient (Green-Kubo); fixes the curvature of the "
+                     "work rate function at <w>: I''(<w>) = 1/(2 gamma F^2 D_x)",
+         classes=frozenset({PAPER, GAUSSIAN_MEMBER}), applies=lambda m: m.is_paper or m.a != 0,
+         element=_ONE_D),
     Kind("mean w", STATIONARY, ("tau",), lambda s, tau: float(s.work(tau).mean()),
          exact=lambda th, tau: th.model.force * th.moments.mean,
          description="mean work rate over windows tau (eq. (3))"),
     Kind("var w", STATIONARY, ("tau",), lambda s, tau: float(s.work(tau).var()),
          exact=lambda th, tau: th.work_variance[tau],
          description="work-rate variance over windows tau (Green-Kubo route)"),
+    # family members only (issue 9)
+    Kind("P(v=0)", STATIONARY, (),
+         lambda s, tau=None: float(np.mean(np.abs(s.v) < s.threshold)), exact=_stick_theory,
+         probability=True, classes=frozenset({SHOT_MEMBER}), element=_ONE_D,
+         description=f"stuck: |v| < {MEMBER_STICK_WINDOW:g} (the bridge holds a stuck object "
+                     "at epsilon atanh(a/Delta), not 0); theory: the atom P(v = 0) plus the "
+                     "continuous mass in the window"),
+    Kind(f"P(v>{MEMBER_STICK_WINDOW:g})", STATIONARY, (),
+         lambda s, tau=None: float(np.mean(s.v >= s.threshold)), exact=_above_theory,
+         probability=True, classes=frozenset({SHOT_MEMBER}), element=_ONE_D,
+         description="moving forward (above the stick window)"),
+    Kind("mean x", STATIONARY, (), lambda s, tau=None: float(s.x.mean()), exact=no_exact,
+         classes=frozenset({SPRING_MEMBER}), description="stationary mean position"),
+    Kind("var x", STATIONARY, (), lambda s, tau=None: float(s.x.var()), exact=no_exact,
+         classes=frozenset({SPRING_MEMBER}), element=_relative("spring_leak_var_x"),
+         description="stationary position variance"),
+    Kind("half period (first swing)", STATIONARY, (), _half_period, exact=no_exact,
+         classes=frozenset({SPRING_MEMBER}),
+         description="time from release to the end of the first swing (v back to 0)"),
+    Kind("amplitude (first swing)", STATIONARY, (), _amplitude, exact=no_exact,
+         classes=frozenset({SPRING_MEMBER}), description="|x| where the first swing ends"),
+    Kind("identity <v> = 0", STATIONARY, (), lambda s, tau=None: float(s.v.mean()),
+         exact=lambda th=None, tau=None: 0.0, identity=True, classes=frozenset({SPRING_MEMBER}),
+         element=_creep, description="stationary <v> = 0 (a bounded position)"),
+    Kind("identity spring <x> - a + <Delta(v) sgn v> + cubic <v^3> = 0", STATIONARY, (),
+         _force_balance, exact=lambda th=None, tau=None: 0.0, identity=True,
+         classes=frozenset({SPRING_MEMBER}), element=_creep,
+         description="the circuit's own friction law Delta(v) tanh(v/epsilon) in "
+                     "<Delta(v) sgn v>; time averages after the burn-in (the identity holds "
+                     "exactly in the stationary state)"),
 )
 
 
@@ -230,15 +449,63 @@ def transition_observables(v0: float, times, *, fit_tests: bool = False) -> list
     """The transition run's observables from ``v0``, in label order (time, then kind);
     with ``fit_tests``, the goodness-of-fit statistics instead."""
     return [Observable(k.name, TRANSITION, t=float(t), v0=float(v0))
-            for t in times for k in KINDS if k.run == TRANSITION and k.fit_test == fit_tests]
+            for t in times for k in KINDS
+            if k.run == TRANSITION and k.fit_test == fit_tests and PAPER in k.classes]
 
 
 def stationary_observables(taus=()) -> list[Observable]:
     """The stationary run's observables, in label order (windows last, by tau)."""
-    plain = [Observable(k.name, STATIONARY) for k in KINDS if k.run == STATIONARY and not k.params]
+    paper = [k for k in KINDS if k.run == STATIONARY and PAPER in k.classes]
+    plain = [Observable(k.name, STATIONARY) for k in paper if not k.params]
     windows = [Observable(k.name, STATIONARY, tau=float(tau)) for tau in taus
-               for k in KINDS if k.run == STATIONARY and k.params == ("tau",)]
+               for k in paper if k.params == ("tau",)]
     return plain + windows
+
+
+def member_observables(model: Model, *, v0: float | None = None, times=()) -> list[Observable]:
+    """A family member's observables, in label order: the stationary ones (those of its
+    class, :func:`model_class`), then, with ``v0``, the transition ones at each time (spring
+    members have none: their run is a release from x0, read by stationary kinds)."""
+    cls = model_class(model)
+    if cls == PAPER:
+        raise ValueError("model is the paper's model: its observables are "
+                         "transition_observables and stationary_observables")
+    out = [Observable(k.name, STATIONARY) for k in KINDS
+           if k.run == STATIONARY and cls in k.classes and not k.params
+           and (k.applies is None or k.applies(model))]
+    if v0 is not None and cls != SPRING_MEMBER:
+        out += [Observable(k.name, TRANSITION, t=float(t), v0=float(v0)) for t in times
+                for k in KINDS if k.run == TRANSITION and cls in k.classes and not k.fit_test]
+    return out
+
+
+def reference_of(o: Observable, model: Model) -> str:
+    """``"exact"`` (finite-noise numerics, or an identity's exact value) or ``"monte carlo"``
+    (spring members: no exact law of the state (x, v))."""
+    k = o.entry
+    if k.identity or (model_class(model) != SPRING_MEMBER and k.exact is not no_exact):
+        return "exact"
+    return "monte carlo"
+
+
+def estimate(o: Observable, ens: Ensemble, *, burn_in: float, threshold: float, force: float,
+             position: np.ndarray | None = None, model: Model | None = None,
+             friction: Model | None = None) -> float:
+    """The kind's estimator of ``o`` on one ensemble (transition: the velocities at o.t;
+    stationary: the part after ``burn_in``; see :func:`stationary_sample`)."""
+    k = o.entry
+    if o.run == TRANSITION:
+        assert o.t is not None  # transition observables carry their time
+        return float(k.estimator(ens.at(o.t)))
+    s = stationary_sample(ens, burn_in=burn_in, threshold=threshold, force=force,
+                          position=position, model=model, friction=friction)
+    return float(k.estimator(s, o.tau))
+
+
+def element_error(o: Observable, bias: dict, model: Model, reference: float) -> float:
+    """The kind's circuit-element error (absolute) for a circuit with mapping ``bias``."""
+    k = o.entry
+    return 0.0 if k.element is None else float(k.element(bias, model, reference))
 
 
 # ------------------------------------------------------------------- values from the table
@@ -255,32 +522,38 @@ def transition_values(ens, v0: float, times) -> dict:
 
 def stationary_values(ens, *, burn_in: float, threshold: float, force: float, taus=()) -> dict:
     """Every stationary observable: time-and-replica averages after ``burn_in``."""
-    i0 = int(np.searchsorted(ens.t, ens.t[0] + burn_in - 1e-12))
-    sample = StationarySample(ens=ens, v=ens.v[:, i0:], burn_in=burn_in, threshold=threshold,
-                              force=force)
+    sample = stationary_sample(ens, burn_in=burn_in, threshold=threshold, force=force)
     return {o.label: o.entry.estimator(sample, o.tau) for o in stationary_observables(taus)}
 
 
 def transition_theory(v: np.ndarray, f: np.ndarray, v0: float, times, *,
-                      weak_noise: bool = False) -> dict:
+                      weak_noise: bool = False, atom=None, observables=None) -> dict:
     """Exact (or, with ``weak_noise``, weak-noise) values of every transition observable
-    from the densities ``f`` (rows: ``times``) on the grid ``v``."""
+    from the densities ``f`` (rows: ``times``) on the grid ``v``, plus ``atom[i]`` at v = 0
+    (shot noise).  ``observables``: the transition observables to read (default: the
+    paper's, :func:`transition_observables`)."""
     out = {}
-    for t, row in zip(times, f):
-        m = density_moments(v, row)
-        for o in transition_observables(v0, [t]):
+    for i, (t, row) in enumerate(zip(times, f)):
+        m = law_moments(v, row, 0.0 if atom is None else float(atom[i]))
+        obs = (transition_observables(v0, [t]) if observables is None else
+               [o for o in observables if o.run == TRANSITION and o.t == float(t)])
+        for o in obs:
             fn = o.entry.weak_noise if weak_noise else o.entry.exact
             if fn is not None:
                 out[o.label] = fn(m)
     return out
 
 
-def stationary_theory(model, moments, *, threshold: float, work_variance: dict) -> dict:
-    """Exact values of every stationary observable (``work_variance``: {tau: Var(w)})."""
+def stationary_theory(model, moments, *, threshold: float, work_variance: dict,
+                      law: tuple | None = None, observables=None) -> dict:
+    """Exact values of every stationary observable (``work_variance``: {tau: Var(w)};
+    ``law``: a family member's grid law, see :class:`StationaryTheory`; ``observables``:
+    default the paper's, :func:`stationary_observables`)."""
     th = StationaryTheory(model=model, moments=moments, threshold=threshold,
-                          work_variance=work_variance)
-    return {o.label: o.entry.exact(th, o.tau)
-            for o in stationary_observables(list(work_variance))}
+                          work_variance=work_variance, law=law)
+    obs = stationary_observables(list(work_variance)) if observables is None else [
+        o for o in observables if o.run == STATIONARY]
+    return {o.label: o.entry.exact(th, o.tau) for o in obs if o.entry.exact is not no_exact}
 
 
 def planned_comparisons(v0s, times, taus, *, weak_noise: bool) -> list[tuple[str, str]]:

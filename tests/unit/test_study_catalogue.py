@@ -24,10 +24,15 @@ LABELS = Path(__file__).with_name("data") / "quick_paper_comparison_labels.json"
 
 
 def test_every_entry_has_an_estimator_and_an_exact_theory():
+    """... or, for kinds of the spring alone (no exact law of (x, v)), the Monte Carlo."""
     assert len({(k.run, k.name) for k in C.KINDS}) == len(C.KINDS)
     for k in C.KINDS:
         assert callable(k.estimator) and callable(k.exact), k.name
         assert k.run in (C.TRANSITION, C.STATIONARY)
+        assert k.classes and k.classes <= {C.PAPER, C.GAUSSIAN_MEMBER, C.SHOT_MEMBER,
+                                           C.SPRING_MEMBER}, k.name
+        if k.exact is C.no_exact:
+            assert k.classes == {C.SPRING_MEMBER}, k.name
         if k.compare_weak_noise:
             assert callable(k.weak_noise), k.name
     assert C.kind_of(C.TRANSITION, "mean v").weak_noise is not None
@@ -105,3 +110,126 @@ def test_exact_stationary_work_variance_matches_the_green_kubo_route():
     for tau in (0.5, 2.0):
         assert out[f"var w (tau={tau:g})"] == pytest.approx(work_variance_exact(m, tau),
                                                             rel=1e-10)
+
+
+# ------------------------------------------------------------------ family members (issue 9)
+# labels of every comparison of each member's report, read from the Beyond chapter's own
+# observable lists before they became catalogue entries (report/beyond.py at commit 12725fb)
+MEMBER_LABELS = Path(__file__).with_name("data") / "member_comparison_labels.json"
+
+
+def test_member_labels_are_those_of_the_chapter_before_the_catalogue():
+    recorded = json.loads(MEMBER_LABELS.read_text())
+    assert set(recorded) == {"cubic", "stribeck", "spring", "shot"}
+    for name, labels in recorded.items():
+        exp = load_experiment(standard_circuit(name))
+        got = C.member_observables(exp.model, v0=float(exp.v0[0]), times=exp.histogram_times)
+        assert [o.label for o in got] == labels, name
+        for o in got:
+            assert C.find(o.label) == o, o.label
+
+
+def test_model_classes_and_references():
+    paper = Model(tau_m=1.0, delta=0.5, a=0.2, gamma=4.0)
+    assert C.model_class(paper) == C.PAPER
+    assert C.model_class(paper.replace(cubic=0.3)) == C.GAUSSIAN_MEMBER
+    spring = paper.replace(spring=1.0)
+    assert C.model_class(spring) == C.SPRING_MEMBER
+    with pytest.raises(ValueError, match="paper's model"):
+        C.member_observables(paper)
+    with pytest.raises(TypeError, match="model must be"):
+        C.model_class("cubic")
+    refs = {o.kind: C.reference_of(o, spring) for o in C.member_observables(spring)}
+    assert refs["var x"] == refs["var v"] == "monte carlo"
+    assert refs["identity <v> = 0"] == "exact"
+    cubic = paper.replace(cubic=0.3)
+    assert {C.reference_of(o, cubic) for o in C.member_observables(cubic, v0=0.0, times=[1.0])} == {"exact"}
+    # the drive-free member has no D_x row (the work rate function needs a != 0)
+    assert "diffusion D_x" not in [o.kind for o in C.member_observables(cubic.replace(a=0.0))]
+
+
+def test_law_moments_of_an_atom_plus_a_gaussian():
+    """p delta(v) + (1 - p) N(mu, s^2): moments, P(v < 0) and the stuck window in closed form."""
+    v = np.linspace(-8, 8, 16001)
+    p, mu, s, w = 0.3, 0.8, 0.6, C.MEMBER_STICK_WINDOW
+    m = C.law_moments(v, (1 - p) * norm.pdf(v, mu, s), p)
+    mean = (1 - p) * mu
+    assert m.mean == pytest.approx(mean, abs=1e-9)
+    assert m.variance == pytest.approx((1 - p) * (s * s + mu * mu) - mean ** 2, rel=1e-6)
+    assert m.p_negative == pytest.approx((1 - p) * norm.cdf(0, mu, s), abs=1e-6)
+    # the window's edges fall between nodes: at most one cell's mass lost at each
+    edge = (1 - p) * (norm.pdf(w, mu, s) + norm.pdf(-w, mu, s)) * (v[1] - v[0])
+    assert m.p_stuck == pytest.approx(p + (1 - p) * (norm.cdf(w, mu, s) - norm.cdf(-w, mu, s)),
+                                      abs=edge)
+    # without the atom it is the paper's density_moments
+    assert C.density_moments(v, norm.pdf(v, mu, s)) == pytest.approx((mu, s * s, norm.cdf(0, mu, s)),
+                                                                     abs=1e-6)
+
+
+def test_member_stationary_theory_reads_the_grid_law():
+    """A grid law (uniform density on [-1, 1] of mass 0.6 + atom 0.4): window masses by hand."""
+    v = np.linspace(-2, 2, 4001)
+    dens = np.where(np.abs(v) <= 1, 0.3, 0.0)
+    model = Model(tau_m=1.0, delta=0.5, a=0.2, gamma=math.inf,
+                  shot=__import__("analogue").ShotNoise(1.0, 0.5))
+    obs = C.member_observables(model)
+    assert [o.kind for o in obs] == ["mean v", "var v", "P(v=0)", "P(v>0.05)"]
+
+    class Moments:
+        mean, variance = 0.1, 0.2
+    out = C.stationary_theory(model, Moments, threshold=0.05, work_variance={},
+                              law=(v, dens, 0.4), observables=obs)
+    dv = v[1] - v[0]
+    assert out["P(v=0)"] == pytest.approx(0.4 + 0.3 * dv * np.sum(np.abs(v) < 0.05))
+    assert out["P(v>0.05)"] == pytest.approx(0.3 * (1 - 0.05), abs=2 * 0.3 * dv)
+    assert out["mean v"] == 0.1 and out["var v"] == 0.2
+
+
+def _spring_ensemble(t, v, x):
+    return Ensemble(t, v, x - x[:, :1], {})
+
+
+def test_first_swing_of_harmonic_releases():
+    """x = x0 cos(w t), v = -x0 w sin(w t): the first swing ends at t = pi/w, |x| = x0."""
+    t = np.linspace(0, 10, 10001)
+    w = np.array([1.0, 1.5, 2.5])[:, None]
+    x0 = np.array([2.0, 1.0, 0.5])[:, None]
+    x = x0 * np.cos(w * t)
+    v = -x0 * w * np.sin(w * t)
+    half, amp = C.first_swing(t, v, x)
+    assert half == pytest.approx(np.pi / w.ravel(), abs=2 * (t[1] - t[0]))
+    assert amp == pytest.approx(x0.ravel(), rel=1e-4)
+    # a replica at rest never swings: NaN, left out of the kind's mean
+    half, _ = C.first_swing(t, np.vstack([v, 0 * t]), np.vstack([x, 0 * t + 1]))
+    assert np.isnan(half[-1])
+    s = C.stationary_sample(_spring_ensemble(t, np.vstack([v, 0 * t]), np.vstack([x, 0 * t + 1])),
+                            burn_in=1.0, threshold=0.05, force=0.0,
+                            position=np.vstack([x, 0 * t + 1]))
+    k = C.kind_of(C.STATIONARY, "half period (first swing)")
+    assert k.estimator(s) == pytest.approx(np.mean(np.pi / w.ravel()), abs=2e-3)
+
+
+def test_force_balance_identity_on_states_at_rest():
+    """At rest (v = 0: sgn 0 = 0) the residual is spring x - a; zero at x = a/spring."""
+    model = Model(tau_m=3.0, delta=0.5, a=0.3, gamma=20.0, spring=1.5)
+    t = np.linspace(0, 5, 501)
+    v = np.zeros((2, t.size))
+    x = np.vstack([np.full(t.size, 0.3 / 1.5), np.full(t.size, 0.3 / 1.5 + 0.4)])
+    o = C.Observable("identity spring <x> - a + <Delta(v) sgn v> + cubic <v^3> = 0", C.STATIONARY)
+    ens = _spring_ensemble(t, v, x)
+    got = C.estimate(o, ens, burn_in=1.0, threshold=0.05, force=model.force, position=x,
+                     model=model)
+    assert got == pytest.approx(1.5 * 0.2, abs=1e-12)      # mean of the two residuals 0 and 0.6
+    assert C.reference_of(o, model) == "exact" and o.entry.exact() == 0.0
+
+
+def test_element_terms_follow_the_mapping_bias():
+    model = Model(tau_m=3.0, delta=0.5, a=0.0, gamma=20.0, spring=1.0)
+    bias = {"spring_leak_var_v": 0.02, "spring_leak_var_x": 0.05, "spring_creep": 0.1,
+            "cubic_variance": 0.0}
+    var_v, var_x = C.Observable("var v", C.STATIONARY), C.Observable("var x", C.STATIONARY)
+    assert C.element_error(var_v, bias, model, -2.0) == pytest.approx(0.04)
+    assert C.element_error(var_x, bias, model, 3.0) == pytest.approx(0.15)
+    ident = C.Observable("identity <v> = 0", C.STATIONARY)
+    assert C.element_error(ident, bias, model, 0.0) == pytest.approx(0.1 * model.velocity_scale)
+    assert C.element_error(C.Observable("mean v", C.TRANSITION, t=1.0, v0=0.0), bias, model, 1.0) == 0.0
