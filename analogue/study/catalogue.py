@@ -238,7 +238,7 @@ def _window_mass(th: StationaryTheory) -> float:
 def _stick_theory(th: StationaryTheory, tau=None) -> float:
     if th.law is not None:
         return _window_mass(th)
-    from ..estimators import stick_fraction_theory
+    from ..theory.stationary import stick_fraction_theory
     return float(stick_fraction_theory(th.model, th.threshold))
 
 

@@ -38,13 +38,14 @@ from scipy import integrate, special
 from scipy.linalg import eigh_tridiagonal
 from scipy.sparse.linalg import expm_multiply
 
+from .. import checks
 from ..model import Model
 from .exact_grid import resolved_grid
 from .fokker_planck import Grid, generator, symmetric_generator
 
 __all__ = ["StationaryMoments", "stationary_moments", "half_line_moments", "diffusion_coefficient",
            "autocorrelation", "sample_stationary", "stationary_std", "central_bin_bias",
-           "CENTRAL_BIN"]
+           "CENTRAL_BIN", "stick_fraction_theory"]
 
 _SQRT_2PI = math.sqrt(2.0 * math.pi)
 # Beyond this depth of truncation (mu/s < -_CF_SWITCH) the truncated-Gaussian formulas cancel;
@@ -495,3 +496,38 @@ def central_bin_bias(model: Model, epsilon: float, std: float | None = None) -> 
     g0 = np.exp(-model.gamma * (u0 - u0.min()))
     ratio = float(np.trapezoid(g0 * h(v), v) / np.trapezoid(g0, v)) / (1.0 + R)
     return abs(ratio - 1.0)
+
+
+def _log_phi_diff(u1: float, u2: float) -> float:
+    """ln(Phi(u2) - Phi(u1)) for u1 < u2, accurate in both tails."""
+    if u1 > 0:  # upper tail: Phi(u2) - Phi(u1) = Phi(-u1) - Phi(-u2)
+        a, b = special.log_ndtr(-u1), special.log_ndtr(-u2)
+    else:
+        a, b = special.log_ndtr(u2), special.log_ndtr(u1)
+    return float(a + np.log1p(-np.exp(b - a)))
+
+
+def stick_fraction_theory(model: Model, threshold: float) -> float:
+    """Exact stationary ``P(|v| < threshold) = integral_{-th}^{th} p_s(v) dv`` (eq. (6)).
+
+    For the sgn law each half line is a Gaussian piece: on v > 0,
+    ``exp(-gamma U) = exp(gamma b^2 tau_m / 2) exp(-(v + b tau_m)^2 / (2 s^2))`` with
+    ``b = Delta - a`` and ``s^2 = tau_m/gamma`` (mirror with ``b = Delta + a`` on v < 0), so
+    the integral is a difference of normal CDFs.  With epsilon > 0 it is integrated
+    numerically.
+    """
+    checks.instance("model", model, Model, description="an analogue.Model")
+    th = checks.positive("threshold", threshold, allow_inf=True)
+    if math.isinf(th):
+        return 1.0
+    g, tau = model.gamma, model.tau_m
+    if model.epsilon == 0:
+        s = math.sqrt(tau / g)
+        def half(b: float) -> float:
+            return (math.log(s * math.sqrt(2 * math.pi)) + 0.5 * g * b * b * tau
+                    + _log_phi_diff(b * tau / s, (th + b * tau) / s))
+        log_mass = np.logaddexp(half(model.delta - model.a), half(model.delta + model.a))
+        return float(min(1.0, math.exp(log_mass - model.log_normaliser())))
+    val, _ = integrate.quad(lambda v: float(model.stationary_pdf(v)), -th, th, points=[0.0],
+                            limit=400, epsabs=0, epsrel=1e-11)
+    return float(min(1.0, val))
