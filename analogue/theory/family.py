@@ -44,7 +44,8 @@ from scipy.linalg import eigh_tridiagonal
 from scipy.sparse.linalg import splu
 
 from ..model import Model, ShotNoise
-from .kolmogorov_feller import ShotGrid, _grid_range, default_spacing, shot_generator
+from .kolmogorov_feller import (ShotGrid, _grid_range, default_spacing, shot_generator,
+                               stable_zeros)
 
 if TYPE_CHECKING:
     from .stationary import StationaryMoments
@@ -103,6 +104,23 @@ def _anchor(model: Model, g: ShotGrid) -> int:
     atom, else the state nearest the noise-free attractor of the mean force (``a`` plus the
     mean kick force ``rate mean`` for one-sided kicks): states below the support of one-sided
     kicks are transient and must not be anchored."""
+    shot = model.shot
+    if shot is not None and not shot.two_sided and not math.isfinite(model.gamma):
+        # one-sided kicks only push up, and the flow from above ends at the highest sliding
+        # attractor v*: [v*, inf) is the recurrent class, everything below it (the stuck state
+        # included) transient (Stribeck, tau_m = 5, Delta = 0.3, delta_s = 1, v_s = 0.2,
+        # a = 0.6: anchored at S the solve gave weights of -2e12 on h/6).  Anchor the bulk:
+        # the highest zero of the mean-force drift f + rate mean (> v*); not the cell next
+        # to v*, where the density vanishes like (v - v*)^(rate tau_m - 1) (rate tau_m = 10:
+        # that cell's weight was 1e-12 of the peak, and the solve failed)
+        zs = stable_zeros(model)
+        if zs.size and zs.max() > 0.0:
+            bulk = stable_zeros(model.replace(a=model.a + shot.mean_force, shot=None,
+                                              gamma=math.inf))
+            cells = g.v[:-1] if g.atom else g.v
+            if bulk.size and bulk.max() > zs.max():
+                return int(np.argmin(np.abs(cells - bulk.max())))
+            return int(np.flatnonzero(cells > zs.max())[0])
     if g.atom:
         return g.n - 1
     a_eff = model.a + (model.shot.mean_force if model.shot is not None else 0.0)
