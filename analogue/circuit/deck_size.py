@@ -31,6 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import checks
 from ..model import Model
 
 __all__ = [
@@ -145,10 +146,8 @@ def choose_deck_size(model: Model, spec, *, replicas: int, t_end: float, workers
     fewer than ``min_replica_holds`` replica-holds get ``DEFAULT_REPLICAS_PER_DECK`` (within
     the bounds) without a calibration (source "default")."""
     lo, hi = _check_bounds(bounds)
-    if isinstance(replicas, bool) or not isinstance(replicas, int) or replicas < 1:
-        raise ValueError(f"replicas must be an integer >= 1, got {replicas!r}")
-    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
+    replicas = checks.integer("replicas", replicas, minimum=1)
+    workers = checks.integer("workers", workers, minimum=1)
     allowed = [s for s in SIZES if lo <= s <= hi] or [lo, hi]
     if replicas <= lo:
         return DeckSizeChoice(lo, "measured")

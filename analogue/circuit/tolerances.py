@@ -55,6 +55,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import checks
 from ..model import Model
 from .mapping import (
     FIXED_METHOD,
@@ -343,13 +344,10 @@ def choose_tolerances(model: Model, spec: CircuitSpec | None = None, *, replicas
     calibration (source "fixed").  ``check_replicas``: the run's integration error will be
     measured on that many of its paths (the report's check), which adds its own noise
     (module docstring)."""
-    spec = spec if spec is not None else CircuitSpec()
-    if not isinstance(spec, CircuitSpec):
-        raise TypeError(f"spec must be a CircuitSpec, got {type(spec).__name__}")
-    if isinstance(replicas, bool) or not isinstance(replicas, int) or replicas < 1:
-        raise ValueError(f"replicas must be an integer >= 1, got {replicas!r}")
-    if not (isinstance(t_end, (int, float)) and math.isfinite(t_end) and t_end > 0):
-        raise ValueError(f"t_end must be a finite number > 0, got {t_end!r}")
+    spec = checks.instance("spec", spec if spec is not None else CircuitSpec(), CircuitSpec,
+                           description="a CircuitSpec")
+    replicas = checks.integer("replicas", replicas, minimum=1)
+    t_end = checks.positive("t_end", t_end)
     if not (isinstance(fraction, (int, float)) and 0 < fraction <= 1):
         raise ValueError(f"fraction must be in (0, 1], got {fraction!r}")
     if check_replicas is not None and (isinstance(check_replicas, bool)

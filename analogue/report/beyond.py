@@ -41,6 +41,7 @@ import numpy as np
 
 from ..circuit.experiments import Experiment, load_experiment, standard_circuit
 from ..ensemble import Ensemble
+from .. import checks
 from ..model import Model
 from ..study import catalogue as C
 from ..study.seeds import SeedPlan
@@ -83,11 +84,8 @@ class MemberSizes:
 
     def __post_init__(self):
         for k in ("stationary_replicas", "transition_replicas", "mc_replicas"):
-            v = getattr(self, k)
-            if isinstance(v, bool) or not isinstance(v, int) or v < 8:
-                raise ValueError(f"{k} must be an integer >= 8, got {v!r}")
-        if not (math.isfinite(self.stationary_t_end) and self.stationary_t_end > 0):
-            raise ValueError(f"stationary_t_end must be a finite number > 0, got {self.stationary_t_end!r}")
+            object.__setattr__(self, k, checks.integer(k, getattr(self, k), minimum=8))
+        object.__setattr__(self, "stationary_t_end", checks.positive("stationary_t_end", self.stationary_t_end))
 
 
 def member_sizes(exp: Experiment, quick: bool) -> MemberSizes:

@@ -16,6 +16,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from .. import checks
+
 __all__ = ["SeedPlan"]
 
 _STRIDE = 1000
@@ -34,8 +36,7 @@ class SeedPlan:
     seed: int
 
     def __post_init__(self):
-        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
-            raise ValueError(f"seed must be an integer >= 0, got {self.seed!r}")
+        object.__setattr__(self, "seed", checks.integer("seed", self.seed, minimum=0))
 
     @property
     def base(self) -> int:

@@ -28,6 +28,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.special import logsumexp
 
+from .. import checks
 from ..model import Model
 from .exact_grid import resolved_grid
 from .fokker_planck import Grid
@@ -44,8 +45,7 @@ __all__ = ["propagator", "propagator_atom", "stationary_moments", "StationaryMom
 
 
 def _check_model(model: object) -> None:
-    if not isinstance(model, Model):
-        raise ValueError(f"model must be an analogue.Model, got {type(model).__name__}")
+    checks.instance("model", model, Model, description="an analogue.Model")
 
 
 def stationary_moments(model: Model, h: float | None = None) -> StationaryMoments:

@@ -43,6 +43,7 @@ from scipy import integrate, optimize, sparse
 from scipy.linalg import eigh_tridiagonal
 from scipy.sparse.linalg import splu
 
+from .. import checks
 from ..model import Model, ShotNoise
 from .kolmogorov_feller import (ShotGrid, _grid_range, default_spacing, shot_generator,
                                stable_zeros)
@@ -63,8 +64,7 @@ def is_member(model: Model) -> bool:
 
 
 def check_one_dimensional(model: Model) -> None:
-    if not isinstance(model, Model):
-        raise ValueError(f"model must be an analogue.Model, got {type(model).__name__}")
+    checks.instance("model", model, Model, description="an analogue.Model")
     if model.spring > 0:
         raise ValueError("spring > 0: the state (x, v) is two-dimensional and has no exact solver "
                          "here; use analogue.montecarlo.simulate_sde as the reference")

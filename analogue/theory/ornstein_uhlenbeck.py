@@ -32,6 +32,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .. import checks
 from ..model import Model
 
 __all__ = [
@@ -41,8 +42,7 @@ __all__ = [
 
 
 def _check(model: Model) -> Model:
-    if not isinstance(model, Model):
-        raise ValueError(f"model must be an analogue.Model, got {type(model).__name__}")
+    checks.instance("model", model, Model, description="an analogue.Model")
     if model.delta != 0:
         raise ValueError(f"Ornstein-Uhlenbeck closed forms need delta == 0, got delta={model.delta!r}")
     return model

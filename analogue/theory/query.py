@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .. import checks
 from ..model import Model
 
 __all__ = [
@@ -224,8 +225,7 @@ def theory_table(model: Model, quantity: str, *, v: ArrayLike | None = None,
                  k: ArrayLike | None = None, tau: ArrayLike | None = None,
                  points: int | None = None, kind: str | None = None) -> TheoryTable:
     """Answer one query (see :data:`QUANTITIES`); ``None`` means "not given"."""
-    if not isinstance(model, Model):
-        raise TypeError(f"model must be an analogue.Model, got {type(model).__name__}")
+    checks.instance("model", model, Model, description="an analogue.Model")
     if quantity not in QUANTITIES:
         raise ValueError(f"quantity must be one of {', '.join(QUANTITIES)}, got {quantity!r}")
     q = QUANTITIES[quantity]
@@ -250,9 +250,8 @@ def theory_table(model: Model, quantity: str, *, v: ArrayLike | None = None,
         from . import weak_noise
         n = 50 if points is None else points
         # bounded: --points 100000000 ran past a minute (killed) instead of answering
-        if quantity == "path" and (isinstance(n, bool) or not isinstance(n, int)
-                                   or not 2 <= n <= 100_000):
-            raise ValueError(f"--points must be an integer in [2, 100000], got {points!r}")
+        if quantity == "path":
+            n = checks.integer("--points", n, minimum=2, maximum=100_000)
         rows = []
         for tt in _floats("t", t):
             for vv in _floats("v", v):

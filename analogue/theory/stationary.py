@@ -96,8 +96,7 @@ class StationaryMoments(Mapping[str, float]):
 
 
 def _check_model(model: object) -> None:
-    if not isinstance(model, Model):
-        raise ValueError(f"model must be an analogue.Model, got {type(model).__name__}")
+    checks.instance("model", model, Model, description="an analogue.Model")
 
 
 def _check_h(h: object) -> None:

@@ -47,6 +47,7 @@ from numpy.typing import ArrayLike
 from scipy.integrate import trapezoid
 from scipy.optimize.elementwise import find_root
 
+from .. import checks
 from ..checks import finite as _finite
 from ..model import Model
 from .weak_noise_pieces import (FloatOrArray, bridge, bridge_min, monotone_time, ou_action,
@@ -74,10 +75,7 @@ def _times(t: float, t0: float) -> tuple[float, float]:
 
 
 def _velocities(v: ArrayLike) -> np.ndarray:
-    arr = np.asarray(v, dtype=float)
-    if not np.all(np.isfinite(arr)):
-        raise ValueError("v must be finite")
-    return arr
+    return checks.finite_array("v", v)
 
 
 # ----------------------------------------------------------------------------- canonical frame
@@ -92,8 +90,7 @@ class _Frame:
 
     @classmethod
     def of(cls, model: Model) -> _Frame:
-        if not isinstance(model, Model):
-            raise ValueError(f"model must be an analogue.Model, got {type(model).__name__}")
+        checks.instance("model", model, Model, description="an analogue.Model")
         if model.cubic or model.stribeck is not None or model.spring or model.shot is not None:
             raise ValueError("analogue.theory.weak_noise is the paper's closed-form theory (cubic=0, "
                              "stribeck=None, spring=0, shot=None); for the family use "
@@ -388,8 +385,7 @@ def optimal_path(model: Model, v: float, t: float, v0: float, t0: float = 0.0,
     t, t0 = _times(t, t0)
     v0 = _finite("v0", v0)
     v = _finite("v", v)
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
-        raise ValueError(f"n must be an integer >= 2, got {n!r}")
+    n = checks.integer("n", n, minimum=2)
     fr = _Frame.of(model)
     T = t - t0
     vc, v0c = fr.flip * v, fr.flip * v0

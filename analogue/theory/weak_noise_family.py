@@ -53,6 +53,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import integrate
 
+from .. import checks
 from ..model import Model
 
 __all__ = ["quasi_potential", "direct_path", "direct_action", "indirect_action", "action",
@@ -60,8 +61,7 @@ __all__ = ["quasi_potential", "direct_path", "direct_action", "indirect_action",
 
 
 def _check(model: object) -> Model:
-    if not isinstance(model, Model):
-        raise ValueError(f"model must be an analogue.Model, got {type(model).__name__}")
+    model = checks.instance("model", model, Model, description="an analogue.Model")
     if not (model.dimension == 1 and model.shot is None):
         raise ValueError("the weak-noise theory applies to one-dimensional members with Gaussian "
                          "noise only (spring = 0, shot = None); see the module docstring")

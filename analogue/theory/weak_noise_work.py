@@ -35,6 +35,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import optimize
 
+from .. import checks
 from ..checks import finite as _finite, finite_array as _finite_array
 from ..model import Model
 
@@ -343,14 +344,10 @@ def work_optimal_path(model: Model, w: float, tau: float, v0: float, v: float,
     """
     _require_force(model)
     w = _finite("w", w)
-    tau = _finite("tau", tau)
-    if not tau > 0:
-        raise ValueError(f"tau must be > 0, got {tau!r}")
+    tau = checks.positive("tau", tau)
     v0 = _finite("v0", v0)
     v = _finite("v", v)
-    if int(n) != n or n < 2:
-        raise ValueError(f"n must be an integer >= 2, got {n!r}")
-    n = int(n)
+    n = checks.integer("n", n, minimum=2)
     target = w * tau / model.force
     rng = np.random.default_rng(12345)  # deterministic multi-start
     best: tuple[float, Any, Any, _Segments | None] = (math.inf, None, None, None)

@@ -60,6 +60,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import integrate, linalg, optimize
 
+from .. import checks
 from ..checks import finite_array as _finite_array
 from ..model import Model
 from .fokker_planck import Grid
@@ -88,8 +89,7 @@ _MAX_NODES = 2_000_000
 
 # ---------------------------------------------------------------------------- validation
 def _check_model(model: Model) -> Model:
-    if not isinstance(model, Model):
-        raise ValueError(f"model must be an analogue.Model, got {type(model).__name__}")
+    checks.instance("model", model, Model, description="an analogue.Model")
     return model
 
 
