@@ -109,7 +109,7 @@ def flag(name: str, value: object) -> bool:
     """True or False (numpy bools too), nothing else (not 0 or 1: a flag given as a number
     is a mistake)."""
     if not isinstance(value, (bool, np.bool_)):
-        raise ArgumentTypeError(f"{name} must be a bool (True or False), got {value!r}")
+        raise ArgumentTypeError(f"{name} must be True or False, got {value!r}")
     return bool(value)
 
 
@@ -118,8 +118,8 @@ def optional_flag(name: str, value: object, *, none_means: str) -> bool | None:
     if value is None:
         return None
     if not isinstance(value, (bool, np.bool_)):
-        raise ArgumentTypeError(f"{name} must be a bool (True or False) or None "
-                                f"({none_means}), got {value!r}")
+        raise ArgumentTypeError(f"{name} must be True, False or None ({none_means}), "
+                                f"got {value!r}")
     return bool(value)
 
 

@@ -58,7 +58,7 @@ def test_bad_values_name_the_parameter(kw, exc, needle):
 
 
 def test_shot_noise_validation():
-    with pytest.raises(TypeError, match="two_sided must be a bool"):
+    with pytest.raises(TypeError, match="two_sided must be True or False"):
         ShotNoise(1.0, 1.0, two_sided="yes")
     with pytest.raises(ValueError, match="shot.mean must be > 0"):
         ShotNoise(1.0, 0.0)
