@@ -10,8 +10,9 @@ role:
   prehistory);
 - ``stationary``: replicas started from the stationary law p_s (stationary law, work, sticking);
 - ``noise_free``: one replica per v0 at gamma = 1e8 (the deterministic motion, paper Fig. 1);
-- ``check_transition``, ``check_stationary``: the first deck of the two runs above again with
-  100x tighter tolerances on the same noise (the integration-error budget).
+- ``check_transition``, ``check_stationary``: the first decks of the two runs above again with
+  100x tighter tolerances on the same noise (the integration-error budget; the stationary one
+  over a prefix window of the run, ``meta["check_window"]``).
 """
 from __future__ import annotations
 

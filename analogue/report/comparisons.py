@@ -10,13 +10,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-import numpy as np
-
 from ..circuit.mapping import map_model
 from ..theory.exact import sample_stationary
 from .budget import SE_MULTIPLIER, held_noise_pair
 from .metrics import Budget, compare
-from ..estimators.resampling import jackknife, jackknife_difference, subset
+from ..estimators.resampling import jackknife, jackknife_difference
 from ..study.seeds import SeedPlan
 from ..study.catalogue import Kind, stationary_values, transition_observables, transition_values
 from .runs import ExperimentRuns
@@ -95,8 +93,7 @@ def analyse(runs: ExperimentRuns, *, theory: ExperimentTheory | None = None, pro
         band = jackknife_difference(fn, held, white)
         integ = {}
         if i == 0:
-            chk = runs.check_transition
-            integ = jackknife_difference(fn, chk, subset(ens, np.arange(chk.replicas)))
+            integ = jackknife_difference(fn, *runs.check_pair("transition"))
         for k, (val, se) in circ.items():
             b = Budget(smoothing=ex_eff[k] - ex[k], bandwidth=_bias(band, k),
                        integration=_bias(integ, k) if integ else 0.0)
@@ -135,8 +132,8 @@ def analyse(runs: ExperimentRuns, *, theory: ExperimentTheory | None = None, pro
                                   replicas=v0_mc.size, seed=seeds.mc_stationary, noise_dt=noise_dt,
                                   sample_dt=exp.sample_dt)
     band = jackknife_difference(stationary_fn, held, white)
-    chk = runs.check_stationary
-    integ = jackknife_difference(stationary_fn, chk, subset(ens, np.arange(chk.replicas)))
+    # the check covers a prefix window of the run: compared on the same rows and times
+    integ = jackknife_difference(stationary_fn, *runs.check_pair("stationary"))
     for k, (val, se) in circ.items():
         b = Budget(smoothing=ex_eff[k] - ex[k], bandwidth=_bias(band, k),
                    integration=_bias(integ, k))

@@ -9,19 +9,33 @@ so they are seeded, stored and resumable).
 - integration checks: the first decks of the transition and stationary runs again with
   100x tighter tolerances than the ones chosen for them (:mod:`analogue.circuit.tolerances`,
   recorded with the deck size in each ensemble's ``meta``) and a quarter of the step,
-  covering at least ``check_replicas`` replicas ([report]).  The held noise (``trrandom`` with ``.options seed``) is the same
-  realisation, so the path-by-path difference measures the integration error directly, with
-  no statistical noise.
+  covering at least ``check_replicas`` replicas ([report]).  The held noise (``trrandom`` with
+  ``.options seed``) is the same realisation, so the path-by-path difference measures the
+  integration error directly, with no statistical noise.  The stationary check runs over a
+  prefix window of the stationary run (:func:`stationary_check_plan`): ngspice draws the held
+  noise in time order, so a deck re-run with a shorter ``t_end`` retraces exactly the first
+  part of the nominal paths (measured: largest difference 0.0 over 32 replicas, t_end 5
+  against 20), and :meth:`ExperimentRuns.check_pair` gives the nominal paths on the same
+  rows and times.
+
+All decks of one experiment (nominal runs and checks) go to one pool of ``workers`` ngspice
+processes at once, the checks first (their decks are the longest), so every core stays busy
+(issue 10: the work report's stationary check alone was one 56 s deck on one core of two).
 
 Every circuit built here was validated when the experiment was loaded
 (:meth:`~analogue.circuit.experiments.Experiment.planned_circuits`).
 """
 from __future__ import annotations
 
+import concurrent.futures as cf
+import contextvars
+import math
 import os
+import threading
 import time
 from dataclasses import dataclass, field
 from typing import Any
+from collections.abc import Callable
 
 import numpy as np
 
@@ -33,7 +47,8 @@ from ..model import Model
 from ..study.seeds import SeedPlan
 from .plan import ReportSettings, RunOptions
 
-__all__ = ["ExperimentRuns", "run_experiment_runs", "first_deck_size", "check_plan"]
+__all__ = ["ExperimentRuns", "run_experiment_runs", "first_deck_size", "check_plan",
+           "stationary_check_plan", "head"]
 
 
 def first_deck_size(replicas: int, per_deck: int = DEFAULT_REPLICAS_PER_DECK) -> int:
@@ -58,6 +73,44 @@ def check_plan(replicas: int, want: int, per_deck: int = DEFAULT_REPLICAS_PER_DE
     return max(1, min(-(-want // size), equal)), size
 
 
+def stationary_check_plan(replicas: int, want: int, per_deck: int, t_end: float, *,
+                          burn_in: float, longest_window: float, sample_dt: float,
+                          workers: int = 1) -> tuple[int, int, float]:
+    """``(decks, size, window)``: the stationary integration check re-runs the first ``decks``
+    decks (of ``size`` replicas) of a nominal run of ``replicas`` replicas of length ``t_end``,
+    over the prefix window ``[0, window]``.
+
+    The rule: the check covers at least the usable replica-time of ``want`` replicas over the
+    whole run, ``decks * size * (window - lost) >= want * (t_end - lost)`` with ``lost =
+    burn_in + longest_window`` (the stationary observables are time averages after the
+    burn-in, the work rates over windows up to ``longest_window``: their integration
+    difference, and so its standard error, depends on that replica-time; measured on the
+    stick report, the term in units of the statistical error grows from 0.11 to 0.21 when the
+    same 16 check replicas cover half the run), spread over at least ``workers`` decks (a whole
+    number of rounds) where the nominal run has that many equal leading decks, so that the
+    check, the longest job of the report at 5x the nominal cost per unit time, runs on every
+    core.  The window is a whole number of ``sample_dt``, at most ``t_end``."""
+    n_decks = -(-replicas // per_deck)
+    q, r = divmod(replicas, n_decks)
+    size = q + (1 if r else 0)
+    equal = r if r else n_decks            # leading decks of that size
+    decks = max(1, -(-want // size), workers)
+    decks = -(-decks // workers) * workers  # a whole number of rounds on the workers
+    decks = min(decks, equal)
+    lost = min(burn_in + longest_window, t_end)
+    window = lost + want * (t_end - lost) / (decks * size)
+    steps = min(round(t_end / sample_dt), math.ceil(window / sample_dt - 1e-9))
+    return decks, size, steps * sample_dt
+
+
+def head(ens: Ensemble, t_end: float, replicas: int | None = None) -> Ensemble:
+    """The first ``replicas`` paths of ``ens`` on its grid up to ``t_end`` (inclusive, within
+    a hundredth of a sample step): the nominal counterpart of a check run."""
+    k = int(np.searchsorted(ens.t, ens.t[0] + t_end + 1e-2 * ens.dt, side="right"))
+    n = ens.replicas if replicas is None else replicas
+    return Ensemble(ens.t[:k], ens.v[:n, :k], ens.x[:n, :k], ens.meta)
+
+
 @dataclass
 class ExperimentRuns:
     exp: Experiment
@@ -67,9 +120,22 @@ class ExperimentRuns:
     stationary: Ensemble
     noise_free: Ensemble        # one replica per v0: the same circuit with the noise off
     check_transition: Ensemble  # tight-tolerance re-run of deck 0 of transition[v0[0]]
-    check_stationary: Ensemble  # ... and of the stationary run
+    check_stationary: Ensemble  # ... and of the first decks of the stationary run, on a
+                                # prefix window (stationary_check_plan)
     wall_time: float = 0.0
     seeds: dict = field(default_factory=dict)
+
+    def check_pair(self, kind: str) -> tuple[Ensemble, Ensemble]:
+        """``(check, nominal)`` on the same rows and times, row i of both driven by the same
+        noise: ``kind`` "transition" (the first v0's run) or "stationary" (its check covers
+        a prefix window of the run).  The integration budget is their paired difference."""
+        if kind == "transition":
+            chk, nom = self.check_transition, self.transition[self.exp.v0[0]]
+        elif kind == "stationary":
+            chk, nom = self.check_stationary, self.stationary
+        else:
+            raise ValueError(f"kind must be 'transition' or 'stationary', got {kind!r}")
+        return chk, head(nom, float(chk.t[-1] - chk.t[0]), chk.replicas)
 
     @property
     def model(self) -> Model:
@@ -106,7 +172,8 @@ def _noise_free_run(exp: Experiment, seed: int, kw: dict) -> Ensemble:
     deck = exp.noise_free_deck(seed=seed)
     times = time_grid(deck.t_end, exp.sample_dt)
     v0 = np.asarray(exp.v0, dtype=float)
-    run_kw: dict[str, Any] = {k: kw[k] for k in ("store", "workers", "scheduler", "progress", "timeout") if k in kw}
+    run_kw: dict[str, Any] = {k: kw[k] for k in ("store", "workers", "scheduler", "executor",
+                                                "progress", "timeout") if k in kw}
     v, x, _, info = run_decks([deck], times, v0, **run_kw)
     mapping = exp.noise_free_mapping()
     meta: dict[str, Any] = {"source": "circuit", "noise": "off", "model": exp.model.as_dict(),
@@ -137,14 +204,73 @@ def _choose(model, spec, replicas: int, t_end: float, kw: dict, check: int):
 
 
 def _check_coupled(nominal: Ensemble, check: Ensemble, what: str) -> None:
-    """The check run must retrace the nominal paths (same noise); anything else is a bug in
-    how the decks were matched, which would silently turn the integration estimate into noise."""
-    n = check.replicas
-    d = np.abs(check.v - nominal.v[:n])
-    spread = float(np.std(nominal.v[:n]))
+    """The check run must retrace the nominal paths (same noise) on its rows and times (a
+    prefix window of them for the stationary check); anything else is a bug in how the decks
+    were matched, which would silently turn the integration estimate into noise."""
+    nom = head(nominal, float(check.t[-1] - check.t[0]), check.replicas)
+    if nom.v.shape != check.v.shape:
+        raise RuntimeError(f"{what}: the tight-tolerance re-run has shape {check.v.shape}, "
+                           f"the nominal paths it should retrace {nom.v.shape}")
+    d = np.abs(check.v - nom.v)
+    spread = float(np.std(nom.v))
     if not np.isfinite(d).all() or float(np.median(d)) > 0.1 * spread:
         raise RuntimeError(f"{what}: the tight-tolerance re-run does not retrace the nominal "
                            "paths (noise not reproduced?); integration budget unavailable")
+
+
+class SharedPool(cf.Executor):
+    """One job's view of the experiment's deck pool: submits go to the shared pool (which the
+    caller owns and shuts down), and ``started`` is set at the job's first submit, so that the
+    jobs' decks queue in the order the jobs were started."""
+
+    def __init__(self, pool: cf.Executor):
+        self.pool = pool
+        self.started = threading.Event()
+
+    def submit(self, fn, /, *args, **kwargs):
+        fut = self.pool.submit(fn, *args, **kwargs)
+        self.started.set()
+        return fut
+
+    def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
+        pass  # the pool is the caller's
+
+
+def _run_jobs(jobs: list[tuple[str, Callable[..., Any]]], kw: dict) -> dict:
+    """Run ``jobs`` (name, fn(executor-kwargs) -> result) with every deck on one pool of
+    ``kw["workers"]`` ngspice processes, queued in the order given (longest first), and return
+    ``{name: result}``.  Each job runs in its own thread, which only waits for its decks, with
+    a copy of the caller's context, so the run store's key collectors
+    (:func:`analogue.circuit.store_index.collecting_keys`) see every deck.  The calling thread
+    holds :func:`analogue.circuit.ngspice.interrupt_guard` meanwhile (a signal kills every
+    ngspice process and raises there).  With a Dask scheduler address the jobs run one after
+    another on it (each simulate call connects on its own)."""
+    from ..circuit import ngspice as _ng
+    if kw.get("scheduler"):
+        return {name: fn({}) for name, fn in jobs}
+    workers = kw.get("workers") or os.cpu_count() or 1
+    out = {}
+    with _ng.interrupt_guard(), \
+            cf.ThreadPoolExecutor(max_workers=workers, thread_name_prefix="analogue-deck") as pool, \
+            cf.ThreadPoolExecutor(max_workers=len(jobs),
+                                  thread_name_prefix="analogue-run") as runner:
+        futures = {}
+        try:
+            for name, fn in jobs:
+                view = SharedPool(pool)
+                fut = runner.submit(contextvars.copy_context().run, fn, {"executor": view})
+                futures[name] = fut
+                # the next job's decks queue behind this one's (all from the store: none)
+                while not (view.started.wait(0.05) or fut.done()):
+                    pass
+            for name, fut in futures.items():
+                out[name] = fut.result()
+        except BaseException:
+            for fut in futures.values():
+                fut.cancel()
+            pool.shutdown(wait=False, cancel_futures=True)
+            raise
+    return out
 
 
 @indexing_runs  # the store's index by experiment (analogue store ls): every entry used
@@ -152,6 +278,7 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
                         settings: ReportSettings | None = None) -> ExperimentRuns:
     from ..circuit.simulate import simulate
     from ..theory.exact import sample_stationary
+    from .theory_curves import stationary_taus
 
     t_start = time.perf_counter()
     settings = (settings or exp.report).for_options(opts)
@@ -159,6 +286,7 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
     model, spec = exp.model, exp.spec
     model_eff = exp.mapping().model_effective
     replicas = opts.scaled(exp.replicas)
+    workers = kw.get("workers") or os.cpu_count() or 1
     # Each run gets its own seed, derived from the experiment's: distinct experiments (whose
     # seeds differ) never share a noise realisation, so their comparisons are independent.
     plan = SeedPlan(exp.seed)       # every seed of the report (analogue.study.seeds)
@@ -167,42 +295,66 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
     # Tolerances and deck sizes chosen here (not inside simulate) so that the integration
     # checks below integrate the very decks of the nominal runs 100x more tightly: each run
     # gets the tolerances its own size calls for (circuit.tolerances) and the deck size that
-    # makes it fastest (circuit.deck_size); both are recorded in the ensembles' meta.
+    # makes it fastest (circuit.deck_size); both are recorded in the ensembles' meta.  The
+    # stationary check covers the replica-time of check_replicas whole paths (below), so the
+    # tolerance chooser's model of the check's noise holds for it as for the transition check.
     n_stat = settings.stationary_replicas
     check = settings.check_replicas
     trans_spec, trans_deck, trans_why = _choose(model, spec, replicas, exp.t_end, kw, check)
     stat_spec, stat_deck, stat_why = _choose(model, spec, n_stat, settings.stationary_t_end, kw,
                                              check)
+    v0_stat = np.asarray(sample_stationary(model_eff, n_stat, seeds["stationary"]), dtype=float)
+    for i, v0 in enumerate(exp.v0):
+        seeds[f"transition v0={v0:g}"] = plan.transition(i)
+
+    v00 = exp.v0[0]
+    t_decks, t_size = check_plan(replicas, check, trans_deck)
+    taus = stationary_taus(exp, settings)
+    s_decks, s_size, s_window = stationary_check_plan(
+        n_stat, check, stat_deck, settings.stationary_t_end,
+        burn_in=settings.stationary_burn_in, longest_window=max(taus, default=0.0),
+        sample_dt=exp.sample_dt, workers=workers)
+    n1 = s_decks * s_size
+
+    def run(**args):
+        return lambda ex: simulate(model, sample_dt=exp.sample_dt, **args, **kw, **ex)
+
+    # Longest first: the checks (5x the nominal cost per unit time), the stationary run, the
+    # transition runs; the noise-free run (one short deck) last.
+    jobs: list[tuple[str, Callable[..., Any]]] = [
+        ("check_stationary", run(v0=v0_stat[:n1], t_end=s_window, replicas=n1,
+                                 seed=seeds["stationary"], circuit=exp.check_spec(stat_spec),
+                                 replicas_per_deck=s_size)),
+        ("check_transition", run(v0=v00, t_end=exp.t_end, replicas=t_decks * t_size,
+                                 seed=plan.transition(0), circuit=exp.check_spec(trans_spec),
+                                 replicas_per_deck=t_size)),
+        ("stationary", run(v0=v0_stat, t_end=settings.stationary_t_end, replicas=n_stat,
+                           seed=seeds["stationary"], circuit=stat_spec,
+                           replicas_per_deck=stat_deck)),
+    ]
+    jobs += [(f"transition {i}", run(v0=v0, t_end=exp.t_end, replicas=replicas,
+                                     seed=plan.transition(i), circuit=trans_spec,
+                                     replicas_per_deck=trans_deck))
+             for i, v0 in enumerate(exp.v0)]
+    jobs.append(("noise_free", lambda ex: _noise_free_run(exp, seeds["noise_free"], {**kw, **ex})))
+    done = _run_jobs(jobs, kw)
 
     transition = {}
     for i, v0 in enumerate(exp.v0):
-        seeds[f"transition v0={v0:g}"] = plan.transition(i)
-        transition[v0] = simulate(model, v0=v0, t_end=exp.t_end, replicas=replicas,
-                                  seed=plan.transition(i), sample_dt=exp.sample_dt, circuit=trans_spec,
-                                  replicas_per_deck=trans_deck, **kw)
+        transition[v0] = done[f"transition {i}"]
         transition[v0].meta.update(trans_why)  # simulate saw them as given: say why
-
-    v0_stat = np.asarray(sample_stationary(model_eff, n_stat, seeds["stationary"]), dtype=float)
-    stationary = simulate(model, v0=v0_stat, t_end=settings.stationary_t_end, replicas=n_stat,
-                          seed=seeds["stationary"], sample_dt=exp.sample_dt, circuit=stat_spec,
-                          replicas_per_deck=stat_deck, **kw)
+    stationary = done["stationary"]
     stationary.meta.update(stat_why)
-
-    noise_free = _noise_free_run(exp, seeds["noise_free"], kw)
-
-    v00 = exp.v0[0]
-    decks, size = check_plan(replicas, settings.check_replicas, trans_deck)
-    check_transition = simulate(model, v0=v00, t_end=exp.t_end, replicas=decks * size, seed=plan.transition(0),
-                                sample_dt=exp.sample_dt, circuit=exp.check_spec(trans_spec),
-                                replicas_per_deck=size, **kw)
+    check_transition, check_stationary = done["check_transition"], done["check_stationary"]
+    check_stationary.meta["check_window"] = {
+        "t_end": s_window, "decks": s_decks, "replicas": n1,
+        "rule": "replica-time after burn-in and the longest work window >= check_replicas "
+                "whole paths', over >= workers decks (analogue.report.runs."
+                "stationary_check_plan)"}
     _check_coupled(transition[v00], check_transition, "transition check")
-    decks, size = check_plan(n_stat, settings.check_replicas, stat_deck)
-    n1 = decks * size
-    check_stationary = simulate(model, v0=v0_stat[:n1], t_end=settings.stationary_t_end,
-                                replicas=n1, seed=seeds["stationary"], sample_dt=exp.sample_dt,
-                                circuit=exp.check_spec(stat_spec), replicas_per_deck=size, **kw)
     _check_coupled(stationary, check_stationary, "stationary check")
     return ExperimentRuns(exp=exp, settings=settings, quick=opts.quick, transition=transition,
-                          stationary=stationary, noise_free=noise_free,
+                          stationary=stationary, noise_free=done["noise_free"],
                           check_transition=check_transition, check_stationary=check_stationary,
                           wall_time=time.perf_counter() - t_start, seeds=seeds)
+
