@@ -22,6 +22,7 @@ import json
 import os
 from pathlib import Path
 
+from . import checks
 from .ensemble import Ensemble
 
 __all__ = ["ROLES", "export_experiment", "find_metrics", "load_runs", "metrics_rows",
@@ -58,9 +59,7 @@ def load_runs(experiment, *, quick: bool = False, store=None, workers: int | Non
     from .report.plan import RunOptions
     from .report.runs import run_experiment_runs
 
-    for name, flag in (("quick", quick), ("progress", progress)):
-        if not isinstance(flag, bool):
-            raise TypeError(f"{name} must be True or False, got {flag!r}")
+    quick, progress = checks.flag("quick", quick), checks.flag("progress", progress)
     exp = load_experiment(experiment)
     opts = RunOptions(workers=workers, scheduler=scheduler,
                       store=None if store is None else Path(store), quick=quick,

@@ -35,6 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import checks
 from .rawfile import RawPlot, read_raw
 
 __all__ = [
@@ -439,9 +440,7 @@ def run_deck(text: str, *, timeout: float = 3600.0, t_stop: float | None = None,
     group : any hashable; the process can be stopped by :func:`terminate_group` (group).
     """
     check_deck(text)
-    if isinstance(timeout, bool) or not isinstance(timeout, (int, float)) \
-            or not (timeout > 0 and np.isfinite(timeout)):
-        raise ValueError(f"timeout must be a number of seconds > 0, got {timeout!r}")
+    timeout = checks.positive("timeout (seconds)", timeout)
     exe = find_ngspice()
     version = _version_of(exe)
     if not _SWEPT:

@@ -40,6 +40,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import checks
+
 __all__ = ["DiodePart", "PARTS", "IDEAL_IS", "ideal_diode", "get_part", "thermal_voltage",
            "bridge_current", "bridge_voltage", "REFERENCE_TEMPERATURE"]
 
@@ -123,10 +125,8 @@ def ideal_diode(emission: float, saturation_current: float = IDEAL_IS) -> DiodeP
     """A Shockley diode with ``RS = 0``, ``CJO = 0``, no breakdown, emission coefficient
     ``N = emission`` (any N > 0: it only sets the tanh width ``2 N V_T``) and
     ``IS = saturation_current`` (any IS > 0: the bridge amplitude is ``I0 + 2 IS``)."""
-    if not (math.isfinite(emission) and emission > 0):
-        raise ValueError(f"emission coefficient N must be finite and > 0, got {emission!r}")
-    if not (math.isfinite(saturation_current) and saturation_current > 0):
-        raise ValueError(f"saturation_current IS must be finite and > 0, got {saturation_current!r}")
+    emission = checks.positive("emission coefficient N", emission)
+    saturation_current = checks.positive("saturation_current IS", saturation_current)
     return DiodePart(name="ideal", source="ideal Shockley diode (RS=0, CJO=0, no breakdown)",
                      model=(("IS", float(saturation_current)), ("N", float(emission))), rp=None,
                      max_forward_current=math.inf, max_reverse_voltage=math.inf)

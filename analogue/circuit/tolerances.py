@@ -350,11 +350,8 @@ def choose_tolerances(model: Model, spec: CircuitSpec | None = None, *, replicas
     t_end = checks.positive("t_end", t_end)
     if not (isinstance(fraction, (int, float)) and 0 < fraction <= 1):
         raise ValueError(f"fraction must be in (0, 1], got {fraction!r}")
-    if check_replicas is not None and (isinstance(check_replicas, bool)
-                                       or not isinstance(check_replicas, int)
-                                       or check_replicas < 1):
-        raise ValueError(f"check_replicas must be None or an integer >= 1, got "
-                         f"{check_replicas!r}")
+    if check_replicas is not None:
+        check_replicas = checks.integer("check_replicas", check_replicas, minimum=1)
     unset = spec.unset_tolerances
     if not unset:
         assert spec.reltol is not None and spec.trtol is not None and spec.method is not None

@@ -22,6 +22,7 @@ from collections.abc import Iterable
 
 from scipy import optimize
 
+from .. import checks
 from ..model import Model
 from .fokker_planck import Grid
 
@@ -66,8 +67,8 @@ def resolved_grid(model: Model, extra: Iterable[float] = (), h: float | None = N
             h = min(h, kink * 20.0 / points_per_width)
         if t_min is not None and t_min > 0:
             h = min(h, math.sqrt(2.0 * t_min / model.gamma) / 10.0)
-    elif not (math.isfinite(h) and h > 0):
-        raise ValueError(f"h must be finite and > 0, got {h!r}")
+    else:
+        h = checks.positive("h", h)
     grid = Grid.span(lo, hi, h)
     if grid.n > max_nodes:
         raise ValueError(f"the grid would need {grid.n} nodes (> {max_nodes}); pass a coarser h "

@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import sparse
 
+from .. import checks
 from ..model import Model
 
 __all__ = ["Grid", "bernoulli", "generator", "symmetric_generator"]
@@ -36,8 +37,7 @@ class Grid:
     i_max: int
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.h) and self.h > 0):
-            raise ValueError(f"grid spacing h must be finite and > 0, got {self.h!r}")
+        object.__setattr__(self, "h", checks.positive("grid spacing h", self.h))
         if not self.i_min < 0 < self.i_max:
             raise ValueError("grid must contain v = 0 strictly inside (i_min < 0 < i_max)")
 

@@ -315,9 +315,7 @@ def theory_table(model: Model, quantity: str, *, v: ArrayLike | None = None,
     # work-pdf
     from . import exact
     ws = _floats("w", w)
-    if not (isinstance(tau, (int, float)) and not isinstance(tau, bool) and tau > 0
-            and math.isfinite(tau)):
-        raise ValueError(f"--tau must be a finite number > 0, got {tau!r}")
+    tau = checks.positive("--tau", tau)
     vals = np.ravel(exact.work_pdf(model, ws, tau))
     return table(["w", "P_tau(w)"], [[float(a), float(b)] for a, b in zip(ws, vals)])
 

@@ -100,8 +100,8 @@ def _check_model(model: object) -> None:
 
 
 def _check_h(h: object) -> None:
-    if h is not None and not (isinstance(h, (int, float, np.floating)) and math.isfinite(h) and h > 0):
-        raise ValueError(f"h must be None or a finite number > 0, got {h!r}")
+    if h is not None:
+        checks.positive("h", h)
 
 
 # ---------------------------------------------------------------- truncated Gaussians (eps = 0)
