@@ -41,6 +41,9 @@ The ``[model]`` and ``[circuit]`` keys are the fields of :class:`analogue.Model`
 :class:`~analogue.circuit.mapping.CircuitSpec` (read from the dataclasses, so new fields are
 accepted as they are added); the values are validated by those classes.  A nested table
 (``[model.shot]``) becomes the dataclass its field is annotated with (e.g. ``ShotNoise``).
+An experiment needs noise: ``gamma = inf`` (TOML ``inf``) switches the Gaussian noise off and
+is accepted only together with a ``[model.shot]`` table; without one the file is refused when
+it is loaded, naming both keys.
 
 Experiment names resolve from ``./circuits/<name>.toml`` first, then from the standard
 circuits shipped with the package (``analogue/circuits/`` in an installed wheel, copied from
