@@ -11,6 +11,11 @@ k = 0, ``work_pdf(..., share=False)``), the new one, their ratio and the largest
 3. work_pdf on 30 w over +-4 sd per window tau (Fig. 8 and OU, gamma = 10; the report's
    range): per-w contours -> shared contours; for OU also the error against the closed form.
 4. The theory cache: cold call, warm call (read from disk).
+6. The report's exact transition propagators (stick, slip, work: every start, ideal and
+   smoothed model, the histogram times): the old "auto" route (eigen-decomposition, or
+   expm_multiply then eigen for starts in the tail) against the contour route (Talbot
+   contour, complex tridiagonal solves), CPU seconds and the largest difference relative to
+   the peak (and relative, where the density exceeds 1e-6 of the peak).
 5. work_pdf's contour generating function: eigen-decomposition (``propagator="eig"``) vs
    batched Pade matrix exponential (``"expm"``, default) on the report's range, with the
    load average printed (2 cores shared by other jobs: times are comparable only side by side).
@@ -148,9 +153,46 @@ def bench_propagator(quick):
                   f"{np.max(np.abs(new / old - 1)):12.1e} {err:>18} {load:5.1f}")
 
 
+def bench_transition(quick):
+    from analogue.circuit.experiments import load_experiment
+    from analogue.theory.exact_grid import resolved_grid
+    from analogue.theory.fokker_planck import symmetric_generator
+    from analogue.theory.propagation import (EIGEN_MAX_HALF_LOG_RANGE, amplification,
+                                             contour_nodes, initial_delta, propagate)
+    print("\n6. transition propagators of the report (old: eigen / hybrid; new: contour), CPU s")
+    print(f"{'case':<30} {'n':>5} {'amp':>5} {'N':>3} {'old [s]':>8} {'new [s]':>8} "
+          f"{'max|d|/peak':>11} {'rel >1e-6':>9} {'load':>5}")
+    tot_old = tot_new = 0.0
+    for name in ("stick", "slip", "work"):
+        exp = load_experiment(name)
+        eff = exp.mapping().model_effective
+        h = eff.epsilon / 2 if eff.epsilon > 0 else None
+        times = np.asarray(exp.histogram_times, dtype=float)
+        for model in (exp.model, eff):
+            for v0 in exp.v0:
+                grid = resolved_grid(model, extra=(v0,), h=h, t_min=float(times.min()))
+                p0 = initial_delta(grid, v0)
+                amp = amplification(symmetric_generator(model, grid)[2], p0)
+                old_method = "eigen" if amp <= EIGEN_MAX_HALF_LOG_RANGE else "hybrid"
+                c0 = time.process_time()
+                old = propagate(model, grid, p0, times, method=old_method)
+                c1 = time.process_time()
+                new = propagate(model, grid, p0, times)
+                c2 = time.process_time()
+                tot_old += c1 - c0
+                tot_new += c2 - c1
+                peak = old.max(axis=1, keepdims=True)
+                big = old > 1e-6 * peak
+                print(f"{name + f' eps={model.epsilon:.3g} v0={v0:g}':<30} {grid.n:5d} {amp:5.1f} "
+                      f"{contour_nodes(amp):3d} {c1 - c0:8.2f} {c2 - c1:8.3f} "
+                      f"{np.max(np.abs(new - old) / peak):11.1e} "
+                      f"{np.max(np.abs(new[big] / old[big] - 1)):9.1e} {os.getloadavg()[0]:5.1f}")
+    print(f"{'total':<30} {'':>5} {'':>5} {'':>3} {tot_old:8.2f} {tot_new:8.3f}")
+
+
 def main(quick=False, only=None):
     sections = {"1": bench_rate, "2": bench_gamma, "3": bench_pdf, "4": lambda q: bench_cache(),
-                "5": bench_propagator}
+                "5": bench_propagator, "6": bench_transition}
     for key, run in sections.items():
         if only is None or key in only:
             run(quick)
