@@ -87,8 +87,9 @@ def test_shot_plus_gaussian_matches_kolmogorov_feller():
 
 
 @pytest.mark.slow
-def test_cubic_shot_rk4_event_driven_matches_kolmogorov_feller():
-    # measured (seed 1): z = 0.15 (mean), -0.05 (var), p0 0.362 +- 0.008 vs 0.3644
+def test_cubic_shot_event_driven_matches_kolmogorov_feller():
+    # (tabulated flow between kicks; with the former RK4 route, seed 1: z = 0.15 (mean),
+    # -0.05 (var), p0 0.362 +- 0.008 vs 0.3644)
     _stationary_check(Model(1.0, 0.7, 0.2, INF, shot=ShotNoise(2.0, 0.3), cubic=0.5), 60.0, 100,
                       20.0, seed=1)
 

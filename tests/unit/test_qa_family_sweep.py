@@ -257,7 +257,8 @@ def test_exact_theory_refuses_spring_and_noise_free_members_naming_the_field():
 
 # ------------------------------------------------------------------ Monte Carlo (slow)
 # Members whose flow between kicks has a closed form (no cubic/Stribeck): the event-driven MC
-# is then exact and fast (RK4 between kicks took 21 s for 200 replicas over 10 tau_m).
+# is then exact and fast (the other 1-D members use the tabulated flow, ~1e-9; RK4 between
+# kicks, still used with a spring, took 21 s for 200 replicas over 10 tau_m).
 MC = [
     # stick regime: the atom at 0; one-sided, small rate*mean
     dict(tau_m=1.0, delta=0.5, a=0.2, gamma=INF, shot=ShotNoise(0.8, 0.3)),
