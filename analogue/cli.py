@@ -178,7 +178,7 @@ class _Group(click.Group):
             ctx.exit(exit_code(exc))
 
 
-def _floats(text, name: str):
+def _floats(name: str, text):
     if not text:
         return None
     if isinstance(text, (tuple, list)):  # repeated option: --w 0 --w 2
@@ -201,9 +201,9 @@ def _floats(text, name: str):
 _MAX_MAGNITUDE = 1e12
 
 
-def _magnitude(value, name: str):
+def _magnitude(name: str, value):
     """A single number option: as :func:`_floats` (finite, at most 1e12 in magnitude)."""
-    return None if value is None else _floats(repr(value), name)[0]
+    return None if value is None else _floats(name, repr(value))[0]
 
 
 @click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
@@ -565,13 +565,13 @@ Examples:
               help="Final velocities, comma-separated (or repeat the option).")
 @click.option("--t", "t", multiple=True, metavar="T[,T...]",
               help="Times, comma-separated (or repeat the option).")
-@click.option("--v0", type=float, default=None, callback=lambda c, p, x: _magnitude(x, "--v0"),
+@click.option("--v0", type=float, default=None, callback=lambda c, p, x: _magnitude("--v0", x),
               help="Initial velocity.")
 @click.option("--w", "w", multiple=True, metavar="W[,W...]",
               help="Work rates, comma-separated (or repeat the option).")
 @click.option("--k", "k", multiple=True, metavar="K[,K...]",
               help="Tilts for the SCGF, comma-separated (or repeat the option).")
-@click.option("--tau", type=float, default=None, callback=lambda c, p, x: _magnitude(x, "--tau"),
+@click.option("--tau", type=float, default=None, callback=lambda c, p, x: _magnitude("--tau", x),
               help="Work time window.")
 @click.option("--points", type=int, default=None,
               help="Points along an optimal path (path only; default 50).")
@@ -599,8 +599,8 @@ def theory(quantity, experiment_arg, experiment, tau_m, delta, a, gamma, mass, e
         raise click.UsageError("missing model parameter(s): "
                                + ", ".join("--" + m.replace("_", "-") for m in missing))
     model = Model(**params)
-    tab = theory_table(model, quantity, v=_floats(v, "--v"), t=_floats(t, "--t"), v0=v0,
-                       w=_floats(w, "--w"), k=_floats(k, "--k"), tau=tau, points=points,
+    tab = theory_table(model, quantity, v=_floats("--v", v), t=_floats("--t", t), v0=v0,
+                       w=_floats("--w", w), k=_floats("--k", k), tau=tau, points=points,
                        kind=kind)
     if as_json:
         click.echo(json.dumps(tab.as_json(model), indent=2, allow_nan=False))
