@@ -55,7 +55,7 @@ _Solve = Callable[[np.ndarray], np.ndarray]   # b -> x of a factorised linear sy
 
 __all__ = ["is_member", "stationary_law", "stationary_moments", "propagator", "propagator_atom",
            "scgf", "rate_function", "check_one_dimensional", "unkicked", "sample_stationary",
-           "autocorrelation", "scgf_domain", "rate_function_asymptote"]
+           "autocorrelation", "scgf_domain", "rate_function_asymptote", "work_edge"]
 
 
 def is_member(model: Model) -> bool:
@@ -485,29 +485,42 @@ def _principal(g: ShotGrid, pot: np.ndarray, guess: float, scale: float) -> floa
     sigma > lambda_max every other eigenvalue is farther from sigma
     (|sigma - lambda_2| >= sigma - Re lambda_2 > sigma - lambda_max), so the iteration
     converges to the Perron root; ``(sigma - L_k)^{-1}`` is applied through the banded form
-    ``N (sigma - L_k)`` (one sparse LU).  The shift starts at ``guess + scale`` and is raised
-    until the limit vector is nonnegative and below sigma."""
+    ``N (sigma - L_k)`` (one sparse LU).
+
+    The root is bracketed: L conserves mass (columns sum to 0), so it is at most ``max pot``,
+    and at least the largest diagonal entry, ``>= max(pot + diag(base) - rate)``.  The shift
+    starts at ``min(guess + scale, max pot)`` (just above), is raised when the limit is not a
+    nonnegative vector below sigma, and moved towards the estimate when 300 iterations do not
+    converge (a shift far above the root converges slowly: circuits/shot.toml at k = -1000
+    started 6500 above it and returned -11.4, below the bound -rate = -1)."""
     n = g.n
     N = g.premultiplier if g.premultiplier is not None else sparse.identity(n, format="csc")
     NLk = (g.banded_L() + N @ sparse.diags(pot)).tocsc()
-    margin = scale
-    for _ in range(8):
-        sigma = guess + margin
+    rate = g.shot.rate if g.shot is not None else 0.0
+    upper = float(pot.max())
+    lower = float(np.max(pot + g.base.diagonal() - rate))
+    tiny = 1e-9 * max(1.0, abs(upper), upper - lower)
+    sigma = max(min(guess + scale, upper + tiny), lower + tiny)
+    for _ in range(24):
         solve = _factor(sigma * N - NLk)
         x = np.ones(n) / n
-        lam = sigma
-        for _ in range(500):
+        lam, converged = sigma, False
+        for _ in range(300):
             y = solve(N @ x)
             ratio = y.sum() / x.sum()
             lam_new = sigma - 1.0 / ratio
             x = y / y.sum()
             if abs(lam_new - lam) <= 1e-13 * max(1.0, abs(lam_new), scale):
-                lam = lam_new
+                lam, converged = lam_new, True
                 break
             lam = lam_new
-        if lam < sigma and x.min() >= -1e-10 * x.max():
+        valid = lower - tiny <= lam < sigma and x.min() >= -1e-10 * x.max()
+        if converged and valid:
             return float(lam)
-        margin *= 4.0
+        if valid:  # slow: the shift is far above the root; move it towards the estimate
+            sigma = max(lam + 0.1 * (sigma - lam), lower + tiny)
+        else:  # the shift is below the root: raise it (never above the bound)
+            sigma = min(sigma + max(4.0 * (sigma - lower), scale), upper + tiny)
     raise RuntimeError(f"inverse iteration for the SCGF (shift {guess:g}) did not converge")
 
 
@@ -582,6 +595,27 @@ def _potential(model: Model, g: ShotGrid, c: float, const: float) -> np.ndarray:
     return np.asarray(pot, dtype=float)
 
 
+def _recurrent_only(model: Model, g: ShotGrid, pot: np.ndarray) -> np.ndarray:
+    """``pot`` with the transient states pushed far below: with one-sided pure shot noise the
+    states below ``v_edge`` (:func:`work_edge`) are transient, and since nothing flows back to
+    them the tilted generator is block triangular, its spectrum the union of the two blocks'.
+    The SCGF (from any recurrent start) is the recurrent block's Perron root, but the
+    transient block's can be larger (Delta = 0, a tau_m = 0.5, k F = -300: cells below 0.5
+    carry k F v ~ 0 against lambda = -152), so that block is moved out of the way."""
+    edge = work_edge(model)
+    if edge is None:
+        return pot
+    v_edge = edge / _force(model)
+    cells = g.v[:-1] if g.atom else g.v
+    transient = np.r_[cells + 0.5 * g.h <= v_edge + 1e-9 * g.h, [v_edge > 0]] if g.atom \
+        else cells + 0.5 * g.h <= v_edge + 1e-9 * g.h
+    if not transient.any():
+        return pot
+    spread = float(np.abs(pot).max()) + 10.0 * float(np.abs(g.base.diagonal()).max())
+    out: np.ndarray = np.where(transient, float(pot.min()) - spread - 1.0, pot)
+    return out
+
+
 class _Scgf:
     """lambda(k) of one member on the grids h and h/2 (built once), Richardson-combined.
     With one-sided kicks and ``k F > 0`` on the grids of the kick-transformed member
@@ -615,8 +649,8 @@ class _Scgf:
         # only costs retries: :func:`_principal` checks what it converged to)
         guess = k * self.mean_w + k * k * self.curv
         scale = 0.1 * abs(guess) + 0.1 * (abs(k * F) * self.sd + 1.0 / model.tau_m)
-        a = _principal(self.fine[0], k * F * self.fine[0].v, guess, scale)
-        b = _principal(self.fine[1], k * F * self.fine[1].v, guess, scale)
+        a, b = (_principal(g, _recurrent_only(model, g, k * F * g.v), guess, scale)
+                for g in self.fine)
         return (w * b - a) / (w - 1.0)
 
     def _transformed(self, c: float, w: float) -> float:
@@ -639,7 +673,7 @@ class _Scgf:
         vals = []
         for hh in (ht, ht / 2.0):
             g = shot_generator(tm, hh)
-            pot = _potential(model, g, c, const)
+            pot = _recurrent_only(model, g, _potential(model, g, c, const))
             # lambda <= max V (L is a generator); start just above it
             top, spread = float(pot.max()), float(pot.max() - pot.min())
             vals.append(_principal(g, pot, top, 1e-3 * spread + 0.1 / model.tau_m))
@@ -679,11 +713,30 @@ def scgf(model: Model, k: ArrayLike, *, h: float | None = None) -> np.ndarray:
     return np.array([solver(float(kk)) for kk in k.ravel()]).reshape(k.shape)
 
 
+def work_edge(model: Model) -> float | None:
+    """The edge ``F v_edge`` of the work rate's support with one-sided pure shot noise, None
+    otherwise.  Kicks only push up and the flow from above ends at the highest attractor
+    ``v_edge`` (a sliding zero of the drift, or the stuck state 0), so the recurrent velocities
+    are ``>= v_edge`` and ``W/tau`` lies on one side of ``F v_edge``.  At the edge
+    ``lambda(k) - k F v_edge -> -rate`` as ``k F -> -inf`` (``E e^{c z} -> 0``), so the rate
+    function there is ``rate`` (no kick at all), and +inf beyond (Delta = 0: the closed form
+    ``(sqrt(B) - sqrt(rate))^2`` at ``B = 0``)."""
+    check_one_dimensional(model)
+    shot = model.shot
+    if shot is None or shot.two_sided or math.isfinite(model.gamma):
+        return None
+    from .kolmogorov_feller import has_atom
+    cands = [float(z) for z in stable_zeros(model)] + ([0.0] if has_atom(model) else [])
+    v_edge = max(cands) if cands else float(model.attractor)
+    return _force(model) * v_edge
+
+
 def rate_function(model: Model, w: ArrayLike, *, h: float | None = None) -> np.ndarray:
     """Rate function of the work rate w (module docstring for the scaling), by the Legendre
     transform of :func:`scgf`, maximising the concave ``k w - lambda(k)`` over k in
     :func:`scgf_domain` (with one-sided kicks the SCGF is steep at its pole, so this is finite
-    for every large w and asymptotically linear, :func:`rate_function_asymptote`).  NaN where
+    for every large w and asymptotically linear, :func:`rate_function_asymptote`; at the other
+    edge of the support, :func:`work_edge`, it is ``rate``, +inf beyond).  NaN where
     no maximiser is found for |k| up to 2^40 times the Gaussian guess (w at or beyond the
     edge of the work's support)."""
     check_one_dimensional(model)
@@ -699,10 +752,15 @@ def rate_function(model: Model, w: ArrayLike, *, h: float | None = None) -> np.n
     # Gaussian guess lambda(k) ~ k <w> + k^2 F^2 D_x: the maximiser is near (w - <w>)/(2 F^2 D_x)
     curv = 2.0 * F * F * max(mom.diffusion, 1e-12)
     solver = _Scgf(model, h)
+    edge = work_edge(model)
     out = np.empty(w.size)
     for i, wi in enumerate(w.ravel()):
         if wi == mean:
             out[i] = 0.0
+            continue
+        if edge is not None and F * (wi - edge) <= 0.0:
+            # at the edge: no kick for the whole time (probability e^{-rate tau}); beyond: none
+            out[i] = model.shot.rate / scale if wi == edge else math.inf  # type: ignore[union-attr]
             continue
         def obj(kk: float, wi: float = float(wi)) -> float:  # convex in k
             return -(kk * wi - float(solver(kk)))

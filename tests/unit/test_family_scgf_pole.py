@@ -137,3 +137,36 @@ def test_coulomb_shot_scgf_against_monte_carlo():
     ext = 2 * est[1][0] - est[0][0]
     se = math.hypot(2 * est[1][1], est[0][1])
     assert abs(ext - float(family.scgf(m, k))) < 4 * se
+
+
+def test_scgf_far_below_zero_respects_the_metzler_bounds_and_the_closed_form():
+    """k F -> -inf: the kicks' generating function -> 0, so lambda(k) -> k F v_edge - rate from
+    above; for the sticking member v_edge = 0 and lambda decreases to -rate = -1 (the former
+    shift gave lambda(-1000) = -11.4 and lambda(-1e4) = -1478).  Delta = 0 against the closed
+    form at k F = -300."""
+    m = SHOT
+    lam = family.scgf(m, [-10.0, -100.0, -1000.0, -1e4])
+    assert np.all(np.diff(lam) < 0) and np.all(lam > -1.0) and lam[-1] < -0.95
+    ou = Model(1.0, 0.0, 0.5, INF, shot=ShotNoise(2.0, 0.3))
+    k = -300.0 / ou.force
+    ref = k * ou.force * 0.5 + 2.0 * (1.0 / (1.0 - k * ou.force * 0.3) - 1.0)
+    assert float(family.scgf(ou, k)) == pytest.approx(ref, rel=1e-4)
+
+
+def test_rate_function_at_and_beyond_the_lower_edge_of_the_work():
+    """One-sided kicks: the recurrent velocities are >= v_edge (the highest attractor), so
+    W/tau >= F v_edge, J(F v_edge) = rate (no kick at all) and +inf below.  Delta = 0: the
+    closed form (sqrt(B) - sqrt(rate))^2 (B = (w - F a tau) k_pole) near the edge too."""
+    m = SHOT
+    assert family.work_edge(m) == 0.0
+    J = family.rate_function(m, [-1e-3, 0.0, 1e-5, 1e-3])
+    assert J[0] == INF and J[1] == 1.0 and 0.0 < J[3] < J[2] < 1.0
+    ou = Model(1.0, 0.0, 0.5, INF, shot=ShotNoise(2.0, 0.3))
+    kp, lam = family.rate_function_asymptote(ou)
+    edge = family.work_edge(ou)
+    assert edge == pytest.approx(ou.force * 0.5)
+    w = edge + np.array([0.0, 1e-3, 1e-2])
+    ref = (np.sqrt((w - edge) * kp) - math.sqrt(lam)) ** 2
+    assert np.allclose(family.rate_function(ou, w), ref, rtol=2e-4)
+    assert family.work_edge(Model(1.0, 0.5, 0.2, INF, shot=ShotNoise(1.0, 0.5, True))) is None
+    assert family.work_edge(Model(1.0, 0.5, 0.2, 5.0, shot=ShotNoise(1.0, 0.5))) is None
