@@ -147,11 +147,8 @@ def fig5_boundaries(axes=None, tau_m=1.0, delta=0.7, a=0.2, v0s=(2.0, -2.0), t_m
         ax.axvline(t_a, color="0.5", ls=":", lw=1)
         ax.annotate("$t_a$", (t_a, 1.0), xycoords=("data", "axes fraction"), ha="center",
                     va="bottom", fontsize=8)
-        end = weak_noise.boundaries(m, np.array([t_end]), v0)
-        w_end, u_end = float(end["w"][0]), float(end["u"][0])
-        # above/below the stick band: direct / direct crossing; u/2 lies in the band on the
-        # side opposite to v0: indirect crossing (the caption's green path)
-        for v_end in (max(w_end, u_end) + margin, min(w_end, u_end) - margin, 0.5 * u_end):
+        # one path of each kind around the boundaries (the caption's green path: u/2)
+        for v_end in weak_noise.boundary_examples(m, t_end, v0, margin).values():
             p = weak_noise.optimal_path(m, v_end, t_end, v0, n=600)
             ax.plot(p.s, p.v, color=KIND_COLOURS.get(p.kind, "k"), lw=1.8, label=f"{p.kind} path")
         _zero_line(ax)

@@ -53,7 +53,7 @@ from ..model import Model
 from .weak_noise_pieces import (FloatOrArray, bridge, bridge_min, monotone_time, ou_action,
                                 ou_action_rate)
 
-__all__ = ["action", "optimal_path", "OptimalPath", "boundaries", "propagator", "Lambda",
+__all__ = ["action", "optimal_path", "OptimalPath", "boundaries", "boundary_examples", "propagator", "Lambda",
            "crossing_time", "lagrangian", "KINDS",
            "rate_function", "fluctuation_relation", "work_optimal_path"]
 
@@ -513,6 +513,26 @@ def boundaries(model: Model, t: ArrayLike, v0: float,
     if t_arr.ndim == 0:
         return {k: float(x) for k, x in out.items()}
     return out
+
+
+def boundary_examples(model: Model, t: float, v0: float, margin: float = 0.8,
+                      t0: float = 0.0) -> dict[str, float]:
+    """Final velocities at time t of one optimal path of each kind around the boundary lines
+    of :func:`boundaries` (paper, Fig. 5; stick regime ``|a| <= Delta``, ``t >= t_a``): beyond
+    the stick band ``[min(w, u), max(w, u)]`` by ``margin`` on the side of v0 a direct path,
+    on the other side a direct-crossing one, and ``u/2`` (inside the band, between u and 0 on
+    the side opposite to v0) an indirect-crossing one.  Keys are names of :data:`KINDS`; the
+    tests check that :func:`optimal_path` has that kind at each velocity."""
+    if not abs(model.a) <= model.delta:
+        raise ValueError(f"boundary_examples needs the stick regime |a| <= Delta, got a={model.a!r}, "
+                         f"Delta={model.delta!r}")
+    b = boundaries(model, float(t), v0, t0)
+    w, u = float(b["w"]), float(b["u"])
+    if math.isnan(w) or math.isnan(u):
+        raise ValueError(f"t={t!r} is before the stick time t_a: the boundaries do not exist yet")
+    above, below = max(w, u) + margin, min(w, u) - margin
+    same, other = (above, below) if v0 >= 0 else (below, above)
+    return {"direct": same, "direct-crossing": other, "indirect-crossing": 0.5 * u}
 
 
 def propagator(model: Model, v: ArrayLike, t: float, v0: float,
