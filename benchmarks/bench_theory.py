@@ -16,6 +16,9 @@ k = 0, ``work_pdf(..., share=False)``), the new one, their ratio and the largest
    expm_multiply then eigen for starts in the tail) against the contour route (Talbot
    contour, complex tridiagonal solves), CPU seconds and the largest difference relative to
    the peak (and relative, where the density exceeds 1e-6 of the peak).
+7. Stationary work variances of the report (work experiment, ideal and smoothed model, its
+   four windows): Simpson on 801 lags of the spectral autocorrelation (old) against the
+   closed form (Poisson solve + Talbot contour, stationary.integrated_autocorrelation).
 5. work_pdf's contour generating function: eigen-decomposition (``propagator="eig"``) vs
    batched Pade matrix exponential (``"expm"``, default) on the report's range, with the
    load average printed (2 cores shared by other jobs: times are comparable only side by side).
@@ -190,9 +193,29 @@ def bench_transition(quick):
     print(f"{'total':<30} {'':>5} {'':>5} {'':>3} {tot_old:8.2f} {tot_new:8.3f}")
 
 
+def bench_work_variance(quick):
+    from analogue.circuit.experiments import load_experiment
+    print("\n7. work_variance of the work experiment (old: Simpson, 801 lags; new: closed form)")
+    print(f"{'model':<22} {'old [s]':>8} {'new [s]':>8} {'max rel diff':>12} {'old n=12801 vs new':>18}")
+    exp = load_experiment("work")
+    taus = np.asarray(exp.work_taus, dtype=float)
+    eff = exp.mapping().model_effective
+    h = eff.epsilon / 2 if eff.epsilon > 0 else None      # the report's common spacing
+    for model in (exp.model, eff):
+        c0 = time.process_time()
+        old = ws.work_variance(model, taus, n=801, h=h)
+        c1 = time.process_time()
+        new = ws.work_variance(model, taus, h=h)
+        c2 = time.process_time()
+        fine = ("" if quick else
+                f"{np.max(np.abs(ws.work_variance(model, taus, n=12801, h=h) / new - 1)):.1e}")
+        print(f"{f'epsilon={model.epsilon:.3g}':<22} {c1 - c0:8.2f} {c2 - c1:8.3f} "
+              f"{np.max(np.abs(new / old - 1)):12.1e} {fine:>18}")
+
+
 def main(quick=False, only=None):
     sections = {"1": bench_rate, "2": bench_gamma, "3": bench_pdf, "4": lambda q: bench_cache(),
-                "5": bench_propagator, "6": bench_transition}
+                "5": bench_propagator, "6": bench_transition, "7": bench_work_variance}
     for key, run in sections.items():
         if only is None or key in only:
             run(quick)
