@@ -419,15 +419,15 @@ def integrated_autocorrelation(model: Model, taus: ArrayLike, h: float | None = 
     if not model.is_paper:
         raise ValueError("integrated_autocorrelation: the paper's model only (family members: "
                          "integrate analogue.theory.family.autocorrelation)")
-    taus = np.abs(np.asarray(taus, dtype=float))
-    if not np.all(np.isfinite(taus)):
+    ta = np.abs(np.asarray(taus, dtype=float))
+    if not np.all(np.isfinite(ta)):
         raise ValueError("taus must be finite")
-    flat = taus.ravel()
+    flat = ta.ravel()
     coarse, fine = _refined_grids(model, h)
     out = _integrated_on_grid(model, fine, flat)
     if richardson:
         out = (4.0 * out - _integrated_on_grid(model, coarse, flat)) / 3.0
-    return out.reshape(taus.shape)
+    return out.reshape(ta.shape)
 
 
 # ---------------------------------------------------------------------------- public moments
