@@ -22,8 +22,9 @@ Methods
   Gaussian-only members the Scharfetter-Gummel generator is symmetrisable and a symmetric
   tridiagonal solver is used), Richardson over (h, h/2); rate function by a Legendre transform
   (concave maximisation in k over :func:`scgf_domain`).  With one-sided kicks the SCGF has a
-  pole at ``k F tau_m mean = 1``; for ``k F > 0`` it is computed after the exponential change
-  of measure of the kicks (:func:`_kick_transform`), whose grid follows the tilted law out to
+  pole at ``k F tau_m mean = 1`` (two-sided: poles at +-1); for ``k F > 0`` (two-sided: any
+  k) it is computed after the exponential change of measure of the kicks
+  (:func:`_kick_transform`, :func:`_two_sided_transform`), whose grid follows the tilted law out to
   the pole (the tilted generator on a fixed grid has spurious top-of-grid modes ~ e^{-c v}
   there), and the rate function is asymptotically linear (:func:`rate_function_asymptote`).
   Checked against the OU-shot closed forms ``lambda(k) = k F a tau + rate (1/(1 - k F tau
@@ -45,7 +46,7 @@ from scipy.sparse.linalg import splu
 
 from .. import checks
 from ..model import Model, ShotNoise
-from .kolmogorov_feller import (ShotGrid, _grid_range, default_spacing, shot_generator,
+from .kolmogorov_feller import (Kicks, ShotGrid, _grid_range, default_spacing, shot_generator,
                                stable_zeros)
 
 if TYPE_CHECKING:
@@ -496,10 +497,13 @@ def _principal(g: ShotGrid, pot: np.ndarray, guess: float, scale: float) -> floa
     n = g.n
     N = g.premultiplier if g.premultiplier is not None else sparse.identity(n, format="csc")
     NLk = (g.banded_L() + N @ sparse.diags(pot)).tocsc()
-    rate = g.shot.rate if g.shot is not None else 0.0
+    rate = g._kicks.rate if (g.shot is not None or g.kicks is not None) else 0.0
     upper = float(pot.max())
     lower = float(np.max(pot + g.base.diagonal() - rate))
-    tiny = 1e-9 * max(1.0, abs(upper), upper - lower)
+    # the shift's least distance above the root: the solves near singularity carry round-off
+    # ~2e-8 (a constant potential on 1.8e5 states: the root is max pot exactly, the estimate
+    # came out 2.6e-8 above it), so 1e-6 of the scale, not less
+    tiny = 1e-6 * max(1.0, abs(upper), upper - lower)
     sigma = max(min(guess + scale, upper + tiny), lower + tiny)
     for _ in range(24):
         solve = _factor(sigma * N - NLk)
@@ -587,6 +591,24 @@ def _kick_transform(model: Model, c: float) -> tuple[Model, float]:
     return model.replace(**changes), const
 
 
+def _two_sided_transform(model: Model, c: float) -> tuple[Model, Kicks, float]:
+    """:func:`_kick_transform` for two-sided kicks (``|c| mean < 1``): the tilted jump law
+    ``rho(z) e^{c z}/M(c)``, ``M(c) = 1/((1 - c mean)(1 + c mean))``, is up with probability
+    ``(1 + c mean)/2`` and mean ``mean/(1 - c mean)``, down with ``(1 - c mean)/2`` and mean
+    ``mean/(1 + c mean)``, at rate ``rate M(c)``; constant ``rate (M(c) - 1) + c^2/gamma``."""
+    shot = model.shot
+    assert shot is not None and shot.two_sided
+    up, down = 1.0 - c * shot.mean, 1.0 + c * shot.mean
+    M = 1.0 / (up * down)
+    kicks = Kicks(shot.rate * M, 0.5 * down, shot.mean / up, 0.5 * up, shot.mean / down)
+    const = shot.rate * (M - 1.0)
+    tm = model
+    if math.isfinite(model.gamma):
+        tm = model.replace(a=model.a + 2.0 * c / model.gamma)
+        const += c * c / model.gamma
+    return tm, kicks, const
+
+
 def _potential(model: Model, g: ShotGrid, c: float, const: float) -> np.ndarray:
     """``V`` of :func:`_kick_transform` on the states of ``g`` (model: the original member)."""
     pot = const + c * (model.drift(g.v) + g.v / model.tau_m)
@@ -643,7 +665,7 @@ class _Scgf:
             return (4.0 * b - a) / 3.0
         w: float = 2.0**self.order
         c = k * F * model.tau_m
-        if c > 0 and not model.shot.two_sided and model.cubic == 0:
+        if model.cubic == 0 and (c > 0 or (c != 0 and model.shot.two_sided)):
             return self._transformed(c, w)
         # start the shift from the Gaussian approximation k <w> + k^2 F^2 D_x (a wrong start
         # only costs retries: :func:`_principal` checks what it converged to)
@@ -655,24 +677,37 @@ class _Scgf:
 
     def _transformed(self, c: float, w: float) -> float:
         model = self.model
-        tm, const = _kick_transform(model, c)
+        kicks: Kicks | None = None
+        if model.shot is not None and model.shot.two_sided:
+            tm, kicks, const = _two_sided_transform(model, c)
+            # symmetric stand-ins: the smaller mean sets the spacing, the larger the range,
+            # widened by the transformed kicks' mean force
+            means = (kicks.mean_up, kicks.mean_down)
+            spacing = tm.replace(shot=ShotNoise(kicks.rate, min(means), True))
+            lo, hi = _grid_range(tm.replace(shot=ShotNoise(kicks.rate, max(means), True)))
+            shift = model.tau_m * kicks.rate * (kicks.w_up * kicks.mean_up
+                                                - kicks.w_down * kicks.mean_down)
+            lo, hi = lo + min(shift, 0.0), hi + max(shift, 0.0)
+        else:
+            tm, const = _kick_transform(model, c)
+            spacing = tm
+            lo, hi = _grid_range(tm)
         # the transformed member's default spacing (it grows with mean/u, as the law's width
-        # does), refined as the caller refined h
-        # refined as the caller refined h.  Aligned with the attractor (as the default grid
-        # is) unless that would refine it more than twofold: near the pole the spacing grows
-        # past |v*| (Delta = 0, a tau_m = 0.5, 1/u = 1000: 12 -> 0.5, 1.5e6 states), and the
-        # transformed law lives far above v* there
-        raw, aligned = default_spacing(tm, align=False), default_spacing(tm)
+        # does), refined as the caller refined h.  Aligned with the attractor (as the default
+        # grid is) unless that would refine it more than twofold: near the pole the spacing
+        # grows past |v*| (Delta = 0, a tau_m = 0.5, 1/u = 1000: 12 -> 0.5, 1.5e6 states), and
+        # the transformed law lives far above v* there
+        raw, aligned = default_spacing(spacing, align=False), default_spacing(spacing)
         ht = (aligned if aligned >= 0.5 * raw else raw) * self.h / default_spacing(model)
-        # the law reaches ~tau_m rate mean/u^2, the spacing grows like mean/u: the states grow
-        # like 25 rate tau_m/u.  Beyond 1.5e5 states (u < ~2e-4 rate tau_m) the spacing is
-        # coarsened to keep that: there the transformed law lives so far above v = 0 that
+        # one-sided: the law reaches ~tau_m rate mean/u^2, the spacing grows like mean/u: the
+        # states grow like 25 rate tau_m/u (two-sided: the down kicks keep the spacing near
+        # mean/50, the states grow like 1/u^2).  Beyond 1.5e5 states the spacing is coarsened:
+        # one-sided, the transformed law then lives so far above v = 0 that
         # lambda - rate (1/u - 1) = c (a - Delta) to 1e-8 already at u = 0.2 (circuits/shot.toml)
-        lo, hi = _grid_range(tm)
         ht = max(ht, (hi - lo) / 150_000.0)
         vals = []
         for hh in (ht, ht / 2.0):
-            g = shot_generator(tm, hh)
+            g = shot_generator(tm, hh, kicks=kicks, span=(lo, hi))
             pot = _recurrent_only(model, g, _potential(model, g, c, const))
             # lambda <= max V (L is a generator); start just above it
             top, spread = float(pot.max()), float(pot.max() - pot.min())

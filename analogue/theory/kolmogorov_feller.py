@@ -42,7 +42,42 @@ from .fokker_planck import Grid
 from .fokker_planck import generator as sg_generator
 
 __all__ = ["ShotGrid", "shot_generator", "jump_kernel", "has_atom", "premultiplier",
-           "stable_zeros"]
+           "stable_zeros", "Kicks"]
+
+
+@dataclass(frozen=True)
+class Kicks:
+    """Exponential kicks at total ``rate``: up with probability ``w_up`` and mean ``mean_up``,
+    down with ``w_down`` (0: one-sided) and ``mean_down``.  :class:`ShotNoise` is the case
+    ``w_up = w_down = 1/2`` with equal means; the exponential change of measure of the SCGF
+    (:func:`analogue.theory.family._kick_transform`) makes two-sided kicks asymmetric."""
+
+    rate: float
+    w_up: float
+    mean_up: float
+    w_down: float = 0.0
+    mean_down: float = 1.0
+
+    @classmethod
+    def of(cls, shot: ShotNoise) -> Kicks:
+        if shot.two_sided:
+            return cls(shot.rate, 0.5, shot.mean, 0.5, shot.mean)
+        return cls(shot.rate, 1.0, shot.mean)
+
+    @property
+    def two_sided(self) -> bool:
+        return self.w_down > 0
+
+    def dirs(self) -> list[tuple[float, int, float]]:
+        """(weight, sign, mean) of each direction."""
+        out = [(self.w_up, 1, self.mean_up)]
+        if self.two_sided:
+            out.append((self.w_down, -1, self.mean_down))
+        return out
+
+
+def _kicks(mean: float, two_sided: bool) -> Kicks:
+    return Kicks(1.0, 0.5, mean, 0.5, mean) if two_sided else Kicks(1.0, 1.0, mean)
 
 
 def premultiplier(mean: float, h: float, n_cells: int, two_sided: bool, extra: int = 0
@@ -53,12 +88,17 @@ def premultiplier(mean: float, h: float, n_cells: int, two_sided: bool, extra: i
     ``N L`` is banded but for a few rows (the folds at the ends, the stuck state): the
     theory.md ODE reduction done on the grid, which makes sparse LU cheap.  ``extra`` identity
     rows are appended (the stuck state)."""
-    q = math.exp(-h / mean)
+    return kicks_premultiplier(_kicks(mean, two_sided), h, n_cells, extra)
+
+
+def kicks_premultiplier(k: Kicks, h: float, n_cells: int, extra: int = 0) -> sparse.csc_matrix:
+    """:func:`premultiplier` for :class:`Kicks`: ``(I - q_d S^T)(I - q_u S)``,
+    ``q_u = e^{-h/mean_up}``, ``q_d = e^{-h/mean_down}``."""
     S = sparse.diags([np.ones(n_cells - 1)], [-1], shape=(n_cells, n_cells))
     I = sparse.identity(n_cells)
-    N = I - q * S
-    if two_sided:
-        N = (I - q * S.T) @ N
+    N = I - math.exp(-h / k.mean_up) * S
+    if k.two_sided:
+        N = (I - math.exp(-h / k.mean_down) * S.T) @ N
     if extra:
         N = sparse.block_diag([N, sparse.identity(extra)])
     return sparse.csc_matrix(N)
@@ -86,16 +126,19 @@ class ShotGrid:
     base: sparse.csc_matrix
     shot: ShotNoise | None = None  # the kicks, if any
     col_s: np.ndarray | None = None  # landing distribution of a kick from S (cells)
+    kicks: Kicks | None = None  # the kicks' law when not that of ``shot`` (asymmetric)
 
     @property
     def n_cells(self) -> int:
         return self.v.size - (1 if self.atom else 0)
 
     @property
-    def _shot(self) -> ShotNoise:
+    def _kicks(self) -> Kicks:
+        if self.kicks is not None:
+            return self.kicks
         if self.shot is None:
             raise ValueError("this generator has no shot noise")
-        return self.shot
+        return Kicks.of(self.shot)
 
     @property
     def L(self) -> sparse.csc_matrix:
@@ -103,19 +146,18 @@ class ShotGrid:
         if self.shot is None:
             return self.base
         n = self.n_cells
-        K = jump_kernel(self._shot.mean, self.h, n, self._shot.two_sided)
+        K = kicks_kernel(self._kicks, self.h, n)
         if self.atom:
             assert self.col_s is not None  # an atom comes with its landing column
             K = sparse.bmat([[K, sparse.csc_matrix(self.col_s[:, None])],
                              [sparse.csc_matrix((1, n)), sparse.csc_matrix((1, 1))]])
-        return (self.base + self._shot.rate * (K - sparse.identity(self.v.size))).tocsc()
+        return (self.base + self._kicks.rate * (K - sparse.identity(self.v.size))).tocsc()
 
     @property
     def premultiplier(self) -> sparse.csc_matrix | None:
         if self.shot is None:
             return None
-        return premultiplier(self._shot.mean, self.h, self.n_cells, self._shot.two_sided,
-                             int(self.atom))
+        return kicks_premultiplier(self._kicks, self.h, self.n_cells, int(self.atom))
 
     def banded_L(self) -> sparse.csc_matrix:
         """``N L`` in closed form (see :func:`banded_jump_kernel`): banded but for a few rows,
@@ -124,13 +166,13 @@ class ShotGrid:
         if N is None:
             return self.base
         n = self.n_cells
-        NK = banded_jump_kernel(self._shot.mean, self.h, n, self._shot.two_sided)
+        NK = banded_kicks_kernel(self._kicks, self.h, n)
         if self.atom:
-            Ncol = premultiplier(self._shot.mean, self.h, n, self._shot.two_sided) @ self.col_s
+            Ncol = kicks_premultiplier(self._kicks, self.h, n) @ self.col_s
             Ncol[np.abs(Ncol) < 1e-16] = 0.0
             NK = sparse.bmat([[NK, sparse.csc_matrix(Ncol[:, None])],
                               [sparse.csc_matrix((1, n)), sparse.csc_matrix((1, 1))]])
-        return sparse.csc_matrix(N @ self.base + self._shot.rate * (NK - N))
+        return sparse.csc_matrix(N @ self.base + self._kicks.rate * (NK - N))
 
     @property
     def n(self) -> int:
@@ -145,16 +187,14 @@ class ShotGrid:
     def landing(self, u: float) -> np.ndarray:
         """Probabilities over the states of the landing point ``u + z`` of one kick from the
         point ``u`` (exact cell integrals of the exponential law; beyond the grid: end cell)."""
-        shot = self._shot
         n = self.n_cells
         centres = self.v[:n]
         lo_e, hi_e = centres - 0.5 * self.h, centres + 0.5 * self.h
         out = np.zeros(self.n)
-        dirs = [(1.0, 1)] if not shot.two_sided else [(0.5, 1), (0.5, -1)]
-        for w, sgn in dirs:
+        for w, sgn, mean in self._kicks.dirs():
             a = np.maximum(sgn * (lo_e if sgn > 0 else hi_e) - sgn * u, 0.0)
             b = np.maximum(sgn * (hi_e if sgn > 0 else lo_e) - sgn * u, 0.0)
-            cell = np.exp(-a / shot.mean) - np.exp(-b / shot.mean)
+            cell = np.exp(-a / mean) - np.exp(-b / mean)
             cell = np.clip(cell, 0.0, None)
             out[:n] += w * cell
             out[n - 1 if sgn > 0 else 0] += w * max(0.0, 1.0 - cell.sum())
@@ -184,16 +224,21 @@ def jump_kernel(mean: float, h: float, n: int, two_sided: bool) -> sparse.csc_ma
     """Column-stochastic matrix K (n x n) of the destination cell of one kick from each cell
     (module docstring), mass beyond the ends folded into the end cells (exact geometric sums;
     the band is cut where ``q^d < e^{-45}``, whose mass also goes to the fold)."""
-    r = h / mean
-    dmax = min(n - 1, int(math.ceil(45.0 / r)) + 1)
-    d = np.arange(1, dmax + 1)
-    c = (math.expm1(r) / r) * (-math.expm1(-r))
-    pd = c * np.exp(-d * r)
-    p0 = 1.0 - (-math.expm1(-r)) / r
+    return kicks_kernel(_kicks(mean, two_sided), h, n)
+
+
+def kicks_kernel(k: Kicks, h: float, n: int) -> sparse.csc_matrix:
+    """:func:`jump_kernel` for :class:`Kicks` (each direction its weight and mean)."""
     i = np.arange(n)
-    parts = [sparse.diags([np.full(n, p0)], [0], shape=(n, n))]
-    dirs = [(1.0, 1)] if not two_sided else [(0.5, 1), (0.5, -1)]
-    for w, sign in dirs:
+    parts = []
+    for w, sign, mean in k.dirs():
+        r = h / mean
+        dmax = min(n - 1, int(math.ceil(45.0 / r)) + 1)
+        d = np.arange(1, dmax + 1)
+        c = (math.expm1(r) / r) * (-math.expm1(-r))
+        pd = c * np.exp(-d * r)
+        p0 = 1.0 - (-math.expm1(-r)) / r
+        parts.append(sparse.diags([np.full(n, w * p0)], [0], shape=(n, n)))
         parts.append(sparse.diags([np.full(n - dd, w * pd[dd - 1]) for dd in d],
                                   [-sign * dd for dd in d], shape=(n, n)))
         # whatever of this direction is not on the band goes to the end cell it points to
@@ -206,44 +251,54 @@ def jump_kernel(mean: float, h: float, n: int, two_sided: bool) -> sparse.csc_ma
 
 def banded_jump_kernel(mean: float, h: float, n: int, two_sided: bool) -> sparse.csc_matrix:
     """``N K`` in closed form, N of :func:`premultiplier`, K the kernel of :func:`jump_kernel`
-    with the full (untruncated) geometric band and exact folds.  Writing
-    ``K = P_0 I + w_u (T + e_{n-1} f_u^T) + w_d (T^T + e_0 f_d^T)`` with ``T_{i+d,i} = c q^d``
-    (``c = (e^r - 1)(1 - e^{-r})/r``, ``r = h/mean``, ``q = e^{-r}``), fold sums
-    ``f_u[i] = c q^{n-i}/(1-q)``, ``f_d[i] = c q^{i+1}/(1-q)``, and S the shift down:
-    one-sided ``(I - qS) T = c q S``; two-sided ``N T = c q (S - q S^T S)`` and
-    ``N T^T = c q (S^T - q S S^T) + q^2 e_0 (row 0 of T^T)``,
-    ``N e_{n-1} = e_{n-1} - q e_{n-2}``, ``N e_0 = (1 + q^2) e_0 - q e_1``."""
-    r = h / mean
-    q = math.exp(-r)
-    c = (math.expm1(r) / r) * (-math.expm1(-r))
-    p0 = 1.0 - (-math.expm1(-r)) / r
+    with the full (untruncated) geometric band and exact folds (:func:`banded_kicks_kernel`)."""
+    return banded_kicks_kernel(_kicks(mean, two_sided), h, n)
+
+
+def banded_kicks_kernel(k: Kicks, h: float, n: int) -> sparse.csc_matrix:
+    """``N K`` in closed form for :class:`Kicks`.  Writing
+    ``K = P_0 I + w_u (T_u + e_{n-1} f_u^T) + w_d (T_d^T + e_0 f_d^T)`` with
+    ``T_{i+d,i} = c q^d`` per direction (``c = (e^r - 1)(1 - e^{-r})/r``, ``r = h/mean``,
+    ``q = e^{-r}``), fold sums ``f_u[i] = c_u q_u^{n-i}/(1-q_u)``,
+    ``f_d[i] = c_d q_d^{i+1}/(1-q_d)``, S the shift down and
+    ``N = (I - q_d S^T)(I - q_u S) = (I - q_u S)(I - q_d S^T) - q_u q_d (e_{n-1} e_{n-1}^T -
+    e_0 e_0^T)``: one-sided ``(I - q_u S) T_u = c_u q_u S``; two-sided
+    ``N T_u = c_u q_u (S - q_d S^T S)``,
+    ``N T_d^T = c_d q_d (S^T - q_u S S^T) + q_u q_d e_0 (row 0 of T_d^T)``,
+    ``N e_{n-1} = e_{n-1} - q_d e_{n-2}``, ``N e_0 = (1 + q_u q_d) e_0 - q_u e_1``."""
     i = np.arange(n)
-    f_u = c * np.exp(-(n - i) * r) / (1.0 - q)
-    f_d = c * np.exp(-(i + 1) * r) / (1.0 - q)
+
+    def geo(mean: float) -> tuple[float, float, float, float]:
+        r = h / mean
+        return r, math.exp(-r), (math.expm1(r) / r) * (-math.expm1(-r)), 1.0 - (-math.expm1(-r)) / r
+    r_u, q_u, c_u, p0_u = geo(k.mean_up)
+    f_u = c_u * np.exp(-(n - i) * r_u) / (1.0 - q_u)
     # The fold rows are dense but decay like q^distance: entries below 1e-17 of the kernel's
     # scale are dropped (a mass error < 1e-17 per column), which keeps the LU banded
     # (36k states: 2.4 s -> 0.05 s per factorisation).
-    tiny = 1e-17 * c
-    f_u = np.where(f_u > tiny, f_u, 0.0)
-    f_d = np.where(f_d > tiny, f_d, 0.0)
-    N = premultiplier(mean, h, n, two_sided)
+    f_u = np.where(f_u > 1e-17 * c_u, f_u, 0.0)
+    N = kicks_premultiplier(k, h, n)
     S = sparse.diags([np.ones(n - 1)], [-1], shape=(n, n))
-    if not two_sided:
+    if not k.two_sided:
         fold = sparse.csc_matrix((f_u, (np.full(n, n - 1), i)), shape=(n, n))
-        return sparse.csc_matrix(p0 * N + c * q * S + fold)
+        return sparse.csc_matrix(p0_u * N + c_u * q_u * S + fold)
+    r_d, q_d, c_d, p0_d = geo(k.mean_down)
+    f_d = c_d * np.exp(-(i + 1) * r_d) / (1.0 - q_d)
+    f_d = np.where(f_d > 1e-17 * c_d, f_d, 0.0)
     d1 = sparse.diags([np.r_[np.ones(n - 1), 0.0]], [0])
     d0 = sparse.diags([np.r_[0.0, np.ones(n - 1)]], [0])
-    row0 = np.where(i >= 1, c * np.exp(-i * r), 0.0) * q * q
-    row0 = np.where(row0 > tiny, row0, 0.0)
-    up = c * q * (S - q * d1) + sparse.csc_matrix(
-        (np.r_[f_u, -q * f_u], (np.r_[np.full(n, n - 1), np.full(n, n - 2)], np.r_[i, i])),
+    row0 = np.where(i >= 1, c_d * np.exp(-i * r_d), 0.0) * q_u * q_d
+    row0 = np.where(row0 > 1e-17 * c_d, row0, 0.0)
+    up = c_u * q_u * (S - q_d * d1) + sparse.csc_matrix(
+        (np.r_[f_u, -q_d * f_u], (np.r_[np.full(n, n - 1), np.full(n, n - 2)], np.r_[i, i])),
         shape=(n, n))
-    down = (c * q * (S.T - q * d0)
+    down = (c_d * q_d * (S.T - q_u * d0)
             + sparse.csc_matrix((row0, (np.zeros(n, int), i)), shape=(n, n))
-            + sparse.csc_matrix((np.r_[(1 + q * q) * f_d, -q * f_d],
+            + sparse.csc_matrix((np.r_[(1 + q_u * q_d) * f_d, -q_u * f_d],
                                  (np.r_[np.zeros(n, int), np.ones(n, int)], np.r_[i, i])),
                                 shape=(n, n)))
-    return sparse.csc_matrix(p0 * N + 0.5 * (up + down))
+    p0 = k.w_up * p0_u + k.w_down * p0_d
+    return sparse.csc_matrix(p0 * N + k.w_up * up + k.w_down * down)
 
 
 def _gaussian_range(model: Model, tail: float = 50.0) -> tuple[float, float]:
@@ -354,17 +409,20 @@ def stable_zeros(model: Model) -> np.ndarray:
 
 
 def shot_generator(model: Model, h: float | None = None, v0s: Iterable[float] = (),
-                   max_states: int = 400_000) -> ShotGrid:
-    """Generator of the Kolmogorov-Feller equation of ``model`` (module docstring)."""
+                   max_states: int = 400_000, kicks: Kicks | None = None,
+                   span: tuple[float, float] | None = None) -> ShotGrid:
+    """Generator of the Kolmogorov-Feller equation of ``model`` (module docstring); ``kicks``
+    replaces the law of ``model.shot`` (which must be set) and ``span`` the velocity range."""
     if h is None:
         h = default_spacing(model)
-    lo, hi = _grid_range(model, v0s)
+    lo, hi = _grid_range(model, v0s) if span is None else span
     shot = model.shot
     if math.isfinite(model.gamma):
         grid = Grid.span(lo, hi, h)
         if grid.n > max_states:
             raise ValueError(f"grid would need {grid.n} states (> {max_states}); pass a coarser h")
-        return ShotGrid(grid.v, h, False, True, sg_generator(model, grid).tocsc(), shot)
+        return ShotGrid(grid.v, h, False, True, sg_generator(model, grid).tocsc(), shot,
+                        kicks=kicks)
     # gamma = inf: cells [j h, (j+1) h]
     j_lo = min(int(math.floor(lo / h)), -1)
     j_hi = max(int(math.ceil(hi / h)), 1)
@@ -410,14 +468,15 @@ def shot_generator(model: Model, h: float | None = None, v0s: Iterable[float] = 
     col_s = None
     if shot is not None and atom:
         # kicks from S: exact landing probabilities from the point v = 0
-        jj = np.arange(max(n - zero_edge, zero_edge))
-        land = np.exp(-jj * h / shot.mean) * -math.expm1(-h / shot.mean)
-        w_up = 0.5 if shot.two_sided else 1.0
         col_s = np.zeros(n)
-        col_s[zero_edge:] += w_up * land[:n - zero_edge]
-        col_s[-1] += w_up - w_up * land[:n - zero_edge].sum()  # beyond the grid: end cell
-        if shot.two_sided:
-            col_s[zero_edge - 1 - np.arange(zero_edge)] += 0.5 * land[:zero_edge]
-            col_s[0] += 0.5 - 0.5 * land[:zero_edge].sum()
+        for w, sgn, mean in (kicks or Kicks.of(shot)).dirs():
+            jj = np.arange(n - zero_edge if sgn > 0 else zero_edge)
+            land = np.exp(-jj * h / mean) * -math.expm1(-h / mean)
+            if sgn > 0:
+                col_s[zero_edge:] += w * land
+                col_s[-1] += w - w * land.sum()  # beyond the grid: end cell
+            else:
+                col_s[zero_edge - 1 - jj] += w * land
+                col_s[0] += w - w * land.sum()
     v = np.concatenate([centres, [0.0]]) if atom else centres
-    return ShotGrid(v, h, atom, False, L.tocsc(), shot, col_s)
+    return ShotGrid(v, h, atom, False, L.tocsc(), shot, col_s, kicks)
