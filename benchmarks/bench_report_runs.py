@@ -1,9 +1,10 @@
 """Benchmark of the report's circuit runs (issue 10): ``run_experiment_runs`` for the paper's
 experiments at the ``--quick`` size, old against new, side by side (not a test).
 
-"old" is ``analogue/report/runs.py`` as of a git ref (default ``main``; before issue 10's run
-scheduling: one ``simulate`` call after another, the stationary check over the whole run);
-"new" is the checkout's.  Each runs on its own empty run store (calibrations included), so
+"old" is ``analogue/report/runs.py`` and ``analogue/circuit/deck_size.py`` as of a git ref
+(``--old-ref``, default ``main``; before issue 10's run scheduling: one ``simulate`` call after
+another, the stationary check over the whole run, the deck-size cost model of one-replica
+decks); "new" is the checkout's.  Each runs on its own empty run store (calibrations included), so
 every deck really runs.  Printed per experiment and version: CPU seconds of this process and
 its ngspice children (user + sys), wall seconds, the load average, and the report's
 integration term in units of the statistical standard error (the largest over the stationary
@@ -24,6 +25,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from contextlib import contextmanager, nullcontext
 from pathlib import Path
 
 import numpy as np
@@ -44,19 +46,32 @@ def cpu_seconds() -> float:
     return s.ru_utime + s.ru_stime + c.ru_utime + c.ru_stime
 
 
-def old_module(ref: str, tmp: Path):
-    """``analogue/report/runs.py`` at ``ref``, imported inside the analogue.report package."""
-    src = subprocess.run(["git", "-C", str(ROOT), "show", f"{ref}:analogue/report/runs.py"],
+def old_module(ref: str, tmp: Path, path: str, name: str, package: str):
+    """The file ``path`` at git ``ref``, imported as ``package.name`` (relative imports work)."""
+    src = subprocess.run(["git", "-C", str(ROOT), "show", f"{ref}:{path}"],
                          check=True, capture_output=True, text=True).stdout
-    path = tmp / "runs_old.py"
-    path.write_text(src)
-    spec = importlib.util.spec_from_file_location("analogue.report._runs_old", path)
+    file = tmp / f"{name}.py"
+    file.write_text(src)
+    spec = importlib.util.spec_from_file_location(f"{package}.{name}", file)
     assert spec is not None and spec.loader is not None
     mod = importlib.util.module_from_spec(spec)
-    mod.__package__ = "analogue.report"
+    mod.__package__ = package
     sys.modules[spec.name] = mod          # dataclasses look their module up there
     spec.loader.exec_module(mod)
     return mod
+
+
+@contextmanager
+def old_deck_size(mod):
+    """The deck-size chooser of the old ref while the old runs are made (runs.py imports
+    ``choose_deck_size`` from analogue.circuit.deck_size at call time)."""
+    from analogue.circuit import deck_size
+    saved = deck_size.choose_deck_size
+    deck_size.choose_deck_size = mod.choose_deck_size
+    try:
+        yield
+    finally:
+        deck_size.choose_deck_size = saved
 
 
 def pairs(runs):
@@ -102,7 +117,11 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     from analogue.report import runs as new
     with tempfile.TemporaryDirectory(prefix="bench-report-runs-") as tmp:
-        versions = {"old": old_module(args.old_ref, Path(tmp)), "new": new}
+        old = old_module(args.old_ref, Path(tmp), "analogue/report/runs.py", "_runs_old",
+                         "analogue.report")
+        old_ds = old_module(args.old_ref, Path(tmp), "analogue/circuit/deck_size.py",
+                            "_deck_size_old", "analogue.circuit")
+        versions = {"old": old, "new": new}
         if args.only:
             versions = {args.only: versions[args.only]}
         print(f"{'experiment':10s} {'version':7s} {'CPU s':>7s} {'wall s':>7s} {'load':>5s}  "
@@ -113,7 +132,8 @@ def main(argv=None) -> int:
                 store = Path(tmp) / f"store-{label}-{name}"
                 opts = RunOptions(quick=True, progress=False, store=store, workers=args.workers)
                 c0, w0 = cpu_seconds(), time.perf_counter()
-                runs = mod.run_experiment_runs(exp, opts)
+                with old_deck_size(old_ds) if label == "old" else nullcontext():
+                    runs = mod.run_experiment_runs(exp, opts)
                 cpu, wall = cpu_seconds() - c0, time.perf_counter() - w0
                 t = terms(runs)
                 (sk, sv), (tk, tv) = t["stationary"], t["transition"]

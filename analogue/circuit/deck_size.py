@@ -4,7 +4,8 @@ Replicas in one deck share every simulator time step, so each replica's crossing
 kink shortens the step for all of them: the time points per noise hold grow with the deck size
 ``r`` (stick deck, reltol 1e-4: 7.7 at r = 1, 16.6 at 16, 22 at 64), at a rate set by how
 often the paths cross v = 0, which depends on the model.  Against that, every deck costs a
-process start-up and a per-time-point overhead shared by its replicas.  The model of the
+process start-up (and, in the model's form, a per-time-point overhead shared by its replicas,
+measured as negligible at 4 or more replicas: below).  The model of the
 wall time of one deck of ``r`` replicas over ``H`` holds is
 
     T(r) = START_S + H p(r) (POINT_S + REPLICA_POINT_S r),
@@ -15,11 +16,17 @@ files and do not depend on the machine's load, so the choice is reproducible), i
 linearly in log r.  A job of N replicas on W workers takes about ``ceil(ceil(N/r)/W) T(r)``;
 the chosen size minimises that over the allowed sizes ``SIZES`` within ``bounds``.
 
-The constants are this 2-core machine's (ngspice 39; theory.md "Measured later"): 0.47 us
-per replica-iteration at 16 or more replicas and 2.3 us at 1, 2.5 Newton iterations per
-point, i.e. 4.9 us per point plus 0.88 us per replica-point; 60 ms to start a process and
-read its deck.  Only their ratios matter for the choice; ``benchmarks/bench_circuit.py
---ceiling`` prints the predicted job times next to the measured ones.
+The constants are fitted to CPU seconds (ngspice children, user + sys) of 32 replicas x 2000
+holds in decks of 4, 8, 16 and 32, stick and work models, trap reltol 1e-4, two repeats
+(``benchmarks/bench_deck_cost.py``; shared machine at load ~10, which inflates both alike, and
+only their ratio matters): 51 ms per deck (process start-up, deck read, raw write) and 1.61 us
+per replica-point; a cost per point shared by the replicas was not resolvable (the
+three-parameter fit put it at -7 us), so it is 0.  The earlier constants (4.9 us per point
+plus 0.88 us per replica-point, extrapolated from one-replica decks) made a replica-point in
+a deck of 4 cost twice what it costs in a deck of 32; measured, it costs the same, and the
+smaller decks win by their fewer time points per hold (work model: 1.97 / 1.68 s CPU at 32 per
+deck, 1.35 at 8, 1.33 at 4).  ``benchmarks/bench_circuit.py --ceiling`` prints the predicted job
+times next to the measured ones.
 
 The deck size changes which noise drives which replica (the deck seeds), so it changes the
 numbers like a different seed would; it is recorded in ``meta["deck_size"]``.
@@ -45,9 +52,9 @@ __all__ = [
     "points_per_hold",
 ]
 
-START_S = 0.06
-POINT_S = 4.9e-6
-REPLICA_POINT_S = 0.88e-6
+START_S = 0.051
+POINT_S = 0.0
+REPLICA_POINT_S = 1.61e-6
 # 64 left out: the point counts miss that Newton iterations per point grow with r as well (any
 # replica not converged costs all of them another iteration); measured with the stick deck
 # (trap, reltol 1e-4, one process, load ~11): 73-74 us per replica-hold at 16, 65-85 at 32,
