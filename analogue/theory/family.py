@@ -665,7 +665,11 @@ class _Scgf:
             return (4.0 * b - a) / 3.0
         w: float = 2.0**self.order
         c = k * F * model.tau_m
-        if model.cubic == 0 and (c > 0 or (c != 0 and model.shot.two_sided)):
+        # the change of measure for every k it is valid for but pure one-sided shot noise at
+        # k F < 0, whose transformed kicks shrink to nothing (mean/u, u -> inf): that side
+        # keeps the tilted generator with the transient states moved away
+        if model.cubic == 0 and c != 0 and (c > 0 or model.shot.two_sided
+                                            or math.isfinite(model.gamma)):
             return self._transformed(c, w)
         # start the shift from the Gaussian approximation k <w> + k^2 F^2 D_x (a wrong start
         # only costs retries: :func:`_principal` checks what it converged to)

@@ -212,3 +212,23 @@ def test_two_sided_scgf_up_to_both_poles():
     lp, lm = family.scgf(m, [d, -d])
     assert (lp - lm) / (2 * d) == pytest.approx(F * s.mean, rel=5e-4)
     assert (lp + lm) / d**2 == pytest.approx(2 * F**2 * s.diffusion, rel=1e-3)
+
+
+@pytest.mark.parametrize("two_sided", [False, True])
+def test_shot_plus_gaussian_scgf_closed_form_and_derivatives(two_sided):
+    """Gaussian noise (gamma = 5) and kicks: the change of measure adds the drift 2c/gamma and
+    the constant c^2/gamma.  Delta = 0: lambda = c a + c^2/gamma + rate (M(c) - 1) (the direct
+    route did not converge at -0.9 k_pole; now <= 6e-8); Delta = 0.5: lambda'(0) = F <v>."""
+    ou = Model(1.0, 0.0, 0.5, 5.0, shot=ShotNoise(2.0, 0.3, two_sided))
+    F = ou.force
+    kp = 1.0 / (F * 0.3)
+    frac = np.array([-0.9, -0.5, 0.5, 0.9, 0.99])
+    c = frac * kp * F
+    M = 1.0 / (1.0 - (c * 0.3) ** 2) if two_sided else 1.0 / (1.0 - c * 0.3)
+    ref = c * 0.5 + c * c / 5.0 + 2.0 * (M - 1.0)
+    assert np.allclose(family.scgf(ou, frac * kp), ref, rtol=3e-7, atol=0)
+    m = ou.replace(delta=0.5, a=0.2)
+    d = 0.02
+    lp, lm = family.scgf(m, [d, -d])
+    assert (lp - lm) / (2 * d) == pytest.approx(m.force * family.stationary_moments(m).mean,
+                                                rel=5e-4)
