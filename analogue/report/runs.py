@@ -221,7 +221,9 @@ def _check_coupled(nominal: Ensemble, check: Ensemble, what: str) -> None:
 class SharedPool(cf.Executor):
     """One job's view of the experiment's deck pool: submits go to the shared pool (which the
     caller owns and shuts down), and ``started`` is set at the job's first submit, so that the
-    jobs' decks queue in the order the jobs were started."""
+    jobs' first decks queue in the order the jobs were started (a job's later decks may
+    interleave with the next job's: the order is a schedule, the results do not depend on
+    it)."""
 
     def __init__(self, pool: cf.Executor):
         self.pool = pool
@@ -263,6 +265,11 @@ def _run_jobs(jobs: list[tuple[str, Callable[..., Any]]], kw: dict) -> dict:
                 # the next job's decks queue behind this one's (all from the store: none)
                 while not (view.started.wait(0.05) or fut.done()):
                     pass
+            # the first failure stops the rest at once (not when the jobs before it are done)
+            cf.wait(list(futures.values()), return_when=cf.FIRST_EXCEPTION)
+            for fut in futures.values():
+                if fut.done() and fut.exception() is not None:
+                    fut.result()
             for name, fut in futures.items():
                 out[name] = fut.result()
         except BaseException:
