@@ -313,7 +313,8 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
     m_eff = exp.mapping().model_effective
     res = MemberAnalysis(exp, sizes)
     burn = exp.burn_in
-    seed = SeedPlan(exp.seed).member      # member + 0..5 (analogue.study.seeds)
+    plan = SeedPlan(exp.seed)             # every seed below (analogue.study.seeds)
+    seed = plan.member_circuit
     name = exp.name
 
     if m.spring > 0:
@@ -328,10 +329,11 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
         tick(f"{name}: Monte Carlo reference ({sizes.mc_replicas} replicas)")
         from ..montecarlo import simulate_sde
         mc = simulate_sde(m, v0=0.0, t_end=sizes.stationary_t_end, replicas=sizes.mc_replicas,
-                          seed=seed + 1, sample_dt=sizes.sample_dt)
+                          seed=plan.member_monte_carlo, sample_dt=sizes.sample_dt)
         mc.meta["_x0"] = m.x0
         mc_eff = simulate_sde(m_eff, v0=0.0, t_end=sizes.stationary_t_end,
-                              replicas=sizes.mc_replicas, seed=seed + 1, sample_dt=sizes.sample_dt)
+                              replicas=sizes.mc_replicas, seed=plan.member_monte_carlo,
+                              sample_dt=sizes.sample_dt)
         mc_eff.meta["_x0"], mc_eff.meta["_model_eff"] = m.x0, m_eff
         obs = C.member_observables(m)
         fns = _estimators(exp, obs)
@@ -375,12 +377,14 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
             "x_circ": _position(circ)[:, circ.t >= burn].ravel(),
             "x_mc": _position(mc)[:, mc.t >= burn].ravel(),
             "v_circ": _after(circ, burn).ravel(), "v_mc": _after(mc, burn).ravel()}
-        res.provenance = _prov(exp, circ, sizes, {"circuit": seed, "monte_carlo": seed + 1})
+        res.provenance = _prov(exp, circ, sizes, {"circuit": seed,
+                                                  "monte_carlo": plan.member_monte_carlo,
+                                                  "plan": plan.describe()})
         res.wall_time = time.perf_counter() - t0
         return res
 
     # ---------------------------------------------------------------- 1-D members
-    v0_stat = family.sample_stationary(m, sizes.stationary_replicas, seed + 2)
+    v0_stat = family.sample_stationary(m, sizes.stationary_replicas, plan.member_stationary_v0)
     tick(f"{name}: stationary circuit run ({sizes.stationary_replicas} x "
          f"{sizes.stationary_t_end:g})")
     stat = _circuit(exp, v0=v0_stat, t_end=sizes.stationary_t_end,
@@ -390,7 +394,7 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
     times = [float(t) for t in exp.histogram_times]
     tick(f"{name}: transition circuit run from v0 = {v00:g} ({sizes.transition_replicas} replicas)")
     trans = _circuit(exp, v0=v00, t_end=max(times), replicas=sizes.transition_replicas,
-                     seed=seed + 3, sizes=sizes, opts=opts)
+                     seed=plan.member_transition, sizes=sizes, opts=opts)
     tick(f"{name}: integration check (first {CHECK_REPLICAS} stationary replicas, 100x tighter)")
     chk = _circuit(exp, v0=v0_stat[:CHECK_REPLICAS], t_end=sizes.stationary_t_end,
                    replicas=CHECK_REPLICAS, seed=seed, sizes=sizes, opts=opts,
@@ -409,10 +413,11 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
     integ = _paired(_estimators(exp, stat_obs), chk, _xs_subset(stat, np.arange(CHECK_REPLICAS)))
     bias = exp.mapping().bias
     for run_obs, ens, v0_band, T in (
-            (stat_obs, stat, family.sample_stationary(m, 128, seed + 4), sizes.stationary_t_end),
+            (stat_obs, stat, family.sample_stationary(m, 128, plan.member_band_v0),
+             sizes.stationary_t_end),
             (trans_obs, trans, v00, max(times))):
         fns = _estimators(exp, run_obs)
-        band = _band(exp, fns, v0_band, T, 128 if np.ndim(v0_band) else 256, seed + 5)
+        band = _band(exp, fns, v0_band, T, 128 if np.ndim(v0_band) else 256, plan.member_band)
         for o in run_obs:
             c, se = _jk(fns[o.label], ens)
             th_model = float(exact[o.label])
@@ -484,7 +489,10 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
     sm = family.stationary_moments(m)
     res.facts.update(mean=sm.mean, variance=sm.variance, p_zero=sm.p_zero,
                      p_zero_measured=fig["atom_measured"])
-    res.provenance = _prov(exp, stat, sizes, {"stationary": seed, "transition": seed + 3})
+    res.provenance = _prov(exp, stat, sizes, {
+        "stationary": seed, "transition": plan.member_transition,
+        "stationary_v0": plan.member_stationary_v0, "band_v0": plan.member_band_v0,
+        "band": plan.member_band, "plan": plan.describe()})
     res.wall_time = time.perf_counter() - t0
     return res
 

@@ -297,7 +297,12 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
     # Each run gets its own seed, derived from the experiment's: distinct experiments (whose
     # seeds differ) never share a noise realisation, so their comparisons are independent.
     plan = SeedPlan(exp.seed)       # every seed of the report (analogue.study.seeds)
-    seeds = {"stationary": plan.stationary, "noise_free": plan.noise_free}
+    # (the Monte Carlo pairs' seeds of report.comparisons are the plan's too: recorded here)
+    seeds: dict = {"stationary": plan.stationary, "noise_free": plan.noise_free,
+                   "mc_stationary": plan.mc_stationary, "mc_stationary_v0": plan.mc_stationary_v0,
+                   **{f"mc_transition v0={v0:g}": plan.mc_transition(i)
+                      for i, v0 in enumerate(exp.v0)},
+                   "plan": plan.describe()}
 
     # Tolerances and deck sizes chosen here (not inside simulate) so that the integration
     # checks below integrate the very decks of the nominal runs 100x more tightly: each run

@@ -1,32 +1,58 @@
-"""Every seed of one experiment's report, derived from the experiment's seed in one place.
+"""Every seed of one experiment's report, derived from one ``numpy.random.SeedSequence`` plan.
 
-Each run of a report (circuit runs, the held/white-noise Monte Carlo pairs of the bandwidth
-budget, the stationary starting velocities) gets its own integer seed, a fixed offset from
-``1000 * experiment.seed``; :func:`analogue.simulate` and :mod:`analogue.montecarlo` turn it
-into a ``numpy.random.SeedSequence``.  Experiments with different seeds never share a
-realisation (offsets stay below 1000).
+The plan is the seed sequence of the experiment's ``[experiment] seed``.  Each stream of a
+report (circuit runs, the noise-free run, the held/white-noise Monte Carlo pairs of the
+bandwidth budget, the stationary starting velocities, the family members' runs and Monte
+Carlo references) has a fixed name and spawn key: stream ``k``, index ``i`` is the
+grandchild ``SeedSequence(seed, spawn_key=(k, i))``, i.e. ``SeedSequence(seed).spawn(k + 1)[k]
+.spawn(i + 1)[i]`` in numpy's spawn tree, so streams are statistically independent and a new
+stream (a new key) leaves every other seed unchanged.  Its first 32-bit word, reduced to
+``1 .. 2**31 - 1``, is the integer handed to :func:`analogue.simulate`, the Monte Carlo or
+``build_deck`` (ngspice parses ``.options seed=`` as a C int: ``build_deck`` refuses seeds
+above ``2**31 - 1``).
 
-These are exactly the integers the report used before this module existed (scattered over
-``report/runs.py`` and ``report/comparisons.py``), so stored runs and every number of the
-report are unchanged.  Deriving them instead with ``SeedSequence(seed).spawn`` would be a
-change of this module alone, but it changes every noise realisation and so every number: it
-needs a re-run of the report and a check that every comparison stays within its budget.
+Stream keys start at 100, clear of the spawn keys that :mod:`analogue.circuit.simulate`
+(0, 1, 2), :mod:`analogue.report.budget` (7) and the board (13, 17) apply to the seeds they
+are given.  The plan replaced fixed offsets from ``1000 * seed`` (which :func:`SeedPlan.all`
+no longer produces): every noise realisation of the report changed with it, and the quick
+reports were re-run and checked against their budgets (commit message).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from .. import checks
 
-__all__ = ["SeedPlan"]
+__all__ = ["SeedPlan", "STREAMS", "SEED_MAX"]
 
-_STRIDE = 1000
-_OFFSETS = {"stationary": 500, "noise_free": 900, "mc_stationary": 700,
-            "mc_stationary_v0": 701,
-            # the family members' chapter (report.beyond): its runs use member + 0..5
-            "member": 800}
-_MC_TRANSITION = 600          # + index of v0
-_MAX_V0 = 100                 # transition runs use offsets 0..99, their Monte Carlo 600..699
+SEED_MAX = 2**31 - 1          # ngspice's `.options seed` is a C int
+
+# stream name -> spawn key (never renumber: stored runs are keyed by the seeds)
+STREAMS = {
+    # the paper's experiments (report.runs, report.comparisons)
+    "transition": 100,          # circuit transition run from the i-th v0 (+ its check)
+    "mc_transition": 101,       # held/white Monte Carlo pair of the i-th transition run
+    "stationary": 102,          # stationary circuit run (+ its starting velocities, check)
+    "noise_free": 103,          # the noise-free deck
+    "mc_stationary": 104,       # held/white Monte Carlo pair of the stationary run
+    "mc_stationary_v0": 105,    # its starting velocities
+    # the family members (report.beyond)
+    "member_circuit": 110,      # 1-D: stationary run (+ check); spring: the release run
+    "member_monte_carlo": 111,  # spring: the Monte Carlo reference (ideal and smoothed)
+    "member_stationary_v0": 112,  # 1-D: starting velocities of the stationary run
+    "member_transition": 113,   # 1-D: transition run
+    "member_band_v0": 114,      # 1-D: starting velocities of the held/white pair
+    "member_band": 115,         # 1-D: the held/white Monte Carlo pair
+}
+_INDEXED = {"transition", "mc_transition"}
+_MAX_INDEX = 100
+
+
+def _derive(seed: int, key: int, index: int) -> int:
+    word = np.random.SeedSequence(seed, spawn_key=(key, index)).generate_state(1, np.uint32)[0]
+    return int(word) % SEED_MAX + 1
 
 
 @dataclass(frozen=True)
@@ -38,32 +64,40 @@ class SeedPlan:
     def __post_init__(self):
         object.__setattr__(self, "seed", checks.integer("seed", self.seed, minimum=0))
 
-    @property
-    def base(self) -> int:
-        return _STRIDE * self.seed
-
-    def _index(self, i: int) -> int:
-        if not 0 <= i < _MAX_V0:
-            raise ValueError(f"v0 index must be in [0, {_MAX_V0}), got {i!r}")
-        return i
+    def stream(self, name: str, index: int = 0) -> int:
+        """The seed of stream ``name`` (a key of :data:`STREAMS`), ``index`` for the
+        per-v0 streams; an int in ``1 .. 2**31 - 1``."""
+        if name not in STREAMS:
+            raise ValueError(f"seed stream must be one of {', '.join(STREAMS)}; got {name!r}")
+        index = checks.integer("v0 index", index, minimum=0, maximum=_MAX_INDEX - 1)
+        if index and name not in _INDEXED:
+            raise ValueError(f"seed stream {name!r} has one seed (index 0), got index {index!r}")
+        return _derive(self.seed, STREAMS[name], index)
 
     def transition(self, i: int) -> int:
         """Circuit transition run from the i-th v0 (its integration check reuses it)."""
-        return self.base + self._index(i)
+        return self.stream("transition", i)
 
     def mc_transition(self, i: int) -> int:
         """Held/white-noise Monte Carlo pair of the i-th transition run (bandwidth budget)."""
-        return self.base + _MC_TRANSITION + self._index(i)
+        return self.stream("mc_transition", i)
 
     def __getattr__(self, name: str) -> int:
-        # stationary, noise_free, mc_stationary, mc_stationary_v0, member
-        if name in _OFFSETS:
-            return self.base + _OFFSETS[name]
+        # stationary, noise_free, mc_stationary, mc_stationary_v0, member_*
+        if name in STREAMS and name not in _INDEXED:
+            return self.stream(name)
         raise AttributeError(name)
 
     def all(self, n_v0: int) -> dict:
         """Every seed by name (for the provenance)."""
         out = {f"transition {i}": self.transition(i) for i in range(n_v0)}
         out.update({f"mc_transition {i}": self.mc_transition(i) for i in range(n_v0)})
-        out.update({k: self.base + v for k, v in _OFFSETS.items()})
+        out.update({k: self.stream(k) for k in STREAMS if k not in _INDEXED})
         return out
+
+    def describe(self) -> dict:
+        """The plan itself, for the provenance: how every seed above was derived."""
+        return {"entropy": int(self.seed),
+                "rule": "SeedSequence(entropy, spawn_key=(stream key, index))"
+                        ".generate_state(1, uint32)[0] % (2**31 - 1) + 1",
+                "streams": dict(STREAMS)}
