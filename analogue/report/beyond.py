@@ -221,15 +221,11 @@ def _transition_law(exp: Experiment, model: Model, v0: float, times):
 
 def _null_se(o: C.Observable, law: C.LawMoments, n: int) -> float:
     """SE of a transition row's estimator on n independent draws from the exact law (one
-    velocity per replica).  The row's SE is at least this: the jackknife of a heavy-tailed
-    sample that misses the tail is too small (pure shot noise, 32 replicas: |z| > 3 in 15 %
-    of seeded ensembles for var v, 1000 ensembles; with the floor 0 %)."""
-    if o.kind == "mean v":
-        return math.sqrt(max(law.variance, 0.0) / n)
-    if o.kind == "var v":
-        s2 = law.variance
-        return math.sqrt(max(law.fourth / n - s2 * s2 * (n - 3) / (n * (n - 1)), 0.0))
-    return 0.0
+    velocity per replica: the catalogue kind's theory_se).  The row's SE is at least this: the
+    jackknife of a heavy-tailed sample that misses the tail is too small (pure shot noise, 32
+    replicas: |z| > 3 in 15 % of seeded ensembles for var v, 1000 ensembles; with the floor
+    0 %)."""
+    return C.theory_se(o, law, n)
 
 
 

@@ -28,6 +28,7 @@ import numpy as np
 from scipy import integrate
 
 from ..ensemble import Ensemble
+from ..estimators.variance_error import sample_variance_se
 from ..model import Model
 
 __all__ = ["KINDS", "Kind", "Observable", "TRANSITION", "STATIONARY", "density_moments",
@@ -36,7 +37,8 @@ __all__ = ["KINDS", "Kind", "Observable", "TRANSITION", "STATIONARY", "density_m
            "model_class", "member_observables", "reference_of", "stationary_sample",
            "transition_observables", "stationary_observables", "transition_values",
            "stationary_values", "transition_theory", "stationary_theory", "transition_label", "stationary_label",
-           "kind_of", "find", "planned_comparisons", "estimate", "element_error", "no_exact"]
+           "kind_of", "find", "planned_comparisons", "estimate", "element_error", "no_exact",
+           "transition_theory_se", "theory_se"]
 
 TRANSITION = "transition"
 STATIONARY = "stationary"
@@ -321,6 +323,11 @@ class Kind:
     identity: bool = False
     # absolute circuit-element error: (mapping bias dict, model, reference value) -> float
     element: Callable | None = None
+    # transition kinds: the standard error of the estimator on n independent draws from the
+    # law (one velocity per replica), (LawMoments, n) -> float; the report's SE of the row is
+    # the larger of it and the replica jackknife (transition_theory_se), because the jackknife
+    # of a skewed or heavy-tailed sample that misses the tail is too small
+    theory_se: Callable | None = None
 
 
 _ONE_D = _relative(*_ONE_D_TERMS)
@@ -329,10 +336,17 @@ KINDS: tuple[Kind, ...] = (
     # transition run: f(v, t | v0) (paper Fig. 6, eqs. (46)-(51)); in label order
     Kind("mean v", TRANSITION, ("t", "v0"), lambda v: float(np.mean(v)),
          exact=lambda m: m.mean, weak_noise=lambda m: m.mean, compare_weak_noise=True,
-         description="mean velocity at t from v0", classes=_ALL_1D),
+         theory_se=lambda m, n: math.sqrt(max(m.variance, 0.0) / n),
+         description="mean velocity at t from v0; SE: the larger of the replica jackknife and "
+                     "the exact law's sqrt(sigma^2/n)", classes=_ALL_1D),
     Kind("var v", TRANSITION, ("t", "v0"), lambda v: float(np.var(v, ddof=1)),
          exact=lambda m: m.variance, weak_noise=lambda m: m.variance,
-         description="velocity variance at t from v0 (unbiased over replicas)", classes=_ALL_1D),
+         # (any law has mu4 >= sigma^4: the max only guards grid round-off)
+         theory_se=lambda m, n: sample_variance_se(max(m.variance, 0.0),
+                                                   max(m.fourth, m.variance ** 2), n),
+         description="velocity variance at t from v0 (unbiased over replicas); SE: the larger "
+                     "of the replica jackknife and the exact law's sqrt(Var s^2) = "
+                     "sqrt(mu4/n - sigma^4 (n-3)/(n(n-1)))", classes=_ALL_1D),
     Kind("P(v<0)", TRANSITION, ("t", "v0"), lambda v: float(np.mean(v < 0)),
          exact=lambda m: m.p_negative, weak_noise=lambda m: m.p_negative, probability=True,
          description="probability of a negative velocity at t from v0",
@@ -578,6 +592,27 @@ def transition_theory(v: np.ndarray, f: np.ndarray, v0: float, times, *,
             if fn is not None:
                 out[o.label] = fn(m)
     return out
+
+
+def transition_theory_se(v: np.ndarray, f: np.ndarray, v0: float, times, n: int, *,
+                         atom=None, point=None, observables=None) -> dict:
+    """``{label: theory-side SE}`` of the transition kinds that have one (``theory_se``), for
+    estimates over ``n`` replicas drawn from the laws ``f`` (rows: ``times``; ``atom`` and
+    ``point`` as in :func:`transition_laws`) on the grid ``v``."""
+    out = {}
+    for t, m in zip(times, transition_laws(v, f, atom=atom, point=point)):
+        obs = (transition_observables(v0, [t]) if observables is None else
+               [o for o in observables if o.run == TRANSITION and o.t == float(t)])
+        for o in obs:
+            if o.entry.theory_se is not None:
+                out[o.label] = float(o.entry.theory_se(m, n))
+    return out
+
+
+def theory_se(o: Observable, law: LawMoments, n: int) -> float:
+    """The kind's theory-side SE of ``o`` on ``n`` draws from ``law`` (0 if it has none)."""
+    k = o.entry
+    return 0.0 if k.theory_se is None else float(k.theory_se(law, n))
 
 
 def stationary_theory(model, moments, *, threshold: float, work_variance: dict,

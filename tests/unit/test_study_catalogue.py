@@ -73,6 +73,16 @@ def test_transition_theory_reads_moments_of_a_gaussian_density():
     assert out["P(v<0) at t=2 from v0=1"] == pytest.approx(norm.cdf(0, mu, s), abs=1e-6)
 
 
+def test_variance_rows_get_the_gaussian_theory_side_se():
+    """N(0.3, 0.7^2): Var(s^2) = 2 sigma^4/(n - 1), Var(mean) = sigma^2/n; P(v<0) has none
+    (its binomial floor is the report's)."""
+    v = np.linspace(-6, 6, 12001)
+    se = C.transition_theory_se(v, norm.pdf(v, 0.3, 0.7)[None, :], 1.0, [2.0], 40)
+    assert sorted(se) == ["mean v at t=2 from v0=1", "var v at t=2 from v0=1"]
+    assert se["var v at t=2 from v0=1"] == pytest.approx(math.sqrt(2 * 0.7 ** 4 / 39), rel=1e-6)
+    assert se["mean v at t=2 from v0=1"] == pytest.approx(0.7 / math.sqrt(40), rel=1e-6)
+
+
 def test_stationary_estimators_on_paths_of_constant_velocity():
     """Replica i moves at the constant velocity c_i: every stationary observable is known."""
     t = np.linspace(0, 10, 1001)
@@ -161,6 +171,9 @@ def test_law_moments_of_an_atom_plus_a_gaussian():
     edge = (1 - p) * (norm.pdf(w, mu, s) + norm.pdf(-w, mu, s)) * (v[1] - v[0])
     assert m.p_stuck == pytest.approx(p + (1 - p) * (norm.cdf(w, mu, s) - norm.cdf(-w, mu, s)),
                                       abs=edge)
+    d = mu - mean                                  # the Gaussian's centre about the mean
+    assert m.fourth == pytest.approx(p * mean ** 4 + (1 - p) * (d ** 4 + 6 * d * d * s * s
+                                                             + 3 * s ** 4), rel=1e-6)
     # without the atom it is the paper's density_moments
     assert C.density_moments(v, norm.pdf(v, mu, s)) == pytest.approx((mu, s * s, norm.cdf(0, mu, s)),
                                                                      abs=1e-6)
