@@ -30,6 +30,7 @@ import numpy as np
 from ..circuit import ngspice as ng
 from ..circuit.experiments import load_experiment
 from ..report.metrics import validate_metrics
+from ..study.seeds import SeedPlan
 from ..theory.exact import rate_function, sample_stationary, stationary_moments
 from . import budget, calibration, tolerance
 from .bom import write_bom
@@ -112,7 +113,9 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
                          "members; the spring board (position integrator feedback) is built by "
                          "analogue.board.netlist.build_board_deck and checked against the "
                          "noise-free equations in tests/integration/test_board_spring.py")
-    seed = exp.seed if seed is None else seed
+    # every seed of the job from one SeedSequence plan of the master seed (study.seeds)
+    plan = SeedPlan(exp.seed if seed is None else seed)
+    seed = plan.board_noise
     out = Path(out)
     design = design_board(model, BoardSpec(), v0=list(exp.v0))   # refuses before anything is written
     out.mkdir(parents=True, exist_ok=True)
@@ -125,7 +128,7 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
     # ------------------------------------------------------------------ 2. nominal board
     log(f"board: nominal board, {st.replicas} replicas x {st.t_end} tau_m")
     t0 = _time.perf_counter()
-    v0 = sample_stationary(design.realised, st.replicas, seed + 1)
+    v0 = sample_stationary(design.realised, st.replicas, plan.board_stationary_v0)
     if vendor is not None:
         from .opamp import vendor_model_path
         vendor = (str(vendor_model_path(vendor[0], vendor[1])), vendor[1])
@@ -146,12 +149,12 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
     traj = {**compare_paths(ens.v[:k], ref_paths, skip), "replicas": k,
             "stationary_std": float(np.std(ens.v[:, skip:]))}
     log("board: noise-chain SDE pair (bandwidth budget)")
-    col, white = budget.bandwidth_pair(design, v0=sample_stationary(design.realised, st.pair_replicas, seed + 2),
-                                       t_end=st.t_end, replicas=st.pair_replicas, seed=seed + 3,
+    col, white = budget.bandwidth_pair(design, v0=sample_stationary(design.realised, st.pair_replicas, plan.board_pair_v0),
+                                       t_end=st.t_end, replicas=st.pair_replicas, seed=plan.board_pair,
                                        sample_dt=SAMPLE_DT)
     band = budget.jackknife_difference(fn, col, white)
     log("board: noise-chain design study (DAC rate, Bessel corner)")
-    study = bandwidth_study(model, fn, seed=seed + 3, replicas=min(128, st.pair_replicas),
+    study = bandwidth_study(model, fn, seed=plan.board_pair, replicas=min(128, st.pair_replicas),
                             t_end=min(20.0, st.t_end), v0=list(exp.v0))
     rows, _circ = budget.board_comparisons(exp.name, design, ens, fn=fn, threshold=thr, taus=taus,
                                           band=band, integ=integ)
@@ -164,7 +167,7 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
     observe = lambda m, off: theory_observables(m, off, thr, w_points)
     _base, grads = tolerance.gradients(design, observe)
     tol = tolerance.Tolerances()
-    sens = tolerance.sensitivities(design, tol, boards=st.sens_boards, seed=seed + 4, grads=grads)
+    sens = tolerance.sensitivities(design, tol, boards=st.sens_boards, seed=plan.board_sensitivities, grads=grads)
     timings["sensitivities_s"] = _time.perf_counter() - t0
 
     # ------------------------------------------------------------------ 3. Monte Carlo
@@ -178,7 +181,7 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
     exact_req = theory_observables(model, 0.0, thr)
     boards = []
     for i in range(st.boards):
-        b = tolerance.draw_board(design, tol, seed + 5, i)
+        b = tolerance.draw_board(design, tol, plan.board_monte_carlo, i)
         obs = fn_mc(run_board(design, b, v0=v0_mc, t_end=st.mc_t_end, sample_dt=SAMPLE_DT,
                               seed=seed, store=store, workers=workers))
         cal = calibration.calibrate_board(design, b, seed=seed, noise_dir=ndir)
@@ -221,8 +224,11 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
     metrics = {
         "comparisons": rows,
         "provenance": {"parameters": model.as_dict(), "realised": design.realised.as_dict(),
-                       "seeds": {"noise": seed, "stationary_v0": seed + 1, "sde_pair": seed + 3,
-                                 "sensitivities": seed + 4, "monte_carlo": seed + 5},
+                       "seeds": {"noise": seed, "stationary_v0": plan.board_stationary_v0,
+                                 "pair_v0": plan.board_pair_v0, "sde_pair": plan.board_pair,
+                                 "sensitivities": plan.board_sensitivities,
+                                 "monte_carlo": plan.board_monte_carlo},
+                       "seed_plan": plan.describe(),
                        "ngspice_version": ng.ngspice_version(), "deck_hashes": ens.meta["deck_sha256"],
                        "wall_time_s": wall, "quick": quick, "settings": asdict(st),
                        "python": platform.python_version(), "timings_s": timings,

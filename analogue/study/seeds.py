@@ -3,7 +3,7 @@
 The plan is the seed sequence of the experiment's ``[experiment] seed``.  Each stream of a
 report (circuit runs, the noise-free run, the held/white-noise Monte Carlo pairs of the
 bandwidth budget, the stationary starting velocities, the family members' runs and Monte
-Carlo references) has a fixed name and spawn key: stream ``k``, index ``i`` is the
+Carlo references, the board job's noise, pairs, sensitivities and Monte Carlo boards) has a fixed name and spawn key: stream ``k``, index ``i`` is the
 grandchild ``SeedSequence(seed, spawn_key=(k, i))``, i.e. ``SeedSequence(seed).spawn(k + 1)[k]
 .spawn(i + 1)[i]`` in numpy's spawn tree, so streams are statistically independent and a new
 stream (a new key) leaves every other seed unchanged.  Its first 32-bit word, reduced to
@@ -45,6 +45,13 @@ STREAMS = {
     "member_transition": 113,   # 1-D: transition run
     "member_band_v0": 114,      # 1-D: starting velocities of the held/white pair
     "member_band": 115,         # 1-D: the held/white Monte Carlo pair
+    # the board job (board.job): its noise (ngspice DAC sequence, references, calibration)
+    "board_noise": 120,
+    "board_stationary_v0": 121,   # starting velocities of the nominal board
+    "board_pair_v0": 122,         # ... of the coloured/white SDE pair
+    "board_pair": 123,            # the coloured/white SDE pair and the bandwidth study
+    "board_sensitivities": 124,   # tolerance sensitivities
+    "board_monte_carlo": 125,     # Monte Carlo boards (component draws)
 }
 _INDEXED = {"transition", "mc_transition"}
 _MAX_INDEX = 100
