@@ -19,6 +19,11 @@ k = 0, ``work_pdf(..., share=False)``), the new one, their ratio and the largest
 7. Stationary work variances of the report (work experiment, ideal and smoothed model, its
    four windows): Simpson on 801 lags of the spectral autocorrelation (old) against the
    closed form (Poisson solve + Talbot contour, stationary.integrated_autocorrelation).
+8. The quick report's theory pieces, CPU seconds on a cold cache (cache=False): experiment_theory
+   of stick, slip, work; figure_curves of work (only with ``--with-runs``: it loads the quick
+   work runs from the store, or runs them); the open question's curves at the
+   quick gammas (10, 100) and at gamma 1000 (what the full report adds).  Run it with the old
+   checkout on PYTHONPATH too for the side-by-side.
 5. work_pdf's contour generating function: eigen-decomposition (``propagator="eig"``) vs
    batched Pade matrix exponential (``"expm"``, default) on the report's range, with the
    load average printed (2 cores shared by other jobs: times are comparable only side by side).
@@ -213,9 +218,49 @@ def bench_work_variance(quick):
               f"{np.max(np.abs(new / old - 1)):12.1e} {fine:>18}")
 
 
+def bench_report_pieces(quick):
+    import resource
+    from analogue.circuit.experiments import load_experiment
+    from analogue.plots.open_question import CASES, open_question_data
+    from analogue.report.plan import RunOptions
+    from analogue.report.runs import run_experiment_runs
+    from analogue.report.theory_curves import experiment_theory, figure_curves
+
+    def cpu():
+        r = resource.getrusage(resource.RUSAGE_SELF)
+        return r.ru_utime + r.ru_stime
+
+    print("\n8. the quick report's theory pieces, CPU s, cold cache")
+    opts = RunOptions(quick=True, workers=1, progress=False)
+    res = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for name in ("stick", "slip", "work"):
+            exp = load_experiment(name)
+            c = cpu()
+            experiment_theory(exp, exp.report.for_options(opts), cache=False)
+            res[f"exact theory {name}"] = cpu() - c
+        if "--with-runs" in sys.argv:     # loads (or runs, ~5 min) the quick work runs
+            runs = run_experiment_runs(load_experiment("work"), opts)
+            c = cpu()
+            figure_curves(runs, cache=False)
+            res["theory curves work"] = cpu() - c
+        for gammas, label in (((10.0, 100.0), "open question quick"),
+                              ((1000.0,), "open question gamma 1000 (full adds)")):
+            c = cpu()
+            for a, half in CASES:
+                open_question_data(a, half, gammas=gammas, cache=False)
+            res[label] = cpu() - c
+    for k, v in res.items():
+        print(f"{k:<40} {v:7.2f}")
+    print(f"{'total (quick)':<40} {sum(v for k, v in res.items() if 'full' not in k):7.2f}"
+          f"  load {os.getloadavg()[0]:.1f}")
+
+
 def main(quick=False, only=None):
     sections = {"1": bench_rate, "2": bench_gamma, "3": bench_pdf, "4": lambda q: bench_cache(),
-                "5": bench_propagator, "6": bench_transition, "7": bench_work_variance}
+                "5": bench_propagator, "6": bench_transition, "7": bench_work_variance,
+                "8": bench_report_pieces}
     for key, run in sections.items():
         if only is None or key in only:
             run(quick)
