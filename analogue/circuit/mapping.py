@@ -109,6 +109,13 @@ FIXED_METHOD = "gear"
 DEFAULT_INDUCTOR_Q = 100.0
 # Target of the automatic shot pulse width: max|drift| w / mean (see analogue.circuit.shot).
 SHOT_PULSE_TARGET = 1e-3
+# Floor of the shot pulse width, as a fraction of the solver's largest step (noise_dt or
+# max_step): narrower pulses made ngspice's velocity relax too slowly between kicks (pure shot
+# noise with cubic = 0.5: automatic width 3.3e-5 of the step, dv/dt 4-20 % too small, stationary
+# mean 0.49 against 0.19; 1e-4 of the step: -1.4 %; 4e-4 and above: within 0.3 %, measured on
+# the same kicks; tests/unit/test_shot_pulse_width_floor.py).  ngspice merges breakpoints closer
+# than a fraction of the largest step, which the pulses' corners then are (our reading).
+SHOT_MIN_WIDTH = 1e-3
 # How far the stationary velocity may wander when checking voltage ratings: to where
 # p_s ~ exp(-gamma U) (eq. (6)) has fallen to exp(-SWING_LEVEL) ~ 1e-14 of its peak; p_s is
 # log-concave, so it keeps falling at least as fast beyond.  Since U'' >= 1/tau_m this is never
@@ -175,7 +182,8 @@ class CircuitSpec:
         ``inductor_q``.
     shot_width : float or None
         Width of a shot-noise pulse in model time units; None: ``1e-3 mean / max|drift|``
-        (a kick error of 1e-3 of the mean jump, :mod:`analogue.circuit.shot`).
+        (a kick error of 1e-3 of the mean jump, :mod:`analogue.circuit.shot`), at least
+        ``SHOT_MIN_WIDTH`` (1e-3) of the largest solver step; a smaller width is refused.
     """
 
     coulomb: str = "diode-bridge"
@@ -814,8 +822,15 @@ def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
             drift_max += model.spring * (abs(model.x0) + delta_max / model.spring + 8.0 * sh.mean
                                          + (math.sqrt(2 * SWING_LEVEL * model.tau_m / model.gamma)
                                             if gaussian else 0.0))
+        step = spec.max_step if spec.max_step is not None else noise_dt
+        w_min = SHOT_MIN_WIDTH * step
+        if spec.shot_width is not None and spec.shot_width < w_min * (1 - 1e-12):
+            raise ValueError(f"shot_width={spec.shot_width:.3g} is below {w_min:.3g} "
+                             f"({SHOT_MIN_WIDTH:g} of the largest solver step {step:.3g}): "
+                             "ngspice then integrates the velocity between kicks wrongly; "
+                             "raise shot_width or lower max_step")
         shot_width = (spec.shot_width if spec.shot_width is not None
-                      else SHOT_PULSE_TARGET * sh.mean / drift_max)
+                      else max(SHOT_PULSE_TARGET * sh.mean / drift_max, w_min))
         bias["shot_pulse"] = drift_max * shot_width / sh.mean
         bias["shot_overlap"] = sh.rate * shot_width
         # the pulses' edges are ramps, integrated by ngspice with first-order steps after

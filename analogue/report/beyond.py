@@ -175,12 +175,18 @@ def _h(exp: Experiment) -> float:
 
 
 def _stationary_theory(exp: Experiment, model: Model, observables) -> dict:
-    """Exact stationary values (family numerics at the ideal model's grid spacing)."""
+    """Exact stationary values (family numerics at the ideal model's grid spacing).  The
+    window masses (stick fraction, P(v=0), P(v>0.05)) read the grid law, first order in h
+    for shot noise, so they take the Richardson pair h, h/2 as the moments do (shot.toml's
+    P(v=0) read 0.42912 at h; 0.43179 at h/2, 0.43313 at h/4, Monte Carlo 0.43440 +- 0.00064);
+    values read from the Richardson moments are the same on both grids and unchanged."""
     from ..theory import family
     h = _h(exp)
-    return C.stationary_theory(model, family.stationary_moments(model, h=h),
-                               threshold=STICK_THRESHOLD, work_variance={},
-                               law=family.stationary_law(model, h=h), observables=observables)
+    moments = family.stationary_moments(model, h=h)
+    coarse, fine = (C.stationary_theory(model, moments, threshold=STICK_THRESHOLD,
+                                        work_variance={}, law=family.stationary_law(model, h=hh),
+                                        observables=observables) for hh in (h, h / 2))
+    return {k: 2.0 * fine[k] - coarse[k] for k in coarse}
 
 
 def _transition_theory(exp: Experiment, model: Model, v0: float, times, observables) -> dict:
@@ -217,6 +223,19 @@ def _transition_law(exp: Experiment, model: Model, v0: float, times):
         vd, un = family.unkicked(model, ts, v0)
         point = (vd, np.where(vd == 0.0, 0.0, un))
     return v, f, atom, point
+
+
+def _paper_law(model: Model, v: np.ndarray) -> tuple[np.ndarray, float]:
+    """(density on ``v``, atom at 0) of the paper's law at the member's Delta and noise (no
+    cubic or Stribeck term): exp(-gamma U)/Z with Gaussian noise only; otherwise the
+    Kolmogorov-Feller grid law interpolated (Model.stationary_pdf refuses shot noise: a cubic
+    or Stribeck member with pure shot noise crashed its report)."""
+    from ..theory import family
+    base = model.replace(stribeck=None, cubic=0.0)
+    if base.shot is None:
+        return base.stationary_pdf(v), 0.0
+    vg, dens, atom = family.stationary_law(base)
+    return np.interp(v, vg, dens, left=0.0, right=0.0), float(atom)
 
 
 def _null_se(o: C.Observable, law: C.LawMoments, n: int) -> float:
@@ -450,7 +469,7 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
            "atom_measured": float(np.mean(np.abs(vs) < STICK_THRESHOLD)), "label": name}
     if m.stribeck is not None or m.cubic > 0:
         base = m.replace(stribeck=None, cubic=0.0)  # the paper's law at the same Delta
-        fig["paper_density"] = base.stationary_pdf(v)
+        fig["paper_density"], _ = _paper_law(m, v)
         fig["paper_label"] = f"paper's law (Delta = {m.delta:g}, no extension)"
         from ..theory.exact import stationary_moments as _sm
         bm = _sm(base)
