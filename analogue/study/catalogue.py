@@ -125,19 +125,20 @@ def stationary_sample(ens: Ensemble, *, burn_in: float, threshold: float, force:
 
 
 def first_swing(t: np.ndarray, v: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Per replica: the time the first swing ends (v returns to 0 from below after leaving
-    rest, v < -0.05: half a period of the damped oscillation) and |x| there (the first
-    amplitude); NaN for a replica that never completes it.  Released from x0 > 0 at rest, the
-    object moves with v < 0 first."""
+    """Per replica: the time the first swing ends (v returns to 0 after leaving rest,
+    |v| > 0.05: half a period of the damped oscillation) and |x| there (the first amplitude);
+    NaN for a replica that never completes it.  The swing's direction is that of the first
+    departure: backward when released from x0 > 0 at rest, forward from x0 < 0 (a release
+    moving forward first had its second swing measured before)."""
     n = v.shape[0]
     t_half = np.full(n, np.nan)
     amp = np.full(n, np.nan)
     for r in range(n):
-        moving = np.flatnonzero(v[r] < -0.05)
+        moving = np.flatnonzero(np.abs(v[r]) > 0.05)
         if moving.size == 0:
             continue
         j0 = moving[0]
-        back = np.flatnonzero(v[r, j0:] >= 0.0)
+        back = np.flatnonzero(np.sign(v[r, j0]) * v[r, j0:] <= 0.0)
         if back.size == 0:
             continue
         j = j0 + back[0]

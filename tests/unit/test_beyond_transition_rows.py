@@ -223,3 +223,18 @@ def test_pure_shot_window_rows_are_converged_in_the_grid():
         want = theory[o.label]
         se = math.sqrt(want * (1 - want) / n)
         assert abs(got - want) < 4 * se, (o.label, got, want, se)
+
+
+# ------------------------------------------------------------------ spring: first swing
+def test_first_swing_of_a_release_moving_forward_first():
+    """Released from x0 < 0 (or pushed by a > Delta + spring x0) the object moves forward
+    first: the first swing ends when v comes back to 0 from above, at pi/w.  The estimator
+    looked for v < -0.05 and measured the second swing (2 pi/w) of such a release."""
+    t = np.linspace(0, 10, 10001)
+    w = np.array([1.0, 1.5])[:, None]
+    x0 = np.array([-2.0, 1.0])[:, None]          # forward first, then backward first
+    x = x0 * np.cos(w * t)
+    v = -x0 * w * np.sin(w * t)
+    half, amp = C.first_swing(t, v, x)
+    assert half == pytest.approx(np.pi / w.ravel(), abs=2 * (t[1] - t[0]))
+    assert amp == pytest.approx(np.abs(x0).ravel(), rel=1e-4)
