@@ -782,7 +782,7 @@ def _work_pdf_shared(model: Model, w: np.ndarray, tau: float, h: float, modes: i
                      mean: float, propagator: str = "expm") -> np.ndarray:
     """:func:`work_pdf` with one contour per group of nearby W (see its docstring)."""
     out = np.full(w.size, np.nan)
-    k0s, _ = _legendre_sweep(model, w, h, "uniform")
+    k0s, lams = _legendre_sweep(model, w, h, "uniform")
     todo = [int(i) for i in np.argsort(w, kind="stable")]
     while todo:
         i = todo[0]
@@ -841,7 +841,8 @@ def _work_pdf_shared(model: Model, w: np.ndarray, tau: float, h: float, modes: i
                 out[j] = math.exp(math.log(tau) + log_p - kc * W - math.log(math.pi))
             break
         if np.isnan(out[i]):     # the lowest W not resolved by its group: alone, as before
-            out[i] = _work_pdf_one(model, float(w[i]), tau, h, modes, mean, propagator)
+            out[i] = _work_pdf_one(model, float(w[i]), tau, h, modes, mean, propagator,
+                                   root=(float(k0s[i]), float(lams[i])))
         # members not resolved stay for a later group, centred nearer to them
         todo = [j for j in todo if np.isnan(out[j])]
     return out
@@ -969,7 +970,7 @@ class _Reduced:
 
 
 def _work_pdf_one(model: Model, w: float, tau: float, h: float, modes: int, mean: float,
-                  propagator: str = "expm") -> float:
+                  propagator: str = "expm", root: tuple[float, float] | None = None) -> float:
     """ln p on the fine grid (h/2) by the contour integral, with the O(h^2) grid error of the
     saddle term ``K(k*) - k* W`` (the eigenvalue error times tau) removed by Richardson
     extrapolation against the coarse grid h at the same k*; the remaining factor (the contour
@@ -982,7 +983,9 @@ def _work_pdf_one(model: Model, w: float, tau: float, h: float, modes: int, mean
     if all three fail the large-deviation form of :func:`work_pdf` is returned (ln p right to
     O(1); only reached far in the tail, at densities far below 1e-8).
     """
-    k0, lam = _legendre_root(model, w, h, mean)
+    # root: (k0, lambda(k0)) already solved by the caller's sweep (the same equation,
+    # lambda'(k0) = w, bracketed from a neighbour instead of from k = 0)
+    k0, lam = root if root is not None else _legendre_root(model, w, h, mean)[:2]
     W = w * tau
     g1 = _grid_for(model, k0, h, extra=_tilt_centres(model, 0.0))
     g2 = Grid(h / 2.0, 2 * g1.i_min, 2 * g1.i_max)
