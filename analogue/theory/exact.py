@@ -136,7 +136,9 @@ def propagator(model: Model, v: ArrayLike, t: ArrayLike, v0: float, t0: float = 
     t - t0 >= 0.5 tau_m (measured against the Delta = 0 closed form: 1.3e-3 and 5e-4; the
     tests check the stated bounds); halving h changes the density by less than 3e-3 of its
     peak (measured <= 2.3e-3, at t - t0 = 0.1 tau_m); ``integral f dv = 1`` within 1e-3
-    (measured 2e-4); the t -> inf limit is the exact ``p_s`` (eq. (6)) to ~1e-12.
+    (measured 2e-4); the t -> inf limit is the exact ``p_s`` (eq. (6)) to ~1e-11 of its
+    peak (the contour route's round-off floor; measured 4e-12 - 5e-11 at t - t0 = 40 tau_m,
+    gamma = 10; the eigen route gave ~1e-12).
     """
     _check_model(model)
     if not model.is_paper:
