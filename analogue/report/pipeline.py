@@ -291,23 +291,36 @@ def _open_question_section(out: Path, opts: RunOptions, data=None) -> Section:
                    figures=[Figure(p, caps[i] if i < len(caps) else "") for i, p in enumerate(paths)])
 
 
-class _TheoryThread:
-    """One background thread for the theory, which needs no circuit data (issue 10, item 4).
+class _Workers:
+    """Background threads that run tasks in submission order, each as a phase of the report
+    (issue 10, item 4: keep every core busy from start to end).
 
-    ngspice runs as subprocesses and the main thread mostly waits for them, so the theory
-    runs beside them; BLAS/LAPACK are limited to one thread while a task runs (threadpoolctl),
-    so the theory adds one runnable thread, not one per core.  The thread is a daemon: an interrupt
-    does not wait for the theory step under way."""
+    - the **theory** thread (one): the theory needs no circuit data, so it runs while ngspice
+      runs; BLAS/LAPACK are limited to one thread while a task runs (threadpoolctl), so it adds
+      one runnable thread, not one per core;
+    - the **circuit** threads: every experiment's circuit runs (and the family members'
+      analyses), queued from the start, so that ngspice never waits for the main thread's
+      comparisons of the previous experiment.  Two threads: most runs of the quick paper are
+      one or two decks, which alone leave a core idle (measured: one core idle for most of
+      the 116 s of circuit runs when they ran one after the other in the main thread).
 
-    def __init__(self, phases: _Phases):
+    The threads are daemons: an interrupt does not wait for a task under way (see
+    :meth:`abort`)."""
+
+    def __init__(self, phases: _Phases, name: str, threads: int = 1, blas_limit: bool = False):
         import queue
         import threading
-        self.phases = phases
+        self.phases, self.name, self.blas_limit = phases, name, blas_limit
         self.queue: queue.Queue = queue.Queue()
-        self.thread = threading.Thread(target=self._run, name="analogue-theory", daemon=True)
-        self.thread.start()
+        self.threads = [threading.Thread(target=self._run, daemon=True,
+                                         name=f"analogue-{name}" + (f"-{i}" if threads > 1 else ""))
+                        for i in range(threads)]
+        for t in self.threads:
+            t.start()
 
     def _run(self):
+        from contextlib import nullcontext
+
         from threadpoolctl import threadpool_limits
         while True:
             item = self.queue.get()
@@ -320,7 +333,8 @@ class _TheoryThread:
                 # the limit is process-wide (OpenBLAS has one pool): held only while a theory
                 # task runs, so the main thread's own theory (the family chapter) gets both
                 # cores once the background work is done
-                with threadpool_limits(1), self.phases(phase, experiment, thread="theory"):
+                with (threadpool_limits(1) if self.blas_limit else nullcontext()), \
+                        self.phases(phase, experiment, thread=self.name):
                     fut.set_result(fn())
             except BaseException as exc:  # handed to whoever waits for the result
                 fut.set_exception(exc)
@@ -330,7 +344,7 @@ class _TheoryThread:
         self.queue.put((fut, phase, experiment, fn))
         return fut
 
-    def close(self) -> None:
+    def _cancel_pending(self) -> None:
         import queue
         while True:               # whatever has not started is cancelled
             try:
@@ -339,7 +353,29 @@ class _TheoryThread:
                 break
             if item is not None:
                 item[0].cancel()
-        self.queue.put(None)
+
+    def close(self) -> None:
+        self._cancel_pending()
+        for _ in self.threads:
+            self.queue.put(None)
+
+    def abort(self, wait: float = 10.0) -> None:
+        """After an interrupt: nothing new starts, and the ngspice processes of the tasks under
+        way are killed (again and again: a task whose deck was killed may start its next one)
+        until their threads end or ``wait`` seconds have passed; a task in pure numerics is
+        left to the daemon thread.  Its temporary directories are removed as it unwinds."""
+        from ..circuit.ngspice import terminate_all
+        self.close()
+        deadline = time.monotonic() + wait
+        while any(t.is_alive() for t in self.threads) and time.monotonic() < deadline:
+            terminate_all()
+            for t in self.threads:
+                t.join(0.05)
+        terminate_all()
+
+
+# the circuit threads (see _Workers): each simulate call runs up to `workers` ngspice processes
+CIRCUIT_THREADS = 2
 
 
 def _wants_open_question(experiments) -> bool:
@@ -363,14 +399,37 @@ def build_report(names, out: Path, opts: RunOptions, title: str, chapter=()) -> 
     out.mkdir(parents=True, exist_ok=True)
     fails = _Failures()
     phases = _Phases(origin=t0)
-    pool = _TheoryThread(phases)
-    try:
-        return _build(experiments, members, out, opts, title, fails, phases, pool, t0, load0)
-    finally:
-        pool.close()
+    # ngspice runs in the circuit threads: this (main) thread's guard turns SIGINT/SIGTERM/
+    # SIGHUP into RunInterrupted here (killing every ngspice group), whoever called us
+    from ..circuit.ngspice import interrupt_guard
+    with interrupt_guard():
+        pool = _Workers(phases, "theory", 1, blas_limit=True)
+        circuit = _Workers(phases, "circuit", CIRCUIT_THREADS)
+        try:
+            return _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
+                          t0, load0)
+        except BaseException:
+            circuit.abort()   # an interrupt (sections' failures are caught in _build)
+            raise
+        finally:
+            circuit.close()
+            pool.close()
 
 
-def _build(experiments, members, out, opts, title, fails, phases, pool, t0, load0) -> Path:
+def _member_task(exp, opts):
+    from . import beyond
+    _log(f"{exp.name}: family member: circuit against theory")
+    return beyond.analyse_member(exp, opts, progress=_log)
+
+
+def _runs_task(exp, opts):
+    _log(f"{exp.name}: circuit runs ({'quick' if opts.quick else 'full'} size; stored runs are "
+         "reused)")
+    return run_experiment_runs(exp, opts)
+
+
+def _build(experiments, members, out, opts, title, fails, phases, pool, circuit, t0,
+           load0) -> Path:
     from . import beyond
     # theory first, in the background: it needs no circuit data
     theory_f = [pool.submit("exact theory", exp.name,
@@ -380,13 +439,18 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, t0, load
     oq_f = (pool.submit("open question (exact rate functions)", None,
                         lambda: _open_question_data(opts))
             if _wants_open_question(experiments) else None)
+    # every circuit run queued at once, in order (the family members last): the comparisons
+    # below take each experiment's runs as they come, while ngspice goes on with the next
+    runs_f = [circuit.submit("circuit runs", exp.name, lambda exp=exp: _runs_task(exp, opts))
+              for exp in experiments]
+    members_f = [circuit.submit("family member (circuit and theory)", exp.name,
+                                lambda exp=exp: _member_task(exp, opts))
+                 for exp in members]
     all_runs, analyses, exp_sections, curves_f = [], [], {}, []
-    for exp, th_f in zip(experiments, theory_f):
+    for exp, th_f, run_f in zip(experiments, theory_f, runs_f):
         section = f"Experiment '{exp.name}'"
-        _log(f"{exp.name}: circuit runs ({'quick' if opts.quick else 'full'} size; stored runs are reused)")
-        with phases("circuit runs", exp.name):
-            runs, err = fails.attempt(section, "circuit runs",
-                                      lambda exp=exp: run_experiment_runs(exp, opts), exp.name)
+        with phases("waiting for circuit runs", exp.name):
+            runs, err = fails.attempt(section, "circuit runs", run_f.result, exp.name)
         if runs is None:
             th_f.cancel()
             exp_sections[exp.name] = Section(f"{section}: failed", experiment_section_text(exp),
@@ -413,21 +477,20 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, t0, load
         analyses.append(analysis)
         curves_f.append(cf)
 
-    t_members = time.perf_counter()
     member_analyses = []
-    for exp in members:
+    for exp, ma_f in zip(members, members_f):
         section = f"{beyond.CHAPTER_TITLE}: {exp.name}"
-        _log(f"{exp.name}: family member: circuit against theory")
-        with phases("family member (circuit and theory)", exp.name):
-            ma, err = fails.attempt(section, "member analysis",
-                                    lambda exp=exp: beyond.analyse_member(exp, opts, progress=_log),
-                                    exp.name)
+        with phases("waiting for family members", exp.name):
+            ma, err = fails.attempt(section, "member analysis", ma_f.result, exp.name)
         if ma is None:
             exp_sections[exp.name] = Section(f"{section}: failed", experiment_section_text(exp),
                                              error=err)
         else:
             member_analyses.append(ma)
-    member_wall = time.perf_counter() - t_members
+    # the chapter's own time: its members' analyses (in a circuit thread, beside the paper's
+    # comparisons) and, below, its figures
+    member_wall = sum(p["seconds"] for p in phases.items
+                      if p["phase"] == "family member (circuit and theory)")
 
     with phases("waiting for theory curves"):
         for a, f in zip(analyses, curves_f):
