@@ -416,6 +416,22 @@ def build_report(names, out: Path, opts: RunOptions, title: str, chapter=()) -> 
             pool.close()
 
 
+def _experiment_title(exp) -> str:
+    return f"Experiment '{exp.name}': {exp.model.regime} regime"
+
+
+def _curves_of(f: Future):
+    """An experiment's theory curves from the theory thread."""
+    try:
+        return f.result()
+    except Exception as exc:  # figure_curves keeps its failures; this is a safety net
+        from .theory_curves import CURVE_GROUPS, FigureCurves
+        curves = FigureCurves()
+        for g in CURVE_GROUPS:
+            curves.fail(g, exc)
+        return curves
+
+
 def _member_task(exp, opts):
     from . import beyond
     _log(f"{exp.name}: family member: circuit against theory")
@@ -446,9 +462,34 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
     members_f = [circuit.submit("family member (circuit and theory)", exp.name,
                                 lambda exp=exp: _member_task(exp, opts))
                  for exp in members]
-    all_runs, analyses, exp_sections, curves_f = [], [], {}, []
+    all_runs, analyses, exp_sections = [], [], {}
+    # Figures are drawn in this thread as soon as an experiment's theory curves are in, while
+    # the circuit threads run the next experiments (measured: the figures and page took 17 s
+    # after everything else had finished)
+    figs_by_name: dict = {}     # experiment -> (figures, errors)
+    undrawn: list = []          # (runs, analysis, future of its theory curves), in order
+    oq_section: list = []       # the open question's section, once drawn
+
+    def draw_ready(block: bool) -> None:
+        while undrawn and (block or undrawn[0][2].done()):
+            runs, a, f = undrawn.pop(0)
+            with phases("waiting for theory curves", runs.exp.name):
+                a.curves = _curves_of(f)
+            with phases("figures", runs.exp.name):
+                figs_by_name[runs.exp.name] = _figures_for(
+                    runs, a, out, fails, _experiment_title(runs.exp))
+        if oq_f is not None and not oq_section and (block or oq_f.done()):
+            _log("the paper's open question: exact rate functions at several gamma")
+            title_ = "The paper's open question: is the jump of I(w) at w = 0 real?"
+            with phases("figures: open question"):
+                sec, err = fails.attempt(title_, "exact rate functions",
+                                         lambda: _open_question_section(out, opts, oq_f))
+            oq_section.append(sec if sec is not None else Section(title_, error=err))
+
     for exp, th_f, run_f in zip(experiments, theory_f, runs_f):
         section = f"Experiment '{exp.name}'"
+        if not run_f.done():
+            draw_ready(block=False)
         with phases("waiting for circuit runs", exp.name):
             runs, err = fails.attempt(section, "circuit runs", run_f.result, exp.name)
         if runs is None:
@@ -475,10 +516,12 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
             continue
         all_runs.append(runs)
         analyses.append(analysis)
-        curves_f.append(cf)
+        undrawn.append((runs, analysis, cf))
 
     member_analyses = []
     for exp, ma_f in zip(members, members_f):
+        if not ma_f.done():
+            draw_ready(block=False)
         section = f"{beyond.CHAPTER_TITLE}: {exp.name}"
         with phases("waiting for family members", exp.name):
             ma, err = fails.attempt(section, "member analysis", ma_f.result, exp.name)
@@ -492,15 +535,7 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
     member_wall = sum(p["seconds"] for p in phases.items
                       if p["phase"] == "family member (circuit and theory)")
 
-    with phases("waiting for theory curves"):
-        for a, f in zip(analyses, curves_f):
-            try:
-                a.curves = f.result()
-            except Exception as exc:  # figure_curves keeps its failures; this is a safety net
-                from .theory_curves import CURVE_GROUPS, FigureCurves
-                a.curves = FigureCurves()
-                for g in CURVE_GROUPS:
-                    a.curves.fail(g, exc)
+    draw_ready(block=True)
 
     _log("drawing figures")
     draw0 = time.perf_counter()
@@ -550,23 +585,15 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
                                  lambda: Figure(*figures.fig_deterministic(fig1_runs, out)))
         sections.append(Section("Paper Fig. 1: deterministic motion",
                                 figures=[fig] if fig is not None else [], error=err))
-    by_name = {r.exp.name: (r, a) for r, a in zip(all_runs, analyses)}
     for exp in experiments:
         if exp.name in exp_sections:
             sections.append(exp_sections[exp.name])
             continue
-        runs, a = by_name[exp.name]
-        title_ = f"Experiment '{exp.name}': {exp.model.regime} regime"
-        figs, errs = _figures_for(runs, a, out, fails, title_)
-        sections.append(Section(title_, experiment_section_text(exp), figures=figs,
-                                error="; ".join(errs) if errs else None))
+        figs, errs = figs_by_name[exp.name]
+        sections.append(Section(_experiment_title(exp), experiment_section_text(exp),
+                                figures=figs, error="; ".join(errs) if errs else None))
 
-    if oq_f is not None:
-        _log("the paper's open question: exact rate functions at several gamma")
-        title_ = "The paper's open question: is the jump of I(w) at w = 0 real?"
-        sec, err = fails.attempt(title_, "exact rate functions",
-                                 lambda: _open_question_section(out, opts, oq_f))
-        sections.append(sec if sec is not None else Section(title_, error=err))
+    sections.extend(oq_section)
 
     if members:
         t_fig = time.perf_counter()
