@@ -249,10 +249,20 @@ class StationaryTheory:
     law: tuple | None = None
 
 
+def _grid_mass(v: np.ndarray, dens: np.ndarray, lo: float, hi: float) -> float:
+    """Mass of the grid density between lo and hi: the cumulative trapezoid, interpolated at
+    the ends.  A Riemann sum over the nodes inside jumps with the grid (stribeck.toml's
+    |v| < 0.05: 0.05191, 0.04941, 0.05058 at h, h/2, h/4; quadrature 0.05149) and misses the
+    part of the window beyond the last cell when the window edge is not a cell edge (pure
+    shot, slip regime: 0.0550 against the Monte Carlo 0.0574)."""
+    c = integrate.cumulative_trapezoid(dens, v, initial=0.0)
+    return float(np.interp(hi, v, c) - np.interp(lo, v, c))
+
+
 def _window_mass(th: StationaryTheory) -> float:
     assert th.law is not None
     v, dens, atom = th.law
-    return float(atom + np.sum(dens[np.abs(v) < th.threshold]) * (v[1] - v[0]))
+    return float(atom) + _grid_mass(v, dens, -th.threshold, th.threshold)
 
 
 def _stick_theory(th: StationaryTheory, tau=None) -> float:
@@ -265,7 +275,7 @@ def _stick_theory(th: StationaryTheory, tau=None) -> float:
 def _above_theory(th: StationaryTheory, tau=None) -> float:
     assert th.law is not None
     v, dens, _ = th.law
-    return float(np.sum(dens[v >= th.threshold]) * (v[1] - v[0]))
+    return _grid_mass(v, dens, th.threshold, float(v[-1]))
 
 
 def no_exact(*_args, **_kw) -> float:
