@@ -246,3 +246,9 @@ def test_element_terms_follow_the_mapping_bias():
     ident = C.Observable("identity <v> = 0", C.STATIONARY)
     assert C.element_error(ident, bias, model, 0.0) == pytest.approx(0.1 * model.velocity_scale)
     assert C.element_error(C.Observable("mean v", C.TRANSITION, t=1.0, v0=0.0), bias, model, 1.0) == 0.0
+    # the stationary mean velocity carries the creep too (its reference is ~0: relative terms
+    # vanish there), and a member without a spring has no creep term
+    mean_v = C.Observable("mean v", C.STATIONARY)
+    assert C.element_error(mean_v, bias, model, 0.0) == pytest.approx(0.1 * model.velocity_scale)
+    assert C.element_error(mean_v, {"cubic_variance": 0.01}, model.replace(spring=0.0),
+                           -2.0) == pytest.approx(0.02)
