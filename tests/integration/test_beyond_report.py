@@ -9,12 +9,16 @@ import json
 
 import pytest
 from click.testing import CliRunner
+from scipy.stats import norm
 
 from analogue.cli import main
 from analogue.report.metrics import validate_metrics
 
 pytestmark = pytest.mark.slow
 
+# per-row threshold (in SE) of the members' rows taken together: two-sided normal tail
+# 1 % / 49 rows (Bonferroni), i.e. a family-wise false alarm of ~1 % for a correct circuit
+Z_FAMILY = float(norm.isf(0.01 / 49 / 2))
 # what each member must report (labels as the paper's experiments name theirs)
 EXPECTED = {
     "shot": {"mean v", "var v", "P(v=0)", "P(v>0.05)", "P(v=0) at t=1 from v0=0"},
@@ -40,10 +44,15 @@ def test_member_report_quick(member, tmp_path):
     assert EXPECTED[member] <= set(rows), sorted(rows)
     assert metrics["failures"] == []
     for name, c in rows.items():
-        # within budget: |circuit - reference| <= 3 SE + the systematic terms
+        # |circuit - reference| <= Z SE + the systematic terms, Z for the whole family of rows
+        # (the report flags each row at 3 SE; with the members' ~49 rows a correct circuit
+        # would miss 3 SE somewhere in ~12 % of seeds: the seed plan's cubic draw has
+        # stationary var v at 3.1 SE past its budget, and 0.2 SE on an independent 64-replica
+        # run, 0.04359 +- 0.00085 vs 0.04337)
         diff = abs(c["circuit"] - c["theory"])
-        assert c["within_budget"], (name, c)
-        assert diff <= 3 * c["circuit_stderr"] + c["budget"]["total"] + 1e-12
+        assert diff <= Z_FAMILY * c["circuit_stderr"] + c["budget"]["total"] + 1e-12, (name, c)
+        assert c["within_budget"] == (diff <= 3 * c["circuit_stderr"] + c["budget"]["total"]
+                                      + 1e-12), name
         assert c["circuit_stderr"] > 0, name
     if member == "shot":
         # the atom: P(v = 0) of the exact law is well away from 0 and 1 in the stick regime,
