@@ -717,7 +717,8 @@ def work_pdf(model: Model, w: ArrayLike, tau: ArrayLike, *, h: float | None = No
     integral is not resolved (too small against the integrand: cancellation; an undecayed
     tail; h and h/2 disagreeing by more than 0.01 in ln p) waits for a later group centred
     nearer to it, and the lowest W of a group is computed alone (``share=False`` path, with
-    its fallbacks) if its own group fails.  Measured on 30 w over +-4 sd (the report's range),
+    its fallbacks) if its own group fails; a group whose contour does not decay with
+    ``modes`` retries with twice as many first.  Measured on 30 w over +-4 sd (the report's range),
     gamma = 10, under load: Fig. 8 model tau = 2 / 5 / 10: 23 / 19 / 29 s -> 2.4 / 2.8 / 3.2 s;
     OU tau = 1 / 2 / 5 / 10: 6-8x; OU against the closed form: 6e-6 (tau = 1), 2e-8 (tau >= 2).
     In the stick regime the shared densities differ from the per-w ones by up to 1.7e-3 near
@@ -821,9 +822,15 @@ def _work_pdf_shared(model: Model, w: np.ndarray, tau: float, h: float, modes: i
                 continue
             fine_integrals = {j: _integrate_contour(f2, float(w[j]) * tau) for j in group}
             if all(v is None for v in fine_integrals.values()):
-                # no member resolved on the fine grid (at tau = 1 in the stick regime: an
-                # undecayed plateau of |G| ~ 1e-6): the coarse contour could not change that,
-                # so it is not computed (measured: 2x fewer matrix exponentials at tau = 1)
+                # no member resolved on the fine grid: the coarse contour could not change
+                # that, so it is not computed.  If the contour did not decay (Fig. 8 model,
+                # tau = 1: |G| levels off at ~1e-6 with 48 modes, a basis artifact -- 96 and
+                # 144 modes decay below 1e-9), the group retries with twice the modes
+                # instead of sending each W off alone with 48 (measured on the report's quick
+                # bins: 7.7 -> 4.3 CPU-s, and those W moved from up to 3.1e-5 to <= 7.6e-7 of
+                # the 96-mode per-W values)
+                if f2[2] is not None:
+                    continue
                 break
             red1 = _Reduced(model, red2.k0, g1, m, propagator)
             K1 = red1.log_g_and_derivatives(kc, tau)[0]
