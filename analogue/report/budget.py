@@ -42,6 +42,16 @@ def held_noise_pair(model: Model, *, v0, t_end: float, replicas: int, seed: int,
     sample_dt = noise_dt * max(1, round(sample_dt / noise_dt))
     rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(7,)))
     z = rng.standard_normal((replicas, n_hold * per_hold))
+    if model.shot is not None:
+        # shot + Gaussian noise (the fused loop is Gaussian-only): two runs whose kicks come
+        # from one seed, so that the pair differs by the hold alone (a shot + Gaussian member's
+        # report failed on the fused loop's refusal)
+        from ..montecarlo import simulate_sde
+        kicks = int(np.random.SeedSequence(seed, spawn_key=(8,)).generate_state(1)[0])
+        kw = dict(v0=v0, t_end=t_end, replicas=replicas, dt=dt, sample_dt=sample_dt, seed=kicks)
+        held = z.reshape(replicas, n_hold, per_hold).mean(axis=2)
+        return (simulate_sde(model, noise=held, noise_hold=per_hold, **kw),
+                simulate_sde(model, noise=z, **kw))
     # both in one loop, each hold's mean driving its per_hold fine steps (the repeated array
     # is never built: 256 x 160000 steps, 330 MB, for the quick work experiment's stationary
     # pair); bit for bit the two simulate_sde runs
