@@ -58,6 +58,7 @@ __all__ = [
     "analyse_member",
     "is_member_experiment",
     "member_sizes",
+    "rate_function_data",
 ]
 
 MEMBERS = ("cubic", "stribeck", "spring", "shot")
@@ -482,25 +483,9 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
         "atom": (np.atleast_1d(family.propagator_atom(m, np.asarray(times), v00, h=_h(exp)))
                  if m.shot is not None else np.zeros(len(times))),
         "samples": [trans.at(t) for t in times], "threshold": STICK_THRESHOLD}
-    if m.shot is None and m.a != 0:
+    if m.a != 0:
         tick(f"{name}: work rate function")
-        mu = m.force * family.stationary_moments(m).mean
-        w = mu * np.linspace(-0.5, 2.5, 13)
-        rf = {"w": w, "member": family.rate_function(m, w), "mean": mu}
-        base = m.replace(stribeck=None, cubic=0.0)
-        from ..theory.exact import rate_function as _rf
-        rf["paper"] = _rf(base, w)
-        rf["paper_label"] = "paper's model, same Delta"
-        # the circuit's finite-tau estimate -ln P_tau(w)/(tau gamma), shifted to min 0
-        tau = WORK_TAU
-        ws = work_rate_samples(stat, tau, m.force, burn_in=burn).ravel()
-        cnt, edges = np.histogram(ws, bins=25)
-        keep = cnt >= 10
-        dens = cnt / (ws.size * np.diff(edges))
-        est = -np.log(dens[keep]) / (tau * m.gamma)
-        rf.update(w_circuit=0.5 * (edges[1:] + edges[:-1])[keep], rate_circuit=est - est.min(),
-                  tau=tau)
-        res.figures["rate_function"] = rf
+        res.figures["rate_function"] = rate_function_data(m, stat, burn)
     sm = family.stationary_moments(m)
     res.facts.update(mean=sm.mean, variance=sm.variance, p_zero=sm.p_zero,
                      p_zero_measured=fig["atom_measured"])
@@ -510,6 +495,63 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
         "band": plan.member_band, "plan": plan.describe()})
     res.wall_time = time.perf_counter() - t0
     return res
+
+
+def rate_function_data(m: Model, stat: Ensemble, burn: float, tau: float = WORK_TAU) -> dict:
+    """Figure data of a 1-D member's work rate function (a != 0): the exact rate function on a
+    grid of w, the paper's model where it is meaningful, the large-w asymptote with one-sided
+    kicks, and the finite-tau estimate from the stationary ensemble ``stat``.
+
+    Scaling (:mod:`analogue.theory.family`): ``I(w) = (1/gamma) sup_k [k w - lambda(k)]`` when
+    gamma is finite (the paper's), ``J(w) = sup_k [k w - lambda(k)]`` with
+    ``P_tau(w) ~ exp(-tau J)`` when gamma = inf (pure shot noise); the circuit's estimate
+    ``-ln P_tau(w)/(tau scale)`` uses the same ``scale`` (gamma, or 1)."""
+    from ..theory import family
+    pure_shot = m.shot is not None and not math.isfinite(m.gamma)
+    scale = m.gamma if math.isfinite(m.gamma) else 1.0
+    mu = m.force * family.stationary_moments(m).mean
+    edge = family.work_edge(m)
+    if edge is not None:
+        # one-sided pure shot noise: w has a lower edge F v_edge (no kick: J = rate there,
+        # +inf below); the grid starts on it and reaches 4 <w> - 3 edge (circuits/shot.toml:
+        # edge 0, <w> = 0.0625, 13 points: 3.6 CPU-s on the shared machine)
+        w = edge + (mu - edge) * np.linspace(0.0, 4.0, 13)
+    else:
+        w = mu * np.linspace(-0.5, 2.5, 13)
+    rf: dict = {"w": w, "member": family.rate_function(m, w), "mean": mu, "scale": scale,
+                "pure_shot": pure_shot, "edge": edge,
+                "ylabel": "J(w)" if pure_shot else "I(w)"}
+    if m.shot is not None:
+        rf["rate"] = m.shot.rate
+    if not pure_shot:
+        # the paper's model at the same Delta, a, gamma (with pure shot noise there is no
+        # paper's curve at the same gamma = inf: the paper's I needs Gaussian noise)
+        from ..theory.exact import rate_function as _rf
+        base = m.replace(stribeck=None, cubic=0.0, shot=None)
+        rf["paper"] = _rf(base, w)
+        rf["paper_label"] = ("paper's model, same Delta and gamma (no kicks)"
+                             if m.shot is not None else "paper's model, same Delta")
+    if m.shot is not None and not m.shot.two_sided and m.cubic == 0:
+        # J(w) = k_pole w - 2 sqrt(rate k_pole w) + O(1) (family.rate_function_asymptote): the
+        # O(1) is matched at the largest w of the grid and the form drawn over the grid's
+        # upper half and beyond (it holds for k_pole w >> 1: circuits/shot.toml reaches
+        # k_pole w = 2.5 on the grid, where J's slope is 4.3 against k_pole = 10)
+        k_pole, rate = family.rate_function_asymptote(m)
+        if k_pole * w[-1] > 0:
+            wa = np.linspace(float(w[6]), float(w[-1] + 0.5 * (w[-1] - w[0])), 60)
+            form = (k_pole * wa - 2.0 * np.sqrt(rate * k_pole * wa)) / scale
+            top = (k_pole * w[-1] - 2.0 * math.sqrt(rate * k_pole * w[-1])) / scale
+            rf.update(k_pole=k_pole, w_asymptote=wa,
+                      asymptote=form + float(rf["member"][-1]) - top)
+    # the circuit's finite-tau estimate -ln P_tau(w)/(tau scale), shifted to min 0
+    ws = work_rate_samples(stat, tau, m.force, burn_in=burn).ravel()
+    cnt, edges = np.histogram(ws, bins=25)
+    keep = cnt >= 10
+    dens = cnt / (ws.size * np.diff(edges))
+    est = -np.log(dens[keep]) / (tau * scale)
+    rf.update(w_circuit=0.5 * (edges[1:] + edges[:-1])[keep], rate_circuit=est - est.min(),
+              tau=tau)
+    return rf
 
 
 def _prov(exp: Experiment, ens: Ensemble, sizes: MemberSizes, seeds: dict) -> dict:

@@ -58,6 +58,9 @@ def test_member_report_quick(member, tmp_path):
         # the atom: P(v = 0) of the exact law is well away from 0 and 1 in the stick regime,
         # and the circuit's stuck fraction is measured against it
         assert 0.2 < rows["P(v=0)"]["theory"] < 0.6
+        # the work rate function of pure shot noise (gamma = inf: J(w), no 1/gamma)
+        assert (out / "beyond_rate_function_shot.png").stat().st_size > 0
+        assert "exact work rate function J(w)" in html
     if member == "spring":
         assert rows["identity <v> = 0"]["theory"] == 0.0
 
