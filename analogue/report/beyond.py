@@ -456,6 +456,12 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
             if o.run == C.TRANSITION:
                 assert o.t is not None  # transition observables carry their time
                 se = max(se, _null_se(o, laws[o.t], ens.replicas))
+            elif o.run == C.STATIONARY and o.label in exact_eff:
+                se_null = C.stationary_null_se(o.entry, c, se, float(exact_eff[o.label]))
+                if se_null > se:
+                    note += ("; SE: the replica jackknife rescaled to the theory's value "
+                             "(study.catalogue.stationary_null_se)")
+                se = se_null
             b = Budget(smoothing=smoothing, bandwidth=_measured(band, o.label),
                        integration=_measured(integ, o.label) if ens is stat else 0.0,
                        element=C.element_error(o, bias, m, th_model))

@@ -16,8 +16,8 @@ from .budget import SE_MULTIPLIER, held_noise_pair
 from .metrics import Budget, compare
 from ..estimators.resampling import jackknife, jackknife_difference
 from ..study.seeds import SeedPlan
-from ..study.catalogue import (Kind, stationary_values, transition_observables, transition_theory_se,
-                               transition_values)
+from ..study.catalogue import (Kind, stationary_null_se, stationary_observables, stationary_values,
+                               transition_observables, transition_theory_se, transition_values)
 from .runs import ExperimentRuns
 from .theory_curves import ExperimentTheory, FigureCurves, experiment_theory
 
@@ -48,6 +48,8 @@ class ExperimentAnalysis:
         return {"comparisons": n, "within_budget": ok, "abs_z_below_3": z_ok}
 
 
+_NULL_SE_NOTE = ("SE: the replica jackknife rescaled to the theory's value (p(1-p) or sigma^4), "
+                 "as the estimate's spread under the null (study.catalogue.stationary_null_se)")
 _THEORY_SE_NOTE = ("SE: the larger of the replica jackknife and that of n draws from the "
                    "exact law (sigma/sqrt(n) for the mean, sqrt(mu4/n - sigma^4 (n-3)/(n(n-1))) "
                    "for the variance)")
@@ -147,10 +149,14 @@ def analyse(runs: ExperimentRuns, *, theory: ExperimentTheory | None = None, pro
     band = jackknife_difference(stationary_fn, held, white)
     # the check covers a prefix window of the run: compared on the same rows and times
     integ = jackknife_difference(stationary_fn, *runs.check_pair("stationary"))
+    stat_entries = {o.label: o.entry for o in stationary_observables(taus)}
     for k, (val, se) in circ.items():
         b = Budget(smoothing=ex_eff[k] - ex[k], bandwidth=_bias(band, k),
                    integration=_bias(integ, k))
+        se_null = stationary_null_se(stat_entries[k], val, se, ex_eff[k])
+        note = _NULL_SE_NOTE if se_null > se else ""
+        se = se_null
         res.budgets[k] = b
         res.circuit[k], res.exact[k], res.exact_eff[k] = (val, se), ex[k], ex_eff[k]
-        res.comparisons.append(compare(exp.name, k, val, se, ex[k], "exact", b))
+        res.comparisons.append(compare(exp.name, k, val, se, ex[k], "exact", b, note))
     return res
