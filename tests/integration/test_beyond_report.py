@@ -63,6 +63,9 @@ def test_member_report_quick(member, tmp_path):
         assert "exact work rate function J(w)" in html
     if member == "spring":
         assert rows["identity <v> = 0"]["theory"] == 0.0
+    if member in ("cubic", "stribeck"):
+        # the weak-noise law from the quasi-potential, and what of the paper carries over
+        assert "weak-noise law exp(-gamma U)/Z" in html and "Weak noise: the stationary" in html
 
 
 def test_paper_chapter_is_built(tmp_path, monkeypatch):
