@@ -1010,9 +1010,16 @@ def _check_family_bias(m: CircuitMapping) -> None:
                              f"bias_tolerance={tol}; raise inductor_q, lower inductor_resistance, or "
                              f"set allow_bias")
     if "shot_pulse" in b and b["shot_pulse"] > tol:
+        w_ok = m.shot_width * tol / b["shot_pulse"]
+        # the width may not go below SHOT_MIN_WIDTH of the largest step: name the step too
+        # when the floor is what holds the width up
+        used = m.spec.max_step if m.spec.max_step is not None else m.noise_dt
+        floor = (f", and max_step below {w_ok / SHOT_MIN_WIDTH:.3g} (the width must stay >= "
+                 f"{SHOT_MIN_WIDTH:g} of it)"
+                 if w_ok < SHOT_MIN_WIDTH * used * (1 - 1e-12) else "")
         raise ValueError(f"shot_width={m.shot_width:.3g}: estimated kick error max|drift| w/mean="
                          f"{b['shot_pulse']:.3g} exceeds bias_tolerance={tol}; lower shot_width below "
-                         f"{m.shot_width * tol / b['shot_pulse']:.3g} or set allow_bias")
+                         f"{w_ok:.3g}{floor}, or set allow_bias")
     if "stribeck_smoothing" in b and b["stribeck_smoothing"] > tol:
         raise ValueError(f"smoothing={spec.smoothing}: epsilon/v_s={b['stribeck_smoothing']:.3g} exceeds "
                          f"bias_tolerance={tol} (the tanh must switch inside the Stribeck decay); "

@@ -46,3 +46,17 @@ def test_shipped_shot_width_unchanged():
     m = map_model(Model(1.0, 0.5, 0.2, math.inf, shot=ShotNoise(1.0, 0.5)), CircuitSpec(**SPEC))
     assert m.bias["shot_pulse"] == pytest.approx(SHOT_PULSE_TARGET, rel=1e-12)
     assert m.shot_width > SHOT_MIN_WIDTH * m.noise_dt
+
+
+def test_refusal_of_a_wide_floor_names_max_step():
+    """cubic = 5 with shot noise: the floored width (1e-3 noise_dt) gives a kick error above
+    the tolerance; lowering shot_width alone would be refused by the floor, so the message
+    names max_step too, and following it gives a valid mapping."""
+    m = Model(1.0, 0.5, -0.2, math.inf, cubic=5.0, shot=ShotNoise(1.5, 0.4))
+    with pytest.raises(ValueError, match="max_step") as err:
+        map_model(m, CircuitSpec(**SPEC))
+    import re
+    w = float(re.search(r"shot_width below (\S+)", str(err.value)).group(1).rstrip(","))
+    step = float(re.search(r"max_step below (\S+)", str(err.value)).group(1).rstrip(","))
+    ok = map_model(m, CircuitSpec(**SPEC, max_step=step, shot_width=w))
+    assert ok.bias["shot_pulse"] <= 0.05 * (1 + 1e-2)
