@@ -81,21 +81,28 @@ def test_empty_store_is_refused_everywhere(cli, tmp_path, monkeypatch, args):
 # the maximiser of k w - lambda(k) runs to k -> -inf) ran for minutes and then printed a
 # number from the grid's unresolved lambda at |k| ~ 1e12.  Now: n/a (NaN) within seconds.
 @pytest.mark.timeout(120)
-def test_shot_rate_function_at_the_support_edge_is_nan_not_a_hang():
+def test_shot_rate_function_at_the_support_edge_answers_quickly():
+    """Pure one-sided shot noise in the stick regime (circuits/shot.toml): the work rate
+    cannot be negative, and w = 0 is the edge of its support, reached by the histories with
+    no kick at all (the object stays stuck): J(0) = rate (P(no kick in T) = e^{-rate T}),
+    J = +inf below.  (It once hung, then answered nan; theory.family.work_edge.)"""
     import math
     from analogue.circuit.experiments import load_experiment
     from analogue.theory import exact
     m = load_experiment(SHOT).model
     got = exact.rate_function(m, [0.0, -0.1])
-    assert all(math.isnan(x) for x in got)
+    assert got[0] == pytest.approx(m.shot.rate, rel=1e-9)
+    assert math.isinf(got[1]) and got[1] > 0
 
 
 @pytest.mark.timeout(120)
-def test_shot_rate_function_cli_answers_n_a(cli):
-    r = cli.invoke(main, ["theory", "rate-function", str(SHOT), "--w", "0", "--json"])
+def test_shot_rate_function_cli_answers_at_and_below_the_edge(cli):
+    r = cli.invoke(main, ["theory", "rate-function", str(SHOT), "--w", "0", "--w", "-0.1",
+                          "--json"])
     assert r.exit_code == 0, r.output
-    row = _strict(r.stdout)["rows"][0]
-    assert row["I_exact"] is None and "support" in row["null_reasons"]["I_exact"]
+    at, below = _strict(r.stdout)["rows"]
+    assert at["I_exact"] == pytest.approx(1.0, rel=1e-9)           # the kick rate of shot.toml
+    assert below["I_exact"] is None and "cannot be reached" in below["null_reasons"]["I_exact"]
 
 
 # --- theory: huge numbers are refused naming the option, sizes are bounded ----------------
