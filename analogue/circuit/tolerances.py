@@ -139,7 +139,7 @@ FIXED = Tolerances(FIXED_RELTOL, FIXED_TRTOL, FIXED_METHOD)
 # met the criterion for the stick and work stationary runs (criterion_met = false, predicted
 # 0.10 and 0.20) and the report's integration term was 0.118 and 0.162 statistical errors at
 # --quick; with trap 3e-5 (chosen for both: predicted 0.082, criterion met, on stick; 0.126,
-# still not met, on work) it is 0.047 and 0.073, for ~15-20 % more CPU (the
+# still not met, on work) it is 0.047 and 0.073, for ~20-25 % more CPU (the
 # tighter run, its 100x tighter check and a calibration reference 100x below 3e-5; benchmarks/
 # README.md, "tighter candidates").  trap 5e-5 measured worse than 1e-4 (0.11 vs 0.10 on
 # stick, 0.25 vs 0.20 on work) and was never chosen: left out.
