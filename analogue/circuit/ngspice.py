@@ -302,12 +302,17 @@ except (AttributeError, RuntimeError):  # pragma: no cover - other interpreters
 
 # ------------------------------------------------------------------------- signal handling
 _GUARD_LOCK = threading.RLock()
-_GUARD: dict[str, Any] = {"depth": 0, "previous": {}, "raised": False}
+_GUARD: dict[str, Any] = {"depth": 0, "previous": {}, "raised": False, "deferred": None}
 _GUARDED_SIGNALS = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP")
                          if hasattr(signal, n))
 
 
 def _on_signal(signum, frame):
+    if _GUARD["deferred"] is not None:
+        # between starting ngspice and tracking it (:func:`_signals_deferred`): acting now
+        # would leave the new process out of terminate_all and orphan it in its own session
+        _GUARD["deferred"].append(signum)
+        return
     terminate_all()  # first of all: no ngspice keeps running while we unwind
     prev = _GUARD["previous"].get(signum)
     if callable(prev) and prev is not signal.default_int_handler:
@@ -349,6 +354,23 @@ def interrupt_guard():
                 for sig, prev in _GUARD["previous"].items():
                     signal.signal(sig, prev if prev is not None else signal.SIG_DFL)
                 _GUARD["previous"] = {}
+
+
+@contextmanager
+def _signals_deferred():
+    """Inside an :func:`interrupt_guard` of the main thread: a guarded signal that arrives in
+    the block is acted on when the block ends (so a process started and tracked in it is
+    killed with the others), not in the middle of it.  Elsewhere a no-op."""
+    if threading.current_thread() is not threading.main_thread() or _GUARD["depth"] == 0:
+        yield
+        return
+    _GUARD["deferred"] = []
+    try:
+        yield
+    finally:
+        pending, _GUARD["deferred"] = _GUARD["deferred"], None
+        if pending:
+            _on_signal(pending[0], None)
 
 
 # ------------------------------------------------------------------------- temporary dirs
@@ -453,23 +475,30 @@ def run_deck(text: str, *, timeout: float = 3600.0, t_stop: float | None = None,
         raw = work / "out.raw"
         out_p, err_p = work / "stdout.txt", work / "stderr.txt"
         t0 = _time.perf_counter()
-        try:
-            with open(out_p, "wb") as out, open(err_p, "wb") as err:
-                proc = _spawn([exe, "-b", "-r", raw.name, "deck.cir"], work, out, err)
-        except OSError as exc:
-            raise NgspiceError(f"could not start {exe}: {_one_line(str(exc))}") from None
-        _track(proc, group)
+        proc = None
         try:
             # Called from the main thread (a script, a calibration run), a signal must not
-            # kill us and orphan ngspice in its own session: guard this wait too (a no-op in
-            # worker threads, whose caller's guard covers them; re-entrant).
+            # kill us and orphan ngspice in its own session: the guard is in place before
+            # ngspice starts (a no-op in worker threads, whose caller's guard covers them;
+            # re-entrant), and a signal between the start and the tracking is acted on once
+            # the process is tracked (measured: a loaded machine let the fake ngspice of
+            # tests/faults start its child before this thread reached a guard installed
+            # after the start, and SIGHUP then killed Python by default)
             with interrupt_guard():
+                with _signals_deferred():
+                    try:
+                        with open(out_p, "wb") as out, open(err_p, "wb") as err:
+                            proc = _spawn([exe, "-b", "-r", raw.name, "deck.cir"], work, out, err)
+                    except OSError as exc:
+                        raise NgspiceError(f"could not start {exe}: {_one_line(str(exc))}") from None
+                    _track(proc, group)
                 returncode = _wait(proc, timeout)
         except subprocess.TimeoutExpired:
             raise NgspiceError(_with_said(f"ngspice did not finish within timeout={timeout} s",
                                           _said(_read_tail(out_p), _read_tail(err_p)))) from None
         finally:
-            _untrack(proc, group)
+            if proc is not None:
+                _untrack(proc, group)
         wall = _time.perf_counter() - t0
         stdout, stderr = _read_tail(out_p), _read_tail(err_p)
         said = _said(stdout, stderr)

@@ -367,3 +367,19 @@ def test_cli_interrupted_outside_ngspice_is_one_line(tmp_path, sig):
     assert "Traceback" not in err
     last = [ln for ln in err.splitlines() if ln.strip()][-1]
     assert last.startswith("analogue: error:") and signal.Signals(sig).name in last, err
+
+
+def test_a_signal_between_starting_and_tracking_ngspice_waits_for_the_tracking():
+    """run_deck starts ngspice and then tracks it for terminate_all; a signal in between
+    (a loaded machine can deschedule Python there for long) is acted on once the block that
+    starts and tracks the process ends, not in the middle of it (where it would orphan the
+    new process), and still raises RunInterrupted."""
+    from analogue.circuit.ngspice import RunInterrupted, _signals_deferred, interrupt_guard
+    reached = False
+    with pytest.raises(RunInterrupted):
+        with interrupt_guard():
+            with _signals_deferred():
+                os.kill(os.getpid(), signal.SIGTERM)
+                time.sleep(0.05)          # the Python-level handler has run by now
+                reached = True
+    assert reached
