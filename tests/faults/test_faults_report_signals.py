@@ -36,7 +36,9 @@ def test_cli_report_interrupted_in_the_circuit_threads_cleans_up(tmp_path, sig):
     seen = _interrupt_when_busy(proc, store, tmp, marker, sig)
     t0 = time.monotonic()
     _, err = proc.communicate(timeout=60)
-    assert time.monotonic() - t0 < 15, err
+    # a hang detector, not a timing test: the report itself would run on for minutes; 15 s
+    # was exceeded once at load 8 (the circuit threads' clean-up waits for the ngspice kills)
+    assert time.monotonic() - t0 < 45, err
     _assert_clean(marker, proc.pid, tmp, store, seen)
     assert proc.returncode == 128 + sig, (proc.returncode, err)
     assert "Traceback" not in err
