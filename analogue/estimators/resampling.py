@@ -4,11 +4,16 @@ driven by the same noise).
 
 Replicas are independent, so these errors hold however correlated the samples along one path
 are; the observables are plain functions ``fn(ensemble) -> {name: value}`` (the report's come
-from :mod:`analogue.study.catalogue`).
+from :mod:`analogue.study.catalogue`).  An ``fn`` that also has a method
+``leave_group_out(ensemble, labels, groups) -> [fn(subset(ensemble, labels != j)) for j]``
+(:class:`GroupObservables`) gives the jackknife its values from per-replica pieces computed
+once instead of ``groups`` copies of the ensemble (the report's stationary observables:
+measured 101 calls on 64 x 10^4 samples per experiment).
 """
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -18,7 +23,17 @@ from ..ensemble import Ensemble
 # an observable set: ensemble -> {name: value}
 Observables = Callable[[Ensemble], Mapping[str, float]]
 
-__all__ = ["jackknife", "jackknife_difference", "subset"]
+__all__ = ["GroupObservables", "jackknife", "jackknife_difference", "subset"]
+
+
+@runtime_checkable
+class GroupObservables(Protocol):
+    """An observable set with a fast route to its delete-a-group values."""
+
+    def __call__(self, ens: Ensemble, /) -> Mapping[str, float]: ...
+
+    def leave_group_out(self, ens: Ensemble, labels: np.ndarray, groups: int
+                        ) -> Sequence[Mapping[str, float]]: ...
 
 
 def subset(ens: Ensemble, rows: np.ndarray) -> Ensemble:
@@ -28,6 +43,15 @@ def subset(ens: Ensemble, rows: np.ndarray) -> Ensemble:
 def _groups(n: int, groups: int) -> tuple[int, np.ndarray]:
     g = max(2, min(groups, n // 2))
     return g, np.arange(n) % g
+
+
+def _left_out(fn: Observables, ens: Ensemble, labels: np.ndarray, g: int
+              ) -> Sequence[Mapping[str, float]]:
+    """``[fn(subset(ens, labels != j)) for j in range(g)]``, by ``fn.leave_group_out`` when
+    it has one."""
+    if isinstance(fn, GroupObservables):
+        return fn.leave_group_out(ens, labels, g)
+    return [fn(subset(ens, labels != j)) for j in range(g)]
 
 
 def _jk_se(reps: ArrayLike, g: int) -> float:
@@ -42,7 +66,7 @@ def jackknife(fn: Observables, ens: Ensemble, groups: int = 32
     returns ``{name: (value, se)}``."""
     g, labels = _groups(ens.replicas, groups)
     full = fn(ens)
-    reps = [fn(subset(ens, labels != j)) for j in range(g)]
+    reps = _left_out(fn, ens, labels, g)
     return {k: (float(full[k]), _jk_se([r[k] for r in reps], g)) for k in full}
 
 
@@ -54,9 +78,6 @@ def jackknife_difference(fn: Observables, a: Ensemble, b: Ensemble, groups: int 
         raise ValueError("paired ensembles need the same number of replicas")
     g, labels = _groups(a.replicas, groups)
     full_a, full_b = fn(a), fn(b)
-    reps = []
-    for j in range(g):
-        keep = labels != j
-        fa, fb = fn(subset(a, keep)), fn(subset(b, keep))
-        reps.append({k: fa[k] - fb[k] for k in full_a})
+    reps = [{k: fa[k] - fb[k] for k in full_a}
+            for fa, fb in zip(_left_out(fn, a, labels, g), _left_out(fn, b, labels, g))]
     return {k: (float(full_a[k] - full_b[k]), _jk_se([r[k] for r in reps], g)) for k in full_a}

@@ -16,7 +16,7 @@ from .budget import SE_MULTIPLIER, held_noise_pair
 from .metrics import Budget, compare
 from ..estimators.resampling import jackknife, jackknife_difference
 from ..study.seeds import SeedPlan
-from ..study.catalogue import (Kind, stationary_null_se, stationary_observables, stationary_values,
+from ..study.catalogue import (Kind, StationaryValues, stationary_null_se, stationary_observables,
                                transition_observables, transition_theory_se, transition_values)
 from .runs import ExperimentRuns
 from .theory_curves import ExperimentTheory, FigureCurves, experiment_theory
@@ -137,8 +137,10 @@ def analyse(runs: ExperimentRuns, *, theory: ExperimentTheory | None = None, pro
     ens = runs.stationary
     thr = theory.threshold
     taus = list(theory.taus)
-    stationary_fn = lambda e: stationary_values(e, burn_in=settings.stationary_burn_in, threshold=thr,
-                                                force=model.force, taus=taus)
+    # the jackknives take their leave-a-group-out values from per-replica pieces
+    # (StationaryValues.leave_group_out): the same numbers to rounding, measured below
+    stationary_fn = StationaryValues(burn_in=settings.stationary_burn_in, threshold=thr,
+                                     force=model.force, taus=tuple(taus))
     circ = jackknife(stationary_fn, ens)
     ex, ex_eff = theory.stationary, theory.stationary_eff
     v0_mc = sample_stationary(model_eff, MC_STATIONARY_REPLICAS, seeds.mc_stationary_v0)

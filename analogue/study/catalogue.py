@@ -36,7 +36,7 @@ __all__ = ["KINDS", "Kind", "Observable", "TRANSITION", "STATIONARY", "density_m
            "LawMoments", "law_moments", "transition_laws", "StationarySample", "StationaryTheory", "first_swing",
            "model_class", "member_observables", "reference_of", "stationary_sample",
            "transition_observables", "stationary_observables", "transition_values",
-           "stationary_values", "transition_theory", "stationary_theory", "transition_label", "stationary_label",
+           "stationary_values", "StationaryValues", "transition_theory", "stationary_theory", "transition_label", "stationary_label",
            "kind_of", "find", "planned_comparisons", "estimate", "element_error", "no_exact",
            "transition_theory_se", "theory_se", "stationary_null_se"]
 
@@ -584,6 +584,82 @@ def stationary_values(ens, *, burn_in: float, threshold: float, force: float, ta
     """Every stationary observable: time-and-replica averages after ``burn_in``."""
     sample = stationary_sample(ens, burn_in=burn_in, threshold=threshold, force=force)
     return {o.label: o.entry.estimator(sample, o.tau) for o in stationary_observables(taus)}
+
+
+def _mean_var_left_out(a: np.ndarray, labels: np.ndarray, groups: int
+                       ) -> tuple[np.ndarray, np.ndarray]:
+    """Mean and (population) variance of the rows of ``a`` (replicas x samples) with the
+    rows of group j left out, for each j: from per-row means and centred sums of squares
+    (the pooled-variance formula M2 = sum_r M2_r + m sum_r (mu_r - mu)^2, m samples a row:
+    no cancellation, unlike sum a^2 - n mu^2)."""
+    m = a.shape[1]
+    mu = a.mean(axis=1)
+    m2 = ((a - mu[:, None]) ** 2).sum(axis=1)
+    means, variances = np.empty(groups), np.empty(groups)
+    for j in range(groups):
+        keep = labels != j
+        mk = mu[keep]
+        means[j] = mk.mean()
+        variances[j] = (m2[keep].sum() + m * ((mk - means[j]) ** 2).sum()) / (m * mk.size)
+    return means, variances
+
+
+def _fraction_left_out(ind: np.ndarray, labels: np.ndarray, groups: int) -> np.ndarray:
+    """Fraction of true entries of ``ind`` (replicas x samples) with group j left out
+    (exact: integer counts over the same number of samples as np.mean)."""
+    c = np.count_nonzero(ind, axis=1)
+    return np.array([c[labels != j].sum() / (ind.shape[1] * np.count_nonzero(labels != j))
+                     for j in range(groups)])
+
+
+@dataclass(frozen=True)
+class StationaryValues:
+    """:func:`stationary_values` as an observable set for the replica jackknife
+    (:class:`analogue.estimators.resampling.GroupObservables`): calling it gives the values
+    of an ensemble; :meth:`leave_group_out` those of every delete-a-group subset from
+    per-replica pieces computed once (sums, centred sums of squares, indicator counts, the
+    work rates of each window, the position deviations of D_x), instead of one copy and
+    one pass per group (the report's comparisons: 101 calls per experiment, most of their
+    CPU; the values agree with the direct route to rounding, tested to 1e-12)."""
+
+    burn_in: float
+    threshold: float
+    force: float
+    taus: tuple[float, ...] = ()
+
+    def __call__(self, ens: Ensemble) -> dict:
+        return stationary_values(ens, burn_in=self.burn_in, threshold=self.threshold,
+                                 force=self.force, taus=self.taus)
+
+    def leave_group_out(self, ens: Ensemble, labels: np.ndarray, groups: int) -> list[dict]:
+        from ..estimators.transport import diffusion_leave_group_out
+        s = stationary_sample(ens, burn_in=self.burn_in, threshold=self.threshold,
+                              force=self.force)
+        cols: dict[str, np.ndarray] = {}
+        mean_v, var_v = _mean_var_left_out(s.v, labels, groups)
+        for o in stationary_observables(self.taus):
+            name = o.kind
+            if name in ("mean v", "identity <v> = 0"):
+                cols[o.label] = mean_v
+            elif name == "var v":
+                cols[o.label] = var_v
+            elif name == "P(v>0)":
+                cols[o.label] = _fraction_left_out(s.v > 0, labels, groups)
+            elif name in ("stick fraction", "P(v=0)"):
+                cols[o.label] = _fraction_left_out(np.abs(s.v) < s.threshold, labels, groups)
+            elif name == f"P(v>{MEMBER_STICK_WINDOW:g})":
+                cols[o.label] = _fraction_left_out(s.v >= s.threshold, labels, groups)
+            elif name == "diffusion D_x":
+                cols[o.label] = diffusion_leave_group_out(ens, labels, groups,
+                                                          burn_in=self.burn_in)
+            elif name in ("mean w", "var w"):
+                assert o.tau is not None  # window kinds carry their tau
+                mw, vw = _mean_var_left_out(s.work(o.tau), labels, groups)
+                cols[o.label] = mw if name == "mean w" else vw
+            else:   # a kind without a per-replica form: the direct route
+                from ..estimators.resampling import subset
+                return [self(subset(ens, labels != j)) for j in range(groups)]
+        return [{k: float(c[j]) for k, c in cols.items()} for j in range(groups)]
 
 
 def transition_laws(v: np.ndarray, f: np.ndarray, *, atom=None, point=None) -> list[LawMoments]:
