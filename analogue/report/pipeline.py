@@ -18,6 +18,7 @@ import json
 import logging
 import os
 import platform
+import threading
 import time
 import traceback
 from concurrent.futures import Future
@@ -85,7 +86,12 @@ log = logging.getLogger(__name__)
 
 def _log(msg: str) -> None:
     """Progress of the report job, on the ``analogue.report.pipeline`` logger (the command line
-    shows it on stderr with the time since the command started: see analogue.cli)."""
+    shows it on stderr with the time since the command started: see analogue.cli).  A task
+    still running in a background thread after its report ended (a daemon thread finishing
+    its numerics) says nothing more: in one process, the next command's output (an
+    in-process ``analogue theory --json`` after a failed report) got its progress lines."""
+    if getattr(threading.current_thread(), "analogue_report_closed", False):
+        return
     log.info(msg)
 
 
@@ -355,6 +361,8 @@ class _Workers:
                 item[0].cancel()
 
     def close(self) -> None:
+        for t in self.threads:
+            t.analogue_report_closed = True  # type: ignore[attr-defined]  # read by _log
         self._cancel_pending()
         for _ in self.threads:
             self.queue.put(None)

@@ -32,7 +32,7 @@ def test_theory_action_json_matches_library(cli):
     r = cli.invoke(main, ["theory", "action", "--tau-m", "1", "--delta", "0.7", "--a", "0.2",
                           "--gamma", "10", "--v0", "2", "--t", "3", "--v", "-0.5,0.5,2.5", "--json"])
     assert r.exit_code == 0, r.output
-    data = json.loads(r.output)
+    data = json.loads(r.stdout)
     m = Model(1.0, 0.7, 0.2, 10.0)
     assert [row["v"] for row in data["rows"]] == [-0.5, 0.5, 2.5]
     for row in data["rows"]:
@@ -44,7 +44,7 @@ def test_theory_action_json_matches_library(cli):
 def test_theory_stationary_from_experiment(cli):
     r = cli.invoke(main, ["theory", "stationary", "--experiment", "stick", "--json"])
     assert r.exit_code == 0, r.output
-    rows = {row["quantity"]: row["value"] for row in json.loads(r.output)["rows"]}
+    rows = {row["quantity"]: row["value"] for row in json.loads(r.stdout)["rows"]}
     ref = exact.stationary_moments(Model(1.0, 0.7, 0.2, 10.0))
     assert rows["mean"] == pytest.approx(ref.mean, rel=1e-12)
     assert rows["p_positive"] == pytest.approx(ref.p_positive, rel=1e-12)

@@ -57,7 +57,7 @@ def test_theory_takes_the_experiment_as_argument_or_option(tmp_path):
     def rows(*args):
         r = CliRunner().invoke(main, ["theory", "stationary", *args, "--json"])
         assert r.exit_code == 0, r.output
-        return json.loads(r.output)["rows"]
+        return json.loads(r.stdout)["rows"]
     assert rows("stick") == rows("--experiment", "stick")
     toml = tmp_path / "mine.toml"
     toml.write_text(TOML)
