@@ -130,6 +130,18 @@ def _time_grid(model, t_end, dt, sample_dt):
     return t_end / n_steps, per, n_steps
 
 
+def _given_v0(v0, replicas: int, allowed: str) -> tuple[np.ndarray, float | str]:
+    """``(v, v0 for the meta)``: the initial velocities ``v0`` (a number or an array) as a
+    finite array of ``replicas`` values (a copy); ``allowed`` says what ``v0`` may be."""
+    try:
+        v = np.broadcast_to(np.asarray(v0, dtype=float), (replicas,)).copy()
+    except (ValueError, TypeError):
+        raise ValueError(f"v0 must be {allowed}, got shape {np.shape(v0)}") from None
+    if not np.all(np.isfinite(v)):
+        raise ValueError("v0 must be finite")
+    return v, (float(v0) if np.ndim(v0) == 0 else "array")
+
+
 def simulate_sde(model: Model, *, v0, t_end: float, replicas: int, seed=None, dt: float | None = None,
                  sample_dt: float | None = None, noise: np.ndarray | None = None,
                  scheme: str = "exponential", noise_hold: int = 1) -> Ensemble:
@@ -210,14 +222,8 @@ def simulate_sde(model: Model, *, v0, t_end: float, replicas: int, seed=None, dt
         v = sample_stationary(model, replicas, seed=init_rng)
         v0_meta: float | str = "stationary"
     else:
-        try:
-            v = np.broadcast_to(np.asarray(v0, dtype=float), (replicas,)).copy()
-        except (ValueError, TypeError):
-            raise ValueError(f"v0 must be a number, an array of shape ({replicas},) or "
-                             f"'stationary', got shape {np.shape(v0)}") from None
-        if not np.all(np.isfinite(v)):
-            raise ValueError("v0 must be finite")
-        v0_meta = float(v0) if np.ndim(v0) == 0 else "array"
+        v, v0_meta = _given_v0(v0, replicas, f"a number, an array of shape ({replicas},) or "
+                                             "'stationary'")
 
     g = model.gamma
     n_out = n_steps // per + 1
@@ -297,14 +303,7 @@ def simulate_sde_held_pair(model: Model, *, v0, t_end: float, replicas: int, noi
                          f"got {noise.shape}")
     if not np.all(np.isfinite(noise)):
         raise ValueError("noise must be finite")
-    try:
-        v = np.broadcast_to(np.asarray(v0, dtype=float), (replicas,))
-    except (ValueError, TypeError):
-        raise ValueError(f"v0 must be a number or an array of shape ({replicas},), got shape "
-                         f"{np.shape(v0)}") from None
-    if not np.all(np.isfinite(v)):
-        raise ValueError("v0 must be finite")
-    v0_meta = float(v0) if np.ndim(v0) == 0 else "array"
+    v, v0_meta = _given_v0(v0, replicas, f"a number or an array of shape ({replicas},)")
     means = noise.reshape(replicas, n_steps // hold, hold).mean(axis=2)
     held_blocks, white_blocks = _given_blocks(means, hold), _given_blocks(noise, 1)
 

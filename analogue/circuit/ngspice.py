@@ -204,14 +204,7 @@ def _version_of(executable: str) -> str:
     with tempfile.TemporaryDirectory(prefix=_tmp_prefix()) as tmp:
         out_p, err_p = Path(tmp) / "stdout.txt", Path(tmp) / "stderr.txt"
         try:
-            with open(out_p, "wb") as out, open(err_p, "wb") as err:
-                proc = _spawn([executable, "-v"], tmp, out, err)
-            _track(proc, None)
-            try:
-                with interrupt_guard():
-                    _wait(proc, VERSION_TIMEOUT)
-            finally:
-                _untrack(proc, None)
+            _run_guarded([executable, "-v"], tmp, out_p, err_p, None, VERSION_TIMEOUT)
         except subprocess.TimeoutExpired:
             raise NgspiceError(f"`{executable} -v` did not answer within {VERSION_TIMEOUT:g} s "
                                f"(is it a working ngspice?)") from None
@@ -373,6 +366,30 @@ def _signals_deferred():
             _on_signal(pending[0], None)
 
 
+def _run_guarded(argv, cwd, out_p: Path, err_p: Path, group, timeout: float) -> int:
+    """Run ``argv`` in its own session with its output in the files ``out_p``, ``err_p``,
+    tracked for :func:`terminate_all` under ``group``, and return its exit status.  Called
+    from the main thread (a script, a calibration run, ``ngspice -v``), a signal must not kill
+    us and orphan the process in its own session: the guard is in place before the start (a
+    no-op in worker threads, whose caller's guard covers them; re-entrant), and a signal
+    between the start and the tracking is acted on once the process is tracked (measured: a
+    loaded machine let the fake ngspice of tests/faults start its child before this thread
+    reached a guard installed after the start, and SIGHUP then killed Python by default).
+    Raises OSError (could not start) and subprocess.TimeoutExpired (killed after
+    ``timeout``)."""
+    proc = None
+    try:
+        with interrupt_guard():
+            with _signals_deferred():
+                with open(out_p, "wb") as out, open(err_p, "wb") as err:
+                    proc = _spawn(argv, cwd, out, err)
+                _track(proc, group)
+            return _wait(proc, timeout)
+    finally:
+        if proc is not None:
+            _untrack(proc, group)
+
+
 # ------------------------------------------------------------------------- temporary dirs
 def _tmp_prefix() -> str:
     """``analogue-ngspice-<host>.<pid>-``: lets a later run recognise directories left by a
@@ -475,30 +492,14 @@ def run_deck(text: str, *, timeout: float = 3600.0, t_stop: float | None = None,
         raw = work / "out.raw"
         out_p, err_p = work / "stdout.txt", work / "stderr.txt"
         t0 = _time.perf_counter()
-        proc = None
         try:
-            # Called from the main thread (a script, a calibration run), a signal must not
-            # kill us and orphan ngspice in its own session: the guard is in place before
-            # ngspice starts (a no-op in worker threads, whose caller's guard covers them;
-            # re-entrant), and a signal between the start and the tracking is acted on once
-            # the process is tracked (measured: a loaded machine let the fake ngspice of
-            # tests/faults start its child before this thread reached a guard installed
-            # after the start, and SIGHUP then killed Python by default)
-            with interrupt_guard():
-                with _signals_deferred():
-                    try:
-                        with open(out_p, "wb") as out, open(err_p, "wb") as err:
-                            proc = _spawn([exe, "-b", "-r", raw.name, "deck.cir"], work, out, err)
-                    except OSError as exc:
-                        raise NgspiceError(f"could not start {exe}: {_one_line(str(exc))}") from None
-                    _track(proc, group)
-                returncode = _wait(proc, timeout)
+            returncode = _run_guarded([exe, "-b", "-r", raw.name, "deck.cir"], work, out_p,
+                                      err_p, group, timeout)
+        except OSError as exc:
+            raise NgspiceError(f"could not start {exe}: {_one_line(str(exc))}") from None
         except subprocess.TimeoutExpired:
             raise NgspiceError(_with_said(f"ngspice did not finish within timeout={timeout} s",
                                           _said(_read_tail(out_p), _read_tail(err_p)))) from None
-        finally:
-            if proc is not None:
-                _untrack(proc, group)
         wall = _time.perf_counter() - t0
         stdout, stderr = _read_tail(out_p), _read_tail(err_p)
         said = _said(stdout, stderr)

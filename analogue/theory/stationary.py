@@ -246,17 +246,23 @@ def _grid_pieces(model: Model, grid: Grid
     return diag, off, lp, pi
 
 
-def _diffusion_on_grid(model: Model, grid: Grid) -> float:
-    """Exact solution of the discrete Poisson equation (see module docstring)."""
-    _, off, lp, pi = _grid_pieces(model, grid)
-    v = grid.v
+def _cumulative_flux(v: np.ndarray, pi: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+    """``(dv, F, mode)``: ``dv = v - <v>``, the cumulative flux ``F_i = sum_{j <= i} dv_j
+    pi_j`` between nodes i and i + 1, summed from whichever end is nearer (left of the mode
+    from the left, right of it from the right, where F_i = -sum_{j > i}), so the tails are
+    not differences of O(1) numbers; and the mode's index."""
     dv = v - np.dot(v, pi)
     f = dv * pi
-    # Cumulative flux from whichever end is nearer, so the tails are not differences of O(1).
     left = np.cumsum(f)[:-1]
     right = -np.cumsum(f[::-1])[::-1][1:]
     mode = int(np.argmax(pi))
-    flux = np.where(np.arange(grid.n - 1) < mode, left, right)
+    return dv, np.where(np.arange(v.size - 1) < mode, left, right), mode
+
+
+def _diffusion_on_grid(model: Model, grid: Grid) -> float:
+    """Exact solution of the discrete Poisson equation (see module docstring)."""
+    _, off, lp, pi = _grid_pieces(model, grid)
+    _, flux, _ = _cumulative_flux(grid.v, pi)
     # k_{i->i+1} pi_i = sqrt(k_up k_down) sqrt(pi_i pi_{i+1}) by detailed balance.
     # Summed in log space: far in the tails both F^2 and the conductance underflow.
     with np.errstate(over="ignore", invalid="ignore", divide="ignore", under="ignore"):
@@ -358,13 +364,7 @@ def _poisson_solution(model: Model, grid: Grid) -> tuple[np.ndarray, np.ndarray,
     ``g_{i+1} - g_i = F_i / (k_{i->i+1} pi_i)`` with F_i the cumulative flux, summed outwards
     from the mode (no differences of O(1) numbers in the tails)."""
     diag, off, lp, pi = _grid_pieces(model, grid)
-    v = grid.v
-    dv = v - np.dot(v, pi)
-    f = dv * pi
-    left = np.cumsum(f)[:-1]
-    right = -np.cumsum(f[::-1])[::-1][1:]
-    mode = int(np.argmax(pi))
-    flux = np.where(np.arange(grid.n - 1) < mode, left, right)
+    dv, flux, mode = _cumulative_flux(grid.v, pi)
     step = flux / (off * np.exp(0.5 * (lp[:-1] + lp[1:])))
     g = np.empty(grid.n)
     g[mode] = 0.0
