@@ -381,7 +381,7 @@ def _stepped(model, v, n_steps, per, dt, scheme, parts, noise_rng, kick_rng):
     x = np.zeros(rows)
     eps, delta, a, lin_a, push_a = (np.full(rows, c) for c in (model.epsilon, model.delta,
                                                                model.a, lin, push))
-    force = np.empty(rows)
+    force, scaled = np.empty(rows), np.empty(rows)
     cubic, shot, stribeck, smooth = model.cubic, model.shot, model.stribeck, model.epsilon > 0
     half_dt = 0.5 * dt
     multiply, add, subtract, divide, tanh, sign = (np.multiply, np.add, np.subtract, np.divide,
@@ -396,15 +396,17 @@ def _stepped(model, v, n_steps, per, dt, scheme, parts, noise_rng, kick_rng):
         else:
             _fill_given(xi, parts, start, amp)
         v = row_views[0]
-        for j in range(m):
+        for new, noise_j in zip(row_views[1:m + 1], xi):   # (7 % cheaper than indexing)
             # force = a - Delta tanh(v / eps)  (or sgn v, or the Stribeck law), - cubic v^3;
             # ufuncs with a positional output: the cheapest call (keywords cost ~10 %)
             if stribeck is not None:
                 subtract(a, model.coulomb(v), force)
             else:
                 if smooth:
-                    divide(v, eps, force)
-                    tanh(force, force)
+                    # tanh out of place, as np.tanh(v / eps) was (its SIMD loop is chosen
+                    # by the operands' overlap: no reliance on in-place taking the same one)
+                    divide(v, eps, scaled)
+                    tanh(scaled, force)
                 else:
                     sign(v, force)
                 multiply(delta, force, force)
@@ -412,11 +414,10 @@ def _stepped(model, v, n_steps, per, dt, scheme, parts, noise_rng, kick_rng):
             if cubic:
                 subtract(force, cubic * v**3, force)
             # v' = (lin v + push force) + amp xi (+ kick)
-            new = row_views[j + 1]
             multiply(lin_a, v, new)
             multiply(push_a, force, force)
             add(new, force, new)
-            add(new, xi[j], new)
+            add(new, noise_j, new)
             if shot is not None:
                 kick = _compound_poisson(shot, dt, rows, kick_rng)
                 n_kicks += int(np.count_nonzero(kick))
