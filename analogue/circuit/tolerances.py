@@ -12,7 +12,8 @@ error of each path observable ``O`` with no statistical noise of their own.
 
 Observables (per replica): the time averages of v, v^2, 1[v > 0], 1[|v| < 0.1 sqrt(tau_m/
 gamma)] (the report's stick fraction) and the displacement x(T) (transport, work), and v, v^2,
-1[v < 0] at the last time (the transition observables).  For a run of ``replicas`` paths of
+1[v < 0] at the last time (the transition observables); the indicators smoothed as the
+report's integration check measures them (:mod:`analogue.estimators.smoothed_indicator`).  For a run of ``replicas`` paths of
 length ``t_end`` the statistical error of O is ``sigma_O / sqrt(n_eff)``, ``sigma_O`` the
 spread of O over the calibration paths, ``n_eff = replicas`` for the instantaneous
 observables and ``replicas * max(1, t_end / T_cal)`` for the time averages (longer paths
@@ -56,6 +57,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import checks
+from ..estimators.smoothed_indicator import kernel_width, window
 from ..model import Model
 from .mapping import (
     FIXED_METHOD,
@@ -240,20 +242,24 @@ class ToleranceChoice:
 
 
 # ----------------------------------------------------------------------------- measurement
-def path_observables(v: np.ndarray, x: np.ndarray, threshold: float) -> tuple[dict, dict]:
+def path_observables(v: np.ndarray, x: np.ndarray, threshold: float,
+                     smoothing: float = 0.0) -> tuple[dict, dict]:
     """Per-replica observables of paths ``v``, ``x`` (replicas, n_t): ``({name: (replicas,)},
-    {name: is_time_average})``."""
+    {name: is_time_average})``.  ``smoothing`` > 0: the indicators smoothed with that width,
+    as the report's integration check measures them
+    (:mod:`analogue.estimators.smoothed_indicator`)."""
     v = np.asarray(v, dtype=float)
     x = np.asarray(x, dtype=float)
+    h = smoothing
     obs = {
         "time mean v": v.mean(axis=1),
         "time mean v^2": (v**2).mean(axis=1),
-        "P(v>0)": (v > 0).mean(axis=1),
-        "stick fraction": (np.abs(v) < threshold).mean(axis=1),
+        "P(v>0)": window(v, 0.0, math.inf, h).mean(axis=1),
+        "stick fraction": window(v, -threshold, threshold, h).mean(axis=1),
         "displacement x(T)": x[:, -1] - x[:, 0],
         "v(T)": v[:, -1],
         "v(T)^2": v[:, -1] ** 2,
-        "1[v(T)<0]": (v[:, -1] < 0).astype(float),
+        "1[v(T)<0]": window(v[:, -1], -math.inf, 0.0, h),
     }
     avg = {k: k in ("time mean v", "time mean v^2", "P(v>0)", "stick fraction",
                     "displacement x(T)") for k in obs}
@@ -261,12 +267,12 @@ def path_observables(v: np.ndarray, x: np.ndarray, threshold: float) -> tuple[di
 
 
 def candidate_result(tol: Tolerances, cand, ref, threshold: float, *, points: float = math.nan,
-                     wall_time: float = math.nan) -> CandidateResult:
+                     wall_time: float = math.nan, smoothing: float = 0.0) -> CandidateResult:
     """Compare a candidate's ensemble with the reference's (same noise, same replicas)."""
     if cand.v.shape != ref.v.shape:
         raise ValueError("candidate and reference ensembles must have the same shape")
-    oc, avg = path_observables(cand.v, cand.x, threshold)
-    orf, _ = path_observables(ref.v, ref.x, threshold)
+    oc, avg = path_observables(cand.v, cand.x, threshold, smoothing)
+    orf, _ = path_observables(ref.v, ref.x, threshold, smoothing)
     mean, sd, sigma = {}, {}, {}
     for k in oc:
         d = oc[k] - orf[k]
@@ -327,6 +333,8 @@ def _calibrate(model: Model, spec: CircuitSpec, candidates, *, store, workers, s
         kw["executor"] = executor
     ref = simulate(model, circuit=reference_spec(spec, mapping, tightest), **kw)
     threshold = 0.1 * model.velocity_scale if math.isfinite(model.gamma) else 0.0
+    # the indicators as the report's integration check measures them (smoothed)
+    h = kernel_width(threshold, mapping.model_effective.epsilon)
     results = []
     for tol in candidates:
         ens = simulate(model, circuit=spec.replace(**tol.as_dict()), **kw)
@@ -335,7 +343,8 @@ def _calibrate(model: Model, spec: CircuitSpec, candidates, *, store, workers, s
                if pts and all(p is not None for p in pts) else math.nan)
         # Points per deck, shared by its replicas: per replica-hold is points x decks / (R H).
         results.append(candidate_result(tol, ens, ref, threshold, points=per,
-                                        wall_time=float(ens.meta.get("wall_time", math.nan))))
+                                        wall_time=float(ens.meta.get("wall_time", math.nan)),
+                                        smoothing=h))
     _MEMO[memo_key] = (results, t_cal)
     return results, t_cal
 

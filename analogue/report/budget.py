@@ -7,7 +7,8 @@
   gets the mean of its fine increments, i.e. the same integrated noise spread evenly) -
   isolates the effect with little statistical noise (common random numbers).
 - **integration**: the circuit re-run with 100x tighter tolerances on the same noise
-  (see :mod:`analogue.report.runs`); the path-by-path difference.
+  (see :mod:`analogue.report.runs`); the path-by-path difference, indicator observables
+  through their smoothed indicator (:func:`integration_term`).
 - **finite noise** (weak-noise comparisons only): exact finite-gamma minus the paper's
   gamma -> infinity formula.
 """
@@ -20,10 +21,32 @@ import numpy as np
 from ..ensemble import Ensemble
 from ..model import Model
 
-__all__ = ["held_noise_pair", "SE_MULTIPLIER"]
+__all__ = ["held_noise_pair", "integration_term", "SE_MULTIPLIER", "RICHARDSON"]
 
 # A measured bias enters the budget as |estimate| + SE_MULTIPLIER * its standard error.
 SE_MULTIPLIER = 2.0
+# The kernel bias of a smoothed indicator is O(h^2): from d_h and d_{h/2}, bias(h) ~
+# (4/3) (d_h - d_{h/2}) (one Richardson step).
+RICHARDSON = 4.0 / 3.0
+
+
+def integration_term(values, check: Ensemble, nominal: Ensemble, h: float) -> dict:
+    """The integration budget term of every observable: ``|d_h| + SE_MULTIPLIER SE(d_h) +
+    RICHARDSON |d_h - d_{h/2}|``, with ``d_s = values(s)(check) - values(s)(nominal)`` on the
+    paired runs (row i of both driven by the same noise) and ``values(s)`` the observable set
+    whose indicator kinds are smoothed with width ``s``
+    (:mod:`analogue.estimators.smoothed_indicator`; the other kinds do not depend on ``s``,
+    so their last term is 0).  SE: the paired delete-a-group jackknife.  Returns ``{name:
+    (term, d_h, se, kernel)}``."""
+    from ..estimators.resampling import jackknife_difference
+    diff = jackknife_difference(values(h), check, nominal)
+    half = values(0.5 * h) if h > 0 else values(h)
+    a, b = half(check), half(nominal)
+    out = {}
+    for k, (d, se) in diff.items():
+        kernel = RICHARDSON * abs(d - (a[k] - b[k])) if h > 0 else 0.0
+        out[k] = (abs(d) + SE_MULTIPLIER * se + kernel, d, se, kernel)
+    return out
 
 
 def held_noise_pair(model: Model, *, v0, t_end: float, replicas: int, seed: int,

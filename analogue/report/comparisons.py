@@ -8,13 +8,14 @@ are independent (errors hold however correlated the samples along one path are).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from ..circuit.mapping import map_model
 from ..theory.exact import sample_stationary
-from .budget import SE_MULTIPLIER, held_noise_pair
+from .budget import SE_MULTIPLIER, held_noise_pair, integration_term
 from .metrics import Budget, compare
 from ..estimators.resampling import jackknife, jackknife_difference
+from ..estimators.smoothed_indicator import kernel_width
 from ..study.seeds import SeedPlan
 from ..study.catalogue import (Kind, StationaryValues, stationary_null_se, stationary_observables,
                                transition_observables, transition_theory_se, transition_values)
@@ -83,6 +84,8 @@ def analyse(runs: ExperimentRuns, *, theory: ExperimentTheory | None = None, pro
         theory = experiment_theory(exp, settings, cache=cache, progress=progress)
     res = ExperimentAnalysis(runs, theory=theory)
     seeds = SeedPlan(exp.seed)
+    # kernel width of the smoothed indicators in the integration differences
+    h = kernel_width(theory.threshold, model_eff.epsilon)
 
     # ---------------------------------------------------------------- transition runs
     times = [t for t in exp.histogram_times]
@@ -106,10 +109,12 @@ def analyse(runs: ExperimentRuns, *, theory: ExperimentTheory | None = None, pro
         band = jackknife_difference(fn, held, white)
         integ = {}
         if i == 0:
-            integ = jackknife_difference(fn, *runs.check_pair("transition"))
+            integ = integration_term(
+                lambda s, v0=v0: (lambda e: transition_values(e, v0, times, smoothing=s)),
+                *runs.check_pair("transition"), h)
         for k, (val, se) in circ.items():
             b = Budget(smoothing=ex_eff[k] - ex[k], bandwidth=_bias(band, k),
-                       integration=_bias(integ, k) if integ else 0.0)
+                       integration=integ[k][0] if integ else 0.0)
             res.budgets[k] = b
             res.circuit[k], res.exact[k], res.exact_eff[k] = (val, se), ex[k], ex_eff[k]
             note = "" if integ else "integration checked on the first v0 only"
@@ -150,11 +155,12 @@ def analyse(runs: ExperimentRuns, *, theory: ExperimentTheory | None = None, pro
                                   sample_dt=exp.sample_dt)
     band = jackknife_difference(stationary_fn, held, white)
     # the check covers a prefix window of the run: compared on the same rows and times
-    integ = jackknife_difference(stationary_fn, *runs.check_pair("stationary"))
+    integ = integration_term(lambda s: replace(stationary_fn, smoothing=s),
+                             *runs.check_pair("stationary"), h)
     stat_entries = {o.label: o.entry for o in stationary_observables(taus)}
     for k, (val, se) in circ.items():
         b = Budget(smoothing=ex_eff[k] - ex[k], bandwidth=_bias(band, k),
-                   integration=_bias(integ, k))
+                   integration=integ[k][0])
         se_null = stationary_null_se(stat_entries[k], val, se, ex_eff[k])
         note = _NULL_SE_NOTE if se_null > se else ""
         se = se_null

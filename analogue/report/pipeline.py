@@ -624,7 +624,9 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
         "the observable's units): smoothing = exact(epsilon) - exact(0) (the diode bridge's "
         "tanh law); bandwidth = held-noise minus white-noise Monte Carlo driven by the same "
         "Wiener increments (|difference| + 2 SE); integration = the circuit re-run with 100x "
-        "tighter tolerances on the same noise (|difference| + 2 SE); finite noise (weak-noise "
+        "tighter tolerances on the same noise (|difference| + 2 SE; indicator observables "
+        "through their smoothed indicator, plus the kernel's Richardson bias estimate: "
+        "docs/error-budget.md); finite noise (weak-noise "
         "rows) = exact(gamma) - weak-noise."], tables=[_comparison_table(comps, "Comparisons")]))
 
     phases.items.append({"phase": "figures and page", "experiment": None, "thread": "main",

@@ -13,7 +13,7 @@ The ``[report]`` table of ``circuits/<name>.toml`` (all keys optional)::
     work_paths = [[1.0, 5.0]]      # (w, tau): circuit windows of work rate ~ w vs eq. (60)
     check_replicas = 64            # replicas re-run with tight tolerances (integration check)
 
-``--quick`` divides replica counts by four (at least 32; the integration check: at least 16;
+``--quick`` divides replica counts by four (at least 32; the integration check: at least 8;
 never more than the file's count) and halves the stationary length.
 
 The table is parsed with the rest of the file, by
@@ -39,7 +39,7 @@ __all__ = ["RunOptions", "ReportSettings", "report_settings", "report_settings_f
 
 QUICK_DIVISOR = 4
 MIN_QUICK_REPLICAS = 32
-MIN_QUICK_CHECK_REPLICAS = 16
+MIN_QUICK_CHECK_REPLICAS = 8
 # The stationary estimators' errors are delete-a-group jackknives over replicas with
 # g = min(32, n // 2) groups (report.observables): at least 4 groups.
 MIN_STATIONARY_REPLICAS = 8

@@ -28,6 +28,7 @@ import numpy as np
 from scipy import integrate
 
 from ..ensemble import Ensemble
+from ..estimators.smoothed_indicator import window
 from ..estimators.variance_error import sample_variance_se
 from ..model import Model
 
@@ -339,6 +340,10 @@ class Kind:
     # the larger of it and the replica jackknife (transition_theory_se), because the jackknife
     # of a skewed or heavy-tailed sample that misses the tail is too small
     theory_se: Callable | None = None
+    # indicator kinds, the fraction of samples with lo < v < hi: threshold -> (lo, hi).  Their
+    # integration differences are taken on the smoothed indicator
+    # (analogue.estimators.smoothed_indicator; ``smoothing`` of the value functions below)
+    window: Callable[[float], tuple[float, float]] | None = None
 
 
 _ONE_D = _relative(*_ONE_D_TERMS)
@@ -369,7 +374,7 @@ KINDS: tuple[Kind, ...] = (
     Kind("P(v<0)", TRANSITION, ("t", "v0"), lambda v: float(np.mean(v < 0)),
          exact=lambda m: m.p_negative, weak_noise=lambda m: m.p_negative, probability=True,
          description="probability of a negative velocity at t from v0",
-         classes=frozenset({PAPER, GAUSSIAN_MEMBER})),
+         classes=frozenset({PAPER, GAUSSIAN_MEMBER}), window=lambda thr: (-math.inf, 0.0)),
     Kind("histogram chi2/dof", TRANSITION, ("t", "v0"), lambda v, grid, f: _chi2_per_dof(v, grid, f),
          exact=lambda m=None: 1.0, fit_test=True,
          description="Pearson chi^2 per degree of freedom of the circuit velocities at t "
@@ -379,7 +384,8 @@ KINDS: tuple[Kind, ...] = (
          lambda v: float(np.mean(np.abs(v) < MEMBER_STICK_WINDOW)),
          exact=lambda m: m.p_stuck, probability=True, classes=frozenset({SHOT_MEMBER}),
          description=f"stuck at t from v0: |v| < {MEMBER_STICK_WINDOW:g}; theory: the atom "
-                     "plus the continuous mass in the window"),
+                     "plus the continuous mass in the window",
+         window=lambda thr: (-MEMBER_STICK_WINDOW, MEMBER_STICK_WINDOW)),
     # stationary run (eq. (6), eqs. (3), (52), Green-Kubo); in label order
     Kind("mean v", STATIONARY, (), lambda s, tau=None: float(s.v.mean()),
          exact=lambda th, tau=None: th.moments.mean, description="stationary mean velocity",
@@ -391,13 +397,15 @@ KINDS: tuple[Kind, ...] = (
     Kind("P(v>0)", STATIONARY, (), lambda s, tau=None: float(np.mean(s.v > 0)),
          exact=lambda th, tau=None: th.moments.p_positive, probability=True,
          description="stationary probability of a positive velocity",
-         classes=frozenset({PAPER, GAUSSIAN_MEMBER}), element=_ONE_D),
+         classes=frozenset({PAPER, GAUSSIAN_MEMBER}), element=_ONE_D,
+         window=lambda thr: (0.0, math.inf)),
     Kind("stick fraction", STATIONARY, (),
          lambda s, tau=None: float(np.mean(np.abs(s.v) < s.threshold)), exact=_stick_theory,
          probability=True,
          description="stationary P(|v| < threshold), threshold = report.stick_threshold "
                      f"sqrt(tau_m/gamma) (family members: {MEMBER_STICK_WINDOW:g})",
-         classes=frozenset({PAPER, GAUSSIAN_MEMBER}), element=_ONE_D),
+         classes=frozenset({PAPER, GAUSSIAN_MEMBER}), element=_ONE_D,
+         window=lambda thr: (-thr, thr)),
     Kind("diffusion D_x", STATIONARY, (), _diffusion,
          exact=lambda th, tau=None: th.moments.diffusion,
          description="position diffusion coefficient (Green-Kubo); fixes the curvature of the "
@@ -416,11 +424,13 @@ KINDS: tuple[Kind, ...] = (
          probability=True, classes=frozenset({SHOT_MEMBER}), element=_ONE_D,
          description=f"stuck: |v| < {MEMBER_STICK_WINDOW:g} (the bridge holds a stuck object "
                      "at epsilon atanh(a/Delta), not 0); theory: the atom P(v = 0) plus the "
-                     "continuous mass in the window"),
+                     "continuous mass in the window",
+         window=lambda thr: (-thr, thr)),
     Kind(f"P(v>{MEMBER_STICK_WINDOW:g})", STATIONARY, (),
          lambda s, tau=None: float(np.mean(s.v >= s.threshold)), exact=_above_theory,
          probability=True, classes=frozenset({SHOT_MEMBER}), element=_ONE_D,
-         description="moving forward (above the stick window)"),
+         description="moving forward (above the stick window)",
+         window=lambda thr: (thr, math.inf)),
     Kind("mean x", STATIONARY, (), lambda s, tau=None: float(s.x.mean()), exact=no_exact,
          classes=frozenset({SPRING_MEMBER}), description="stationary mean position"),
     Kind("var x", STATIONARY, (), lambda s, tau=None: float(s.x.var()), exact=no_exact,
@@ -569,21 +579,32 @@ def element_error(o: Observable, bias: dict, model: Model, reference: float) -> 
 
 
 # ------------------------------------------------------------------- values from the table
-def transition_values(ens, v0: float, times) -> dict:
+def transition_values(ens, v0: float, times, *, smoothing: float = 0.0) -> dict:
     """Every transition observable estimated on ``ens`` (velocities at each time):
-    ``{label: value}``."""
+    ``{label: value}``.  ``smoothing`` > 0: indicator kinds as the mean of their smoothed
+    indicator of that width (the integration difference,
+    :mod:`analogue.estimators.smoothed_indicator`)."""
     out = {}
     for t in times:
         v = ens.at(t)
         for o in transition_observables(v0, [t]):
-            out[o.label] = o.entry.estimator(v)
+            w = o.entry.window
+            out[o.label] = (float(window(v, *w(0.0), smoothing).mean())
+                            if smoothing > 0 and w is not None else o.entry.estimator(v))
     return out
 
 
-def stationary_values(ens, *, burn_in: float, threshold: float, force: float, taus=()) -> dict:
-    """Every stationary observable: time-and-replica averages after ``burn_in``."""
+def stationary_values(ens, *, burn_in: float, threshold: float, force: float, taus=(),
+                      smoothing: float = 0.0) -> dict:
+    """Every stationary observable: time-and-replica averages after ``burn_in``
+    (``smoothing``: as in :func:`transition_values`)."""
     sample = stationary_sample(ens, burn_in=burn_in, threshold=threshold, force=force)
-    return {o.label: o.entry.estimator(sample, o.tau) for o in stationary_observables(taus)}
+    out = {}
+    for o in stationary_observables(taus):
+        w = o.entry.window
+        out[o.label] = (float(window(sample.v, *w(threshold), smoothing).mean())
+                        if smoothing > 0 and w is not None else o.entry.estimator(sample, o.tau))
+    return out
 
 
 def _mean_var_left_out(a: np.ndarray, labels: np.ndarray, groups: int
@@ -626,10 +647,12 @@ class StationaryValues:
     threshold: float
     force: float
     taus: tuple[float, ...] = ()
+    # > 0: indicator kinds smoothed (the integration difference; stationary_values)
+    smoothing: float = 0.0
 
     def __call__(self, ens: Ensemble) -> dict:
         return stationary_values(ens, burn_in=self.burn_in, threshold=self.threshold,
-                                 force=self.force, taus=self.taus)
+                                 force=self.force, taus=self.taus, smoothing=self.smoothing)
 
     def leave_group_out(self, ens: Ensemble, labels: np.ndarray, groups: int) -> list[dict]:
         from ..estimators.transport import diffusion_leave_group_out
@@ -639,7 +662,11 @@ class StationaryValues:
         mean_v, var_v = _mean_var_left_out(s.v, labels, groups)
         for o in stationary_observables(self.taus):
             name = o.kind
-            if name in ("mean v", "identity <v> = 0"):
+            w = o.entry.window
+            if self.smoothing > 0 and w is not None:
+                cols[o.label] = _mean_var_left_out(
+                    window(s.v, *w(self.threshold), self.smoothing), labels, groups)[0]
+            elif name in ("mean v", "identity <v> = 0"):
                 cols[o.label] = mean_v
             elif name == "var v":
                 cols[o.label] = var_v
