@@ -14,7 +14,7 @@ from scipy.special import ndtr
 from analogue.ensemble import Ensemble
 from analogue.estimators.resampling import jackknife_difference, subset
 from analogue.estimators.smoothed_indicator import kernel_width, window
-from analogue.report.budget import RICHARDSON, SE_MULTIPLIER, integration_term
+from analogue.report.budget import SE_MULTIPLIER, integration_term
 from analogue.study import catalogue as C
 
 
