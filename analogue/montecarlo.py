@@ -43,7 +43,10 @@ SCHEMES = ("exponential", "euler")
 _ALIASES = {"em": "euler", "euler-maruyama": "euler", "euler_maruyama": "euler",
             "ou": "exponential", "exact-ou": "exponential", "exact_ou": "exponential"}
 _MAX_OUTPUT_POINTS = 1000
-_BLOCK_NUMBERS = 1 << 20  # normals generated per block (8 MB)
+# numbers (steps x rows) per block of the time-stepped loop: its three block buffers of 1 MB
+# stay in cache (measured, work's held pair, 64000 steps x 512 rows / 19200 x 2048: 1 << 20
+# numbers 0.43 / 0.30 CPU s, 1 << 17 0.33 / 0.26)
+_BLOCK_NUMBERS = 1 << 17
 
 
 def default_dt(model: Model) -> float:
