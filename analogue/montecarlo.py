@@ -216,7 +216,7 @@ def simulate_sde(model: Model, *, v0, t_end: float, replicas: int, seed=None, dt
             what = "n_steps" if noise_hold == 1 else "n_steps / noise_hold"
             raise ValueError(f"noise must have shape (replicas, {what}) = "
                              f"{(replicas, n_steps // noise_hold)}, got {noise.shape}")
-        if not np.all(np.isfinite(noise)):
+        if not _all_finite(noise):
             raise ValueError("noise must be finite")
 
     if isinstance(v0, str):
@@ -241,6 +241,18 @@ def simulate_sde(model: Model, *, v0, t_end: float, replicas: int, seed=None, dt
     meta = _meta(model, seed, dt, per, scheme, noise is not None, v0_meta, replicas, t,
                  noise_hold, n_kicks)
     return Ensemble(t, v_out, x_out, meta, noise)
+
+
+def _all_finite(a: np.ndarray, sums: np.ndarray | None = None) -> bool:
+    """Whether every element of ``a`` is finite, from ``sums`` (sums or means over parts of
+    ``a``; default: its total) when those are finite: an inf or nan in a sum's terms makes it
+    inf or nan.  Only a sum that is not finite (a non-finite term, or finite terms that
+    overflow) costs the elementwise test, which at the report's full size (256 x 320000) took
+    0.22 CPU s, 10 % of the held pair."""
+    if sums is None:
+        with np.errstate(over="ignore", invalid="ignore"):
+            sums = np.add.reduce(a, axis=None)
+    return bool(np.all(np.isfinite(sums))) or bool(np.all(np.isfinite(a)))
 
 
 def _meta(model, seed, dt, per, scheme, given, v0_meta, replicas, t, noise_hold, n_kicks) -> dict:
@@ -304,10 +316,11 @@ def simulate_sde_held_pair(model: Model, *, v0, t_end: float, replicas: int, noi
     if noise.shape != (replicas, n_steps):
         raise ValueError(f"noise must have shape (replicas, n_steps) = {(replicas, n_steps)}, "
                          f"got {noise.shape}")
-    if not np.all(np.isfinite(noise)):
+    with np.errstate(over="ignore", invalid="ignore"):
+        means = noise.reshape(replicas, n_steps // hold, hold).mean(axis=2)
+    if not _all_finite(noise, means):
         raise ValueError("noise must be finite")
     v, v0_meta = _given_v0(v0, replicas, f"a number or an array of shape ({replicas},)")
-    means = noise.reshape(replicas, n_steps // hold, hold).mean(axis=2)
     v_out, x_out, _ = _stepped(model, np.concatenate([v, v]), n_steps, per, dt, scheme,
                                ((means, hold), (noise, 1)), None, None)
     t = np.arange(n_steps // per + 1) * (per * dt)

@@ -93,3 +93,28 @@ def test_spring_member_takes_the_reference_loop():
     spring = Model(tau_m=1.0, delta=0.5, a=0.2, gamma=10.0, spring=4.0)
     fast, ref = _both(spring, 5, 300, 10, "exponential", None)
     _identical(fast, ref)
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf, "inf and -inf"])
+def test_non_finite_noise_is_refused(bad):
+    """The finiteness check goes through sums (an inf or nan term makes a sum non-finite):
+    every kind of non-finite value is still refused, by both entry points."""
+    z = np.random.default_rng(5).standard_normal((3, 100))
+    if bad == "inf and -inf":          # their sum is nan, within one hold of 4
+        z[1, 40], z[1, 41] = np.inf, -np.inf
+    else:
+        z[2, 77] = bad
+    kw = dict(v0=0.0, t_end=0.1, replicas=3, dt=1e-3, sample_dt=1e-2)
+    with pytest.raises(ValueError, match="noise must be finite"):
+        mc.simulate_sde(SGN, noise=z, **kw)
+    with pytest.raises(ValueError, match="noise must be finite"):
+        mc.simulate_sde_held_pair(SGN, noise=z, noise_hold=4, **kw)
+
+
+def test_finite_noise_whose_sums_overflow_is_accepted():
+    """Finite values whose sums overflow to inf are not refused (the elementwise fallback)."""
+    z = np.full((2, 100), 1e308)
+    kw = dict(v0=0.0, t_end=0.1, replicas=2, dt=1e-3, sample_dt=1e-2)
+    with np.errstate(over="ignore", invalid="ignore"):
+        mc.simulate_sde(SGN, noise=z, **kw)
+        mc.simulate_sde_held_pair(SGN, noise=z, noise_hold=4, **kw)
