@@ -37,8 +37,11 @@ P(v > 0)           +0.0025 +- 0.0013, sd 0.0075        +0.0013 .. +0.0016 +- 0.0
 =================  ==================================  ===================================
 
 The smoothed means agree with the flip counts within the latter's errors at every ``h`` from
-``threshold/4`` down to ``epsilon/16``, with 5-15x smaller spread, so a check of 16 paths
-measures what needed 128.
+``threshold/4`` down to ``epsilon/16``, with 5-15x smaller spread: for the check's own noise
+(2 SE) to stay below 0.05 statistical errors of a 256-path run, counting flips needs 14-59
+re-run paths, the smoothed indicator 1-3 (``benchmarks/bench_integration_check.py``).  The
+report's check was 128 paths (half the work experiment's stationary run, at 3.3-4.5x the
+nominal cost per unit time); it is now 16.
 
 Limits: the Richardson step assumes the density change ``Dp`` is smooth on the scale ``h``
 at each edge.  A path-wise error that jumped exactly at an edge would break it (then ``d_h
