@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 
+from ..circuit.experiments import Experiment
 from ..circuit.mapping import map_model
 from ..theory.exact import sample_stationary
 from .budget import SE_MULTIPLIER, held_noise_pair, integration_term
@@ -19,10 +20,12 @@ from ..estimators.smoothed_indicator import kernel_width
 from ..study.seeds import SeedPlan
 from ..study.catalogue import (Kind, StationaryValues, stationary_null_se, stationary_observables,
                                transition_observables, transition_theory_se, transition_values)
+from .plan import ReportSettings
 from .runs import ExperimentRuns
-from .theory_curves import ExperimentTheory, FigureCurves, experiment_theory
+from .theory_curves import ExperimentTheory, FigureCurves, experiment_theory, stationary_taus
 
-__all__ = ["ExperimentAnalysis", "analyse", "MC_REPLICAS", "MC_STATIONARY_REPLICAS"]
+__all__ = ["ExperimentAnalysis", "analyse", "MC_REPLICAS", "MC_STATIONARY_REPLICAS",
+           "BandwidthTerms", "bandwidth_terms"]
 
 # Held/white Monte Carlo pairs are cheap (numpy); enough replicas that the bandwidth estimate
 # is not dominated by its own noise (threshold observables change by whole paths).
@@ -69,21 +72,84 @@ def _bias(pair_diffs: dict, name: str) -> float:
     return abs(d) + SE_MULTIPLIER * se
 
 
-def analyse(runs: ExperimentRuns, *, theory: ExperimentTheory | None = None, progress=None,
+# ------------------------------------------------------------------- bandwidth term
+@dataclass(frozen=True, eq=False)
+class BandwidthTerms:
+    """The bandwidth term of every comparison of one experiment: the held-noise minus
+    white-noise Monte Carlo difference ``{label: (difference, se)}`` (paired jackknife),
+    per transition ``v0`` and for the stationary run.  It needs no circuit data (the
+    effective model, the seeds, the settings, the hold and sampling steps), so the report
+    computes it while ngspice runs; ``threshold`` and ``taus`` are those of the stationary
+    observables it was computed for (checked against the theory's by :func:`analyse`)."""
+
+    threshold: float
+    taus: tuple
+    transition: dict                   # v0 -> {label: (difference, se)}
+    stationary: dict                   # label -> (difference, se)
+    wall_time_s: float = 0.0
+
+
+def bandwidth_terms(exp: Experiment, settings: ReportSettings, *,
+                    progress=None) -> BandwidthTerms:
+    """Held/white Monte Carlo pairs (:func:`~analogue.report.budget.held_noise_pair`) of one
+    experiment, on the seeds of its :class:`~analogue.study.seeds.SeedPlan`, and their paired
+    jackknife differences: the budget's bandwidth term, bit for bit what :func:`analyse`
+    computes when not given it.  ``settings``: the report settings the runs use
+    (``exp.report.for_options(opts)``)."""
+    import time
+    t0 = time.perf_counter()
+    tick = progress or (lambda *_: None)
+    model = exp.model
+    mapping = map_model(model, exp.spec)
+    model_eff, noise_dt = mapping.model_effective, mapping.noise_dt
+    seeds = SeedPlan(exp.seed)
+    times = list(exp.histogram_times)
+    transition = {}
+    for i, v0 in enumerate(exp.v0):
+        tick(f"{exp.name}: held-noise Monte Carlo pair from v0={v0:g}")
+        held, white = held_noise_pair(model_eff, v0=v0, t_end=max(times), replicas=MC_REPLICAS,
+                                      seed=seeds.mc_transition(i), noise_dt=noise_dt,
+                                      sample_dt=exp.sample_dt)
+        def fn(e, v0=v0):
+            return transition_values(e, v0, times)
+        transition[v0] = jackknife_difference(fn, held, white)
+    thr = settings.stick_threshold * model.velocity_scale
+    taus = stationary_taus(exp, settings)
+    stationary_fn = StationaryValues(burn_in=settings.stationary_burn_in, threshold=thr,
+                                     force=model.force, taus=tuple(taus))
+    v0_mc = sample_stationary(model_eff, MC_STATIONARY_REPLICAS, seeds.mc_stationary_v0)
+    tick(f"{exp.name}: held-noise Monte Carlo pair (stationary)")
+    held, white = held_noise_pair(model_eff, v0=v0_mc, t_end=settings.stationary_t_end,
+                                  replicas=v0_mc.size, seed=seeds.mc_stationary, noise_dt=noise_dt,
+                                  sample_dt=exp.sample_dt)
+    stationary = jackknife_difference(stationary_fn, held, white)
+    return BandwidthTerms(threshold=thr, taus=tuple(taus), transition=transition,
+                          stationary=stationary, wall_time_s=time.perf_counter() - t0)
+
+
+def analyse(runs: ExperimentRuns, *, theory: ExperimentTheory | None = None,
+            bandwidth: BandwidthTerms | None = None, progress=None,
             cache=None) -> ExperimentAnalysis:
     """Every comparison of one experiment.  ``theory``: its circuit-free theory
     (:func:`~analogue.report.theory_curves.experiment_theory`, computed here if not given;
-    the pipeline computes it while ngspice runs)."""
+    the pipeline computes it while ngspice runs).  ``bandwidth``: its bandwidth terms
+    (:func:`bandwidth_terms`, likewise: computed here if not given)."""
     exp, settings = runs.exp, runs.settings
     model = exp.model
-    mapping = map_model(model, exp.spec)
-    model_eff = mapping.model_effective
-    noise_dt = mapping.noise_dt
+    model_eff = map_model(model, exp.spec).model_effective
     tick = progress or (lambda *_: None)
     if theory is None:
         theory = experiment_theory(exp, settings, cache=cache, progress=progress)
+    if bandwidth is None:
+        bandwidth = bandwidth_terms(exp, settings, progress=progress)
+    if (bandwidth.threshold != theory.threshold or bandwidth.taus != tuple(theory.taus)
+            or list(bandwidth.transition) != list(runs.transition)):
+        raise ValueError(f"{exp.name}: bandwidth terms computed for other settings (threshold "
+                         f"{bandwidth.threshold:g}, work windows {bandwidth.taus}, v0 "
+                         f"{list(bandwidth.transition)}) than the analysis (threshold "
+                         f"{theory.threshold:g}, work windows {tuple(theory.taus)}, v0 "
+                         f"{list(runs.transition)})")
     res = ExperimentAnalysis(runs, theory=theory)
-    seeds = SeedPlan(exp.seed)
     # kernel width of the smoothed indicators in the integration differences
     h = kernel_width(theory.threshold, model_eff.epsilon)
 
@@ -103,10 +169,7 @@ def analyse(runs: ExperimentRuns, *, theory: ExperimentTheory | None = None, pro
         se_theory = transition_theory_se(th.v_eff, th.f_exact_eff, v0, times, n)
         circ = {k: (v, max(se, se_theory.get(k, 0.0))) for k, (v, se) in circ.items()}
         ex, ex_eff, weak = th.exact, th.exact_eff, th.weak
-        held, white = held_noise_pair(model_eff, v0=v0, t_end=max(times), replicas=MC_REPLICAS,
-                                      seed=seeds.mc_transition(i), noise_dt=noise_dt,
-                                      sample_dt=exp.sample_dt)
-        band = jackknife_difference(fn, held, white)
+        band = bandwidth.transition[v0]
         integ = {}
         if i == 0:
             integ = integration_term(
@@ -148,12 +211,7 @@ def analyse(runs: ExperimentRuns, *, theory: ExperimentTheory | None = None, pro
                                      force=model.force, taus=tuple(taus))
     circ = jackknife(stationary_fn, ens)
     ex, ex_eff = theory.stationary, theory.stationary_eff
-    v0_mc = sample_stationary(model_eff, MC_STATIONARY_REPLICAS, seeds.mc_stationary_v0)
-    tick(f"{exp.name}: held-noise Monte Carlo pair")
-    held, white = held_noise_pair(model_eff, v0=v0_mc, t_end=settings.stationary_t_end,
-                                  replicas=v0_mc.size, seed=seeds.mc_stationary, noise_dt=noise_dt,
-                                  sample_dt=exp.sample_dt)
-    band = jackknife_difference(stationary_fn, held, white)
+    band = bandwidth.stationary
     # the check covers a prefix window of the run: compared on the same rows and times
     integ = integration_term(lambda s: replace(stationary_fn, smoothing=s),
                              *runs.check_pair("stationary"), h)
