@@ -113,3 +113,10 @@ def validate_metrics(obj: dict) -> None:
     for k in ("parameters", "seeds", "ngspice_version", "deck_hashes", "wall_time_s"):
         if k not in prov:
             raise ValueError(f"provenance lacks {k!r}")
+    # optional (added keys: older documents lack them): seconds from the start, or null
+    for k in ("paper_wall_time_s", "beyond_wall_time_s"):
+        v = prov.get(k)
+        if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float))
+                              or not v >= 0):
+            raise ValueError(f"provenance {k!r} must be a number of seconds >= 0 or null, "
+                             f"got {v!r}")

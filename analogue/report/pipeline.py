@@ -21,7 +21,7 @@ import platform
 import threading
 import time
 import traceback
-from concurrent.futures import Future
+from concurrent.futures import FIRST_COMPLETED, Future, wait
 from contextlib import contextmanager
 from dataclasses import dataclass
 from datetime import datetime, timezone
@@ -33,7 +33,7 @@ from ..circuit.experiments import (FIG1_EXPERIMENTS, OPEN_QUESTION_EXPERIMENTS,
                                    PAPER_EXPERIMENTS, PAPER_FIGURE_TAGS, Experiment,
                                    load_experiment, standard_circuit)
 from . import figures
-from .comparisons import ExperimentAnalysis, analyse
+from .comparisons import BandwidthTerms, ExperimentAnalysis, analyse, bandwidth_terms
 from .theory_curves import ExperimentTheory, experiment_theory, figure_curves
 from .html import Figure, Section, Table, write_page
 from .metrics import validate_metrics
@@ -304,20 +304,26 @@ class _Workers:
     - the **theory** thread (one): the theory needs no circuit data, so it runs while ngspice
       runs; BLAS/LAPACK are limited to one thread while a task runs (threadpoolctl), so it adds
       one runnable thread, not one per core;
-    - the **circuit** threads: every experiment's circuit runs (and the family members'
-      analyses), queued from the start, so that ngspice never waits for the main thread's
-      comparisons of the previous experiment.  Two threads: most runs of the quick paper are
-      one or two decks, which alone leave a core idle (measured: one core idle for most of
-      the 116 s of circuit runs when they ran one after the other in the main thread).
+    - the **circuit** thread (one): every experiment's circuit runs, queued from the start
+      (longest first), so that ngspice never waits for the main thread's comparisons of the
+      previous experiment.  One thread: an experiment's runs keep ``workers`` ngspice
+      processes busy on their own (one deck pool for all its runs, report.runs), and the
+      theory thread fills the last deck's idle core.  With two threads the experiments
+      shared the cores, so the longest one (work, queued first) ended last anyway, at 108 s
+      of the quick paper, and its theory curves trailed after it;
+    - the **members** threads: the family members' analyses (circuit and theory), queued
+      once every paper run is done (:meth:`submit_after`).  Two threads: a member's runs are
+      few decks, which alone leave a core idle.
 
     The threads are daemons: an interrupt does not wait for a task under way (see
     :meth:`abort`)."""
 
     def __init__(self, phases: _Phases, name: str, threads: int = 1, blas_limit: bool = False):
         import queue
-        import threading
         self.phases, self.name, self.blas_limit = phases, name, blas_limit
         self.queue: queue.Queue = queue.Queue()
+        self._lock = threading.Lock()
+        self._closed = False
         self.threads = [threading.Thread(target=self._run, daemon=True,
                                          name=f"analogue-{name}" + (f"-{i}" if threads > 1 else ""))
                         for i in range(threads)]
@@ -347,7 +353,34 @@ class _Workers:
 
     def submit(self, phase: str, experiment: str | None, fn) -> Future:
         fut: Future = Future()
-        self.queue.put((fut, phase, experiment, fn))
+        self._put((fut, phase, experiment, fn))
+        return fut
+
+    def _put(self, item) -> None:
+        with self._lock:   # nothing is queued behind close()'s end markers: cancelled instead
+            if self._closed:
+                item[0].cancel()
+            else:
+                self.queue.put(item)
+
+    def submit_after(self, after: list, phase: str, experiment: str | None, fn) -> Future:
+        """Like :meth:`submit`, but queued only once every future in ``after`` is done
+        (a result, an error or cancelled): the family members' circuit work waits for the
+        paper's circuit runs, so that they never share the cores with them."""
+        fut: Future = Future()
+        left = [len(after)]
+        lock = threading.Lock()
+
+        def one_done(_f) -> None:
+            with lock:
+                left[0] -= 1
+                go = left[0] == 0
+            if go:
+                self._put((fut, phase, experiment, fn))
+        if not after:
+            self._put((fut, phase, experiment, fn))
+        for f in after:
+            f.add_done_callback(one_done)
         return fut
 
     def _cancel_pending(self) -> None:
@@ -363,9 +396,11 @@ class _Workers:
     def close(self) -> None:
         for t in self.threads:
             t.analogue_report_closed = True  # type: ignore[attr-defined]  # read by _log
-        self._cancel_pending()
-        for _ in self.threads:
-            self.queue.put(None)
+        with self._lock:
+            self._closed = True
+            self._cancel_pending()
+            for _ in self.threads:
+                self.queue.put(None)
 
     def abort(self, wait: float = 10.0) -> None:
         """After an interrupt: nothing new starts, and the ngspice processes of the tasks under
@@ -382,8 +417,10 @@ class _Workers:
         terminate_all()
 
 
-# the circuit threads (see _Workers): each simulate call runs up to `workers` ngspice processes
-CIRCUIT_THREADS = 2
+# the threads of the paper's circuit runs and of the family members' analyses (see
+# _Workers): each simulate call runs up to `workers` ngspice processes
+CIRCUIT_THREADS = 1
+MEMBER_THREADS = 2
 
 
 def _wants_open_question(experiments) -> bool:
@@ -413,14 +450,20 @@ def build_report(names, out: Path, opts: RunOptions, title: str, chapter=()) -> 
     with interrupt_guard():
         pool = _Workers(phases, "theory", 1, blas_limit=True)
         circuit = _Workers(phases, "circuit", CIRCUIT_THREADS)
+        family = _Workers(phases, "members", MEMBER_THREADS)
         try:
             return _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
-                          t0, load0)
+                          family, t0, load0)
         except BaseException:
-            circuit.abort()   # an interrupt (sections' failures are caught in _build)
+            # an interrupt (sections' failures are caught in _build): nothing new starts in
+            # either pool, then every ngspice process is killed until their threads end
+            family.close()
+            circuit.abort()
+            family.abort()
             raise
         finally:
             circuit.close()
+            family.close()
             pool.close()
 
 
@@ -452,25 +495,54 @@ def _runs_task(exp, opts):
     return run_experiment_runs(exp, opts)
 
 
-def _build(experiments, members, out, opts, title, fails, phases, pool, circuit, t0,
+def _circuit_cost(exp: Experiment, opts: RunOptions) -> float:
+    """A proxy for an experiment's ngspice time: its replica-time (replicas x model time of
+    the transition and stationary runs; the integration checks scale with them).  Only its
+    order matters: the paper's work experiment (7600 replica-time units at --quick, against
+    5600 for stick and slip) took 58 s of circuit runs, stick 30 s, slip 15 s."""
+    settings = exp.report.for_options(opts)
+    return (len(exp.v0) * opts.scaled(exp.replicas) * exp.t_end
+            + settings.stationary_replicas * settings.stationary_t_end)
+
+
+def _build(experiments, members, out, opts, title, fails, phases, pool, circuit, family, t0,
            load0) -> Path:
     from . import beyond
-    # theory first, in the background: it needs no circuit data
-    theory_f = [pool.submit("exact theory", exp.name,
-                            lambda exp=exp: experiment_theory(exp, exp.report.for_options(opts),
-                                                              progress=_log))
-                for exp in experiments]
+    # The schedule (issue 10: the paper's chapters first, every core busy):
+    # - circuit runs longest first: the longest experiment's runs finish early, and its long
+    #   analysis (comparisons, the work densities of its theory curves) overlaps the other
+    #   experiments' runs instead of trailing after them (measured on the quick paper: work's
+    #   runs queued behind slip ended at 73 s, its comparisons and curves at 90 s);
+    # - the theory thread takes the experiments in the same order: each experiment's exact
+    #   theory, then its bandwidth term (held/white Monte Carlo pairs: no circuit data), so
+    #   that both are ready when its runs are; the open question last (only drawn);
+    # - the family members' circuit work waits until every paper run is done, then runs
+    #   beside the paper's comparisons and figures.
+    order = sorted(range(len(experiments)), key=lambda i: -_circuit_cost(experiments[i], opts))
+    theory_f: dict = {}
+    band_f: dict = {}
+    for i in order:
+        exp = experiments[i]
+        settings = exp.report.for_options(opts)
+        theory_f[i] = pool.submit("exact theory", exp.name,
+                                  lambda exp=exp, s=settings: experiment_theory(exp, s,
+                                                                                progress=_log))
+        band_f[i] = pool.submit("bandwidth term (held/white Monte Carlo)", exp.name,
+                                lambda exp=exp, s=settings: bandwidth_terms(exp, s,
+                                                                            progress=_log))
     oq_f = (pool.submit("open question (exact rate functions)", None,
                         lambda: _open_question_data(opts))
             if _wants_open_question(experiments) else None)
-    # every circuit run queued at once, in order (the family members last): the comparisons
-    # below take each experiment's runs as they come, while ngspice goes on with the next
-    runs_f = [circuit.submit("circuit runs", exp.name, lambda exp=exp: _runs_task(exp, opts))
-              for exp in experiments]
-    members_f = [circuit.submit("family member (circuit and theory)", exp.name,
-                                lambda exp=exp: _member_task(exp, opts))
+    runs_f = {i: circuit.submit("circuit runs", experiments[i].name,
+                                lambda exp=experiments[i]: _runs_task(exp, opts))
+              for i in order}
+    members_f = [family.submit_after(list(runs_f.values()),
+                                      "family member (circuit and theory)", exp.name,
+                                      lambda exp=exp: _member_task(exp, opts))
                  for exp in members]
-    all_runs, analyses, exp_sections = [], [], {}
+    runs_by_index: dict = {}
+    analyses_by_index: dict = {}
+    exp_sections: dict = {}
     # Figures are drawn in this thread as soon as an experiment's theory curves are in, while
     # the circuit threads run the next experiments (measured: the figures and page took 17 s
     # after everything else had finished)
@@ -494,14 +566,32 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
                                          lambda: _open_question_section(out, opts, oq_f))
             oq_section.append(sec if sec is not None else Section(title_, error=err))
 
-    for exp, th_f, run_f in zip(experiments, theory_f, runs_f):
-        section = f"Experiment '{exp.name}'"
-        if not run_f.done():
+    def next_done() -> int:
+        """The next experiment whose runs are done (the runs' order among those done at
+        once), drawing the figures whose curves are in while none is."""
+        while True:
+            done = [i for i in order if i in runs_f and runs_f[i].done()]
+            if done:
+                return done[0]
             draw_ready(block=False)
-        with phases("waiting for circuit runs", exp.name):
-            runs, err = fails.attempt(section, "circuit runs", run_f.result, exp.name)
+            waits = list(runs_f.values())
+            if undrawn:
+                waits.append(undrawn[0][2])
+            if oq_f is not None and not oq_section:
+                waits.append(oq_f)
+            with phases("waiting for circuit runs"):
+                wait(waits, return_when=FIRST_COMPLETED)
+
+    # the experiments are compared in the order their runs complete (the page keeps the
+    # paper's order)
+    while runs_f:
+        i = next_done()
+        exp, run_f, th_f, bw_f = experiments[i], runs_f.pop(i), theory_f[i], band_f[i]
+        section = f"Experiment '{exp.name}'"
+        runs, err = fails.attempt(section, "circuit runs", run_f.result, exp.name)
         if runs is None:
             th_f.cancel()
+            bw_f.cancel()
             exp_sections[exp.name] = Section(f"{section}: failed", experiment_section_text(exp),
                                              error=err)
             continue
@@ -511,25 +601,39 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
                          lambda runs=runs: figure_curves(runs, progress=_log))
         _log(f"{exp.name}: comparing with theory")
 
-        def compare_(runs=runs, th_f=th_f):
+        def compare_(runs=runs, th_f=th_f, bw_f=bw_f):
             with phases("waiting for theory", runs.exp.name):
                 theory: ExperimentTheory = th_f.result()
+                bandwidth: BandwidthTerms = bw_f.result()
             with phases("comparisons", runs.exp.name):
-                return analyse(runs, theory=theory, progress=_log)
+                return analyse(runs, theory=theory, bandwidth=bandwidth, progress=_log)
         analysis, err = fails.attempt(section, "comparison with theory", compare_, exp.name)
         if analysis is None:
             cf.cancel()
             exp_sections[exp.name] = Section(f"{section}: failed", experiment_section_text(exp),
                                              error=err)
             continue
-        all_runs.append(runs)
-        analyses.append(analysis)
+        runs_by_index[i] = runs
+        analyses_by_index[i] = analysis
         undrawn.append((runs, analysis, cf))
+    all_runs = [runs_by_index[i] for i in sorted(runs_by_index)]
+    analyses = [analyses_by_index[i] for i in sorted(analyses_by_index)]
+
+    # the paper's chapters are complete once their figures (and Fig. 1) are drawn
+    draw_ready(block=True)
+    fig1_section = None
+    if all_runs:
+        fig1_runs = [r for r in all_runs if r.exp.name in FIG1_EXPERIMENTS] or all_runs
+        with phases("figures: Fig. 1"):
+            fig, err = fails.attempt("Paper Fig. 1: deterministic motion", "figure",
+                                     lambda: Figure(*figures.fig_deterministic(fig1_runs, out)))
+        fig1_section = Section("Paper Fig. 1: deterministic motion",
+                               figures=[fig] if fig is not None else [], error=err)
+    paper_wall = time.perf_counter() - t0
+    _log(f"the paper's chapters are complete ({paper_wall:.0f} s)")
 
     member_analyses = []
     for exp, ma_f in zip(members, members_f):
-        if not ma_f.done():
-            draw_ready(block=False)
         section = f"{beyond.CHAPTER_TITLE}: {exp.name}"
         with phases("waiting for family members", exp.name):
             ma, err = fails.attempt(section, "member analysis", ma_f.result, exp.name)
@@ -542,8 +646,6 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
     # comparisons) and, below, its figures
     member_wall = sum(p["seconds"] for p in phases.items
                       if p["phase"] == "family member (circuit and theory)")
-
-    draw_ready(block=True)
 
     _log("drawing figures")
     draw0 = time.perf_counter()
@@ -587,12 +689,8 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
             tables.append(t)
     sections.append(Section("The circuit and its component values", circuit_par, tables=tables))
 
-    if all_runs:
-        fig1_runs = [r for r in all_runs if r.exp.name in FIG1_EXPERIMENTS] or all_runs
-        fig, err = fails.attempt("Paper Fig. 1: deterministic motion", "figure",
-                                 lambda: Figure(*figures.fig_deterministic(fig1_runs, out)))
-        sections.append(Section("Paper Fig. 1: deterministic motion",
-                                figures=[fig] if fig is not None else [], error=err))
+    if fig1_section is not None:
+        sections.append(fig1_section)
     for exp in experiments:
         if exp.name in exp_sections:
             sections.append(exp_sections[exp.name])
@@ -648,6 +746,10 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
         "tolerances": {k: p.get("tolerances") for k, p in provs.items()},
         "deck_size": {k: p.get("deck_size") for k, p in provs.items()},
         "wall_time_s": wall,
+        # when the paper's chapters (its experiments, Fig. 1, the open question) were
+        # complete, from the start; the chapter "Beyond the paper" runs after their circuit
+        # runs, beside their comparisons and figures
+        "paper_wall_time_s": round(paper_wall, 3),
         "beyond_wall_time_s": member_wall if members else None,
         "quick": opts.quick,
         "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
@@ -684,9 +786,12 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
     tmp.write_text(json.dumps(metrics, indent=2, default=str))
     tmp.replace(out / "metrics.json")
 
+    timing = (f"{wall:.0f} s in all; the paper's chapters were complete after "
+              f"{paper_wall:.0f} s, and the chapter '{beyond.CHAPTER_TITLE}' took "
+              f"{member_wall:.0f} s of its own threads' time" if members else f"{wall:.0f} s")
     intro = [f"Generated {provenance['created']} by analogue {software['analogue']} "
              f"with ngspice {provenance['ngspice_version']} ({'quick' if opts.quick else 'full'} run, "
-             f"{wall:.0f} s). Model units throughout: velocity, time and work rate of the "
+             f"{timing}). Model units throughout: velocity, time and work rate of the "
              "reduced equation dv/dt = -v/tau_m - Delta sgn(v) + a + xi/m (Baule, Touchette & "
              "Cohen).",
              "Every figure is also a PNG file in this directory; every number is in metrics.json."]

@@ -1,0 +1,174 @@
+"""The report's schedule (issue 10): circuit runs longest first, experiments compared in the
+order their runs complete (the page keeps the given order), the family members' circuit work
+only after every paper run, and none of it changes a number.  No ngspice: the "circuit" runs
+are SDE ensembles of the circuit's effective model; figures are stubs."""
+from __future__ import annotations
+
+import json
+import threading
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from analogue.circuit.experiments import experiment_from_dict, load_experiment, standard_circuit
+from analogue.montecarlo import simulate_sde
+from analogue.report import pipeline as P
+from analogue.report.comparisons import analyse
+from analogue.report.html import Section
+from analogue.report.plan import RunOptions
+from analogue.report.runs import ExperimentRuns
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _exp(name: str, stationary_t_end: float, seed: int):
+    d = tomllib.loads((ROOT / "circuits" / "stick.toml").read_text())
+    d["name"] = name
+    d["experiment"].update(t_end=2.0, histogram_times=[0.5, 2.0], seed=seed, replicas=32)
+    d["report"].update(stationary_t_end=stationary_t_end, stationary_burn_in=1.0,
+                       stationary_replicas=16, prehistory=[[2.0, 0.9, 1.0]])
+    return experiment_from_dict(d)
+
+
+def _fake_runs(exp, opts):
+    """SDE ensembles in place of the circuit's (a function of the experiment alone)."""
+    settings = exp.report.for_options(opts)
+    m = exp.mapping().model_effective
+    kw = dict(sample_dt=exp.sample_dt)
+
+    def sde(**k):
+        e = simulate_sde(m, **k, **kw)
+        e.meta["model_effective"] = m.as_dict()
+        return e
+    tr = {v0: sde(v0=v0, t_end=exp.t_end, replicas=32, seed=exp.seed + i)
+          for i, v0 in enumerate(exp.v0)}
+    st = sde(v0="stationary", t_end=settings.stationary_t_end, replicas=16, seed=exp.seed + 9)
+    chk_t = sde(v0=exp.v0[0], t_end=exp.t_end, replicas=8, seed=exp.seed)
+    chk_s = sde(v0="stationary", t_end=settings.stationary_t_end, replicas=8, seed=exp.seed + 9)
+    return ExperimentRuns(exp=exp, settings=settings, quick=opts.quick, transition=tr,
+                          stationary=st, noise_free=chk_t, check_transition=chk_t,
+                          check_stationary=chk_s)
+
+
+def test_circuit_cost_puts_the_papers_work_experiment_first():
+    """At both sizes (measured at --quick: work's runs 58 s, stick's 30 s, slip's 15 s)."""
+    exps = [load_experiment(standard_circuit(n)) for n in ("stick", "slip", "work")]
+    for quick in (True, False):
+        costs = [P._circuit_cost(e, RunOptions(quick=quick)) for e in exps]
+        assert costs[2] > max(costs[:2])
+
+
+def test_gated_task_waits_for_every_gate_and_is_cancelled_by_close():
+    from concurrent.futures import Future
+    pool = P._Workers(P._Phases(), "circuit", 2)
+    try:
+        g1, g2 = Future(), Future()
+        f = pool.submit_after([g1, g2], "family member", "m", lambda: 7)
+        g1.set_result(1)
+        assert not f.done()
+        g2.set_exception(RuntimeError("a failed run opens the gate too"))
+        assert f.result(timeout=30) == 7
+        g3 = Future()
+        late = pool.submit_after([g3], "family member", "n", lambda: 8)
+    finally:
+        pool.close()
+    g3.set_result(1)            # the gate opens after close: cancelled, never left pending
+    assert late.cancelled()
+
+
+@pytest.fixture(params=[1, 2], ids=["one circuit thread", "two circuit threads"])
+def schedule(request, tmp_path, monkeypatch):
+    """A report of two experiments given as [small, big] (big: longer stationary run) and
+    one family member.  With two circuit threads, big's runs wait (up to 30 s) until small's
+    comparisons have started: the main thread must take small's runs first."""
+    threads = request.param
+    monkeypatch.setattr(P, "CIRCUIT_THREADS", threads)
+    monkeypatch.setenv("ANALOGUE_THEORY_CACHE", str(tmp_path / "theory"))
+    big, small = _exp("big", 12.0, 21), _exp("small", 6.0, 22)
+    events: list = []
+    small_compared = threading.Event()
+    lock = threading.Lock()
+
+    def runs(exp, opts, settings=None):
+        with lock:
+            events.append(("runs start", exp.name))
+        if exp.name == "big" and threads == 2:
+            waited = small_compared.wait(30)
+            with lock:
+                events.append(("big waited for small's comparisons", waited))
+        r = _fake_runs(exp, opts)
+        with lock:
+            events.append(("runs done", exp.name))
+        return r
+
+    real_analyse = analyse
+
+    def analyse_(runs, **kw):
+        with lock:
+            events.append(("compare", runs.exp.name))
+        if runs.exp.name == "small":
+            small_compared.set()
+        return real_analyse(runs, **kw)
+
+    def member(exp, opts):
+        with lock:
+            events.append(("member start", exp.name))
+        raise RuntimeError("member stub")
+
+    from analogue.plots.style import new_figure, save
+    fig, ax = new_figure()
+    png = save(fig, tmp_path / "stub.png")
+    for name in ("fig_prehistory", "fig_boundaries", "fig_propagator", "fig_stationary",
+                 "fig_work_paths", "fig_rate_function", "fig_budget", "fig_deterministic"):
+        monkeypatch.setattr(P.figures, name, lambda *a, n=name, **k: (png, n))
+    monkeypatch.setattr(P, "run_experiment_runs", runs)
+    monkeypatch.setattr(P, "analyse", analyse_)
+    monkeypatch.setattr(P, "_member_task", member)
+    monkeypatch.setattr(P, "_open_question_data", lambda opts: None)
+    monkeypatch.setattr(P, "_open_question_section",
+                        lambda out, opts, data=None: Section("The paper's open question", ["q"]))
+    opts = RunOptions(quick=True, progress=False)
+    out = tmp_path / "report"
+    with pytest.raises(P.ReportIncomplete) as exc:
+        P.build_report([small, big], out, opts, title="t",
+                       chapter=[load_experiment(standard_circuit("cubic"))])
+    return dict(big=big, small=small, opts=opts, out=out, events=events, exc=exc.value,
+                threads=threads)
+
+
+def test_schedule_longest_first_completion_order_members_last(schedule):
+    ev = schedule["events"]
+    starts = [e[1] for e in ev if e[0] == "runs start"]
+    assert starts == ["big", "small"]                     # queued longest first
+    compared = [e[1] for e in ev if e[0] == "compare"]
+    if schedule["threads"] == 2:                          # in the order the runs complete
+        assert ("big waited for small's comparisons", True) in ev
+        assert compared == ["small", "big"]
+    else:
+        assert compared == ["big", "small"]
+    i_member = ev.index(("member start", "cubic"))
+    assert {e[1] for e in ev[:i_member] if e[0] == "runs done"} == {"big", "small"}
+    # the member's failure is its own section; the page keeps the given order
+    assert [f["experiment"] for f in schedule["exc"].failures] == ["cubic"]
+    html = (schedule["out"] / "index.html").read_text()
+    assert html.index("Experiment &#39;small&#39;") < html.index("Experiment &#39;big&#39;")
+    metrics = json.loads((schedule["out"] / "metrics.json").read_text())
+    prov = metrics["provenance"]
+    assert 0 < prov["paper_wall_time_s"] <= prov["wall_time_s"]
+    assert "the paper&#39;s chapters were complete after" in html
+
+
+def test_schedule_changes_no_number(schedule):
+    """Every comparison of the report is the one analyse() gives on the same runs, computed
+    here in this thread from scratch (theory and bandwidth terms included)."""
+    from threadpoolctl import threadpool_limits
+    metrics = json.loads((schedule["out"] / "metrics.json").read_text())
+    want = []
+    for exp in (schedule["small"], schedule["big"]):
+        # one BLAS thread, as in the report's theory thread (a multi-threaded LAPACK may
+        # round differently)
+        with threadpool_limits(1):
+            a = analyse(_fake_runs(exp, schedule["opts"]), cache=False)
+        want += [c.as_dict() for c in a.comparisons]
+    assert metrics["comparisons"] == json.loads(json.dumps(want, default=str))
