@@ -34,6 +34,89 @@ def _children_cpu() -> tuple[float, float]:
     return r.ru_utime, r.ru_stime
 
 
+_TICK = os.sysconf("SC_CLK_TCK")
+
+
+def _proc_stat(path: str) -> list[str] | None:
+    """Fields of a /proc stat file after the command name (state first), or None if gone."""
+    try:
+        with open(path) as f:
+            text = f.read()
+    except OSError:
+        return None
+    return text[text.rindex(")") + 2:].split()
+
+
+def _sample_tree(root: int) -> tuple[float, int]:
+    """(CPU seconds of ``root`` and its descendants, reaped children included; how many of
+    their threads are runnable now)."""
+    kids: dict = {}
+    for d in os.listdir("/proc"):
+        if d.isdigit():
+            st = _proc_stat(f"/proc/{d}/stat")
+            if st is not None:
+                kids.setdefault(int(st[1]), []).append(int(d))
+    pids, todo = [], [root]
+    while todo:
+        p = todo.pop()
+        pids.append(p)
+        todo.extend(kids.get(p, []))
+    cpu, running = 0.0, 0
+    for p in pids:
+        st = _proc_stat(f"/proc/{p}/stat")
+        if st is None:
+            continue
+        cpu += sum(int(x) for x in st[11:15]) / _TICK      # utime stime cutime cstime
+        try:
+            tasks = os.listdir(f"/proc/{p}/task")
+        except OSError:
+            continue
+        for t in tasks:
+            ts = _proc_stat(f"/proc/{p}/task/{t}/stat")
+            running += ts is not None and ts[0] == "R"
+    return cpu, running
+
+
+class _Sampler:
+    """Samples the job's process tree every ``every`` s: its CPU seconds and how many of its
+    threads are runnable.  On a shared machine the wall time says little; the runnable count
+    is the job's own demand, so ``sum(dCPU / clip(runnable, 1, cores))`` over the samples
+    estimates the wall time of the same schedule on an idle machine with ``cores`` cores
+    (the samples are instants: a rough estimate, good for comparing schedules)."""
+
+    def __init__(self, pid: int, every: float = 0.5):
+        import threading
+        self.pid, self.every = pid, every
+        self.samples: list[tuple[float, float, int]] = []
+        self.t0 = time.perf_counter()
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        while not self._stop.wait(self.every):
+            cpu, running = _sample_tree(self.pid)
+            self.samples.append((time.perf_counter() - self.t0, cpu, running))
+
+    def stop(self) -> None:
+        self._stop.set()
+        self._thread.join()
+
+    def summary(self, until: float | None, cores: int = 2) -> dict:
+        """CPU seconds and idle-machine wall estimate up to ``until`` s after the start."""
+        cpu_prev, est, cpu, busy = 0.0, 0.0, 0.0, []
+        t_prev = 0.0
+        for t, c, r in self.samples:
+            if until is not None and t > until:
+                break
+            dc = max(0.0, c - cpu_prev)
+            est += dc / min(max(r, 1), cores)
+            cpu, cpu_prev, t_prev = c, c, t
+            busy.append(min(r, cores))
+        return {"cpu_s": cpu, "idle_estimate_s": est, "until_s": t_prev,
+                "mean_runnable": sum(busy) / len(busy) if busy else 0.0}
+
+
 def run_paper(code: Path, full: bool, store: Path | None = None) -> dict:
     """One ``analogue paper`` run of the checkout ``code`` on an empty store; returns wall,
     CPU and the metrics.json phase breakdown."""
@@ -47,7 +130,12 @@ def run_paper(code: Path, full: bool, store: Path | None = None) -> dict:
         u0, s0 = _children_cpu()
         load0 = os.getloadavg()[0]
         t0 = time.perf_counter()
-        res = subprocess.run(cmd, env=env, cwd=tmp, capture_output=True, text=True, check=False)
+        proc = subprocess.Popen(cmd, env=env, cwd=tmp, stdout=subprocess.PIPE,
+                                stderr=subprocess.PIPE, text=True)
+        sampler = _Sampler(proc.pid)
+        stdout, stderr = proc.communicate()
+        sampler.stop()
+        res = subprocess.CompletedProcess(cmd, proc.returncode, stdout, stderr)
         wall = time.perf_counter() - t0
         u1, s1 = _children_cpu()
         load1 = os.getloadavg()[0]
@@ -58,27 +146,47 @@ def run_paper(code: Path, full: bool, store: Path | None = None) -> dict:
         if store is not None:
             shutil.copy(out / "metrics.json", store / "metrics.json")
     prov = metrics["provenance"]
+    # the report's clock starts after the imports: its times are shifted by the difference
+    shift = wall - prov["wall_time_s"]
+    paper_at = prov.get("paper_wall_time_s")
+    sampled = {"job": sampler.summary(None),
+               "paper": sampler.summary(paper_at + shift) if paper_at is not None else None}
     by_thread: dict = {}
     for p in prov["phases"]:
         key = (p["phase"], p.get("thread", "main"))
         by_thread[key] = by_thread.get(key, 0.0) + p["seconds"]
     return {"code": str(code), "wall_s": wall, "user_s": u1 - u0, "sys_s": s1 - s0,
             "load_1min": (load0, load1), "report_wall_s": prov["wall_time_s"],
-            "phases": by_thread, "summary": metrics["summary"]}
+            "paper_wall_s": prov.get("paper_wall_time_s"),
+            "beyond_wall_s": prov.get("beyond_wall_time_s"),
+            "phases": by_thread, "timeline": prov["phases"], "summary": metrics["summary"],
+            "sampled": sampled}
 
 
 def _print(r: dict) -> None:
     cpu = r["user_s"] + r["sys_s"]
     print(f"\n## {r['code']}")
-    print(f"wall {r['wall_s']:.1f} s (report {r['report_wall_s']:.1f} s), CPU {cpu:.1f} s "
+    paper = (f", paper's chapters complete at {r['paper_wall_s']:.1f} s"
+             if r.get("paper_wall_s") is not None else "")
+    print(f"wall {r['wall_s']:.1f} s (report {r['report_wall_s']:.1f} s{paper}), CPU {cpu:.1f} s "
           f"(user {r['user_s']:.1f} + sys {r['sys_s']:.1f}; {cpu / r['wall_s']:.2f} cores), "
           f"load average (1 min) {r['load_1min'][0]:.2f} -> {r['load_1min'][1]:.2f}; "
           f"{r['summary']['comparisons']} comparisons, {r['summary']['within_budget']} within "
           f"budget, {r['summary']['failed_sections']} failed sections")
+    for what, smp in r["sampled"].items():
+        if smp is not None:
+            print(f"sampled ({what}, to {smp['until_s']:.1f} s): CPU {smp['cpu_s']:.1f} s, "
+                  f"mean runnable threads (clipped at 2) {smp['mean_runnable']:.2f}, "
+                  f"idle 2-core wall estimate {smp['idle_estimate_s']:.1f} s")
     print("| phase | thread | seconds (sum over experiments) |")
     print("|---|---|---|")
     for (phase, thread), sec in sorted(r["phases"].items(), key=lambda kv: -kv[1]):
         print(f"| {phase} | {thread} | {sec:.1f} |")
+    print("timeline (start, end, thread, phase, experiment):")
+    for p in sorted(r["timeline"], key=lambda p: p["start_s"]):
+        if p["seconds"] >= 0.5:
+            print(f"  {p['start_s']:6.1f} {p['start_s'] + p['seconds']:6.1f}  "
+                  f"{p.get('thread', 'main'):8s} {p['phase']} ({p['experiment'] or ''})")
 
 
 def main() -> None:
