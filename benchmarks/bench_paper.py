@@ -47,9 +47,10 @@ def _proc_stat(path: str) -> list[str] | None:
     return text[text.rindex(")") + 2:].split()
 
 
-def _sample_tree(root: int) -> tuple[float, int]:
+def _sample_tree(root: int) -> tuple[float, int, float]:
     """(CPU seconds of ``root`` and its descendants, reaped children included; how many of
-    their threads are runnable now)."""
+    their threads are runnable now; CPU seconds of ``root`` itself, i.e. the Python process
+    without its ngspice children)."""
     kids: dict = {}
     for d in os.listdir("/proc"):
         if d.isdigit():
@@ -61,12 +62,14 @@ def _sample_tree(root: int) -> tuple[float, int]:
         p = todo.pop()
         pids.append(p)
         todo.extend(kids.get(p, []))
-    cpu, running = 0.0, 0
+    cpu, running, own = 0.0, 0, 0.0
     for p in pids:
         st = _proc_stat(f"/proc/{p}/stat")
         if st is None:
             continue
         cpu += sum(int(x) for x in st[11:15]) / _TICK      # utime stime cutime cstime
+        if p == root:
+            own = sum(int(x) for x in st[11:13]) / _TICK
         try:
             tasks = os.listdir(f"/proc/{p}/task")
         except OSError:
@@ -74,7 +77,7 @@ def _sample_tree(root: int) -> tuple[float, int]:
         for t in tasks:
             ts = _proc_stat(f"/proc/{p}/task/{t}/stat")
             running += ts is not None and ts[0] == "R"
-    return cpu, running
+    return cpu, running, own
 
 
 class _Sampler:
@@ -87,7 +90,7 @@ class _Sampler:
     def __init__(self, pid: int, every: float = 0.5):
         import threading
         self.pid, self.every = pid, every
-        self.samples: list[tuple[float, float, int]] = []
+        self.samples: list[tuple[float, float, int, float]] = []
         self.t0 = time.perf_counter()
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, daemon=True)
@@ -95,8 +98,8 @@ class _Sampler:
 
     def _run(self) -> None:
         while not self._stop.wait(self.every):
-            cpu, running = _sample_tree(self.pid)
-            self.samples.append((time.perf_counter() - self.t0, cpu, running))
+            cpu, running, own = _sample_tree(self.pid)
+            self.samples.append((time.perf_counter() - self.t0, cpu, running, own))
 
     def stop(self) -> None:
         self._stop.set()
@@ -104,16 +107,16 @@ class _Sampler:
 
     def summary(self, until: float | None, cores: int = 2) -> dict:
         """CPU seconds and idle-machine wall estimate up to ``until`` s after the start."""
-        cpu_prev, est, cpu, busy = 0.0, 0.0, 0.0, []
+        cpu_prev, est, cpu, busy, python = 0.0, 0.0, 0.0, [], 0.0
         t_prev = 0.0
-        for t, c, r in self.samples:
+        for t, c, r, own in self.samples:
             if until is not None and t > until:
                 break
             dc = max(0.0, c - cpu_prev)
             est += dc / min(max(r, 1), cores)
-            cpu, cpu_prev, t_prev = c, c, t
+            cpu, cpu_prev, t_prev, python = c, c, t, own
             busy.append(min(r, cores))
-        return {"cpu_s": cpu, "idle_estimate_s": est, "until_s": t_prev,
+        return {"cpu_s": cpu, "python_cpu_s": python, "idle_estimate_s": est, "until_s": t_prev,
                 "mean_runnable": sum(busy) / len(busy) if busy else 0.0}
 
 
@@ -175,7 +178,9 @@ def _print(r: dict) -> None:
           f"budget, {r['summary']['failed_sections']} failed sections")
     for what, smp in r["sampled"].items():
         if smp is not None:
-            print(f"sampled ({what}, to {smp['until_s']:.1f} s): CPU {smp['cpu_s']:.1f} s, "
+            print(f"sampled ({what}, to {smp['until_s']:.1f} s): CPU {smp['cpu_s']:.1f} s "
+                  f"(Python process {smp['python_cpu_s']:.1f}, ngspice "
+                  f"{smp['cpu_s'] - smp['python_cpu_s']:.1f}), "
                   f"mean runnable threads (clipped at 2) {smp['mean_runnable']:.2f}, "
                   f"idle 2-core wall estimate {smp['idle_estimate_s']:.1f} s")
     print("| phase | thread | seconds (sum over experiments) |")

@@ -418,8 +418,11 @@ class _Workers:
 
 
 # the threads of the paper's circuit runs and of the family members' analyses (see
-# _Workers): each simulate call runs up to `workers` ngspice processes
+# _Workers): each simulate call runs up to `workers` ngspice processes.  With a Dask
+# scheduler an experiment's runs go to the cluster one after another (report.runs._run_jobs)
+# and the local cores are not the limit: two experiments at once keep more of it busy.
 CIRCUIT_THREADS = 1
+SCHEDULER_CIRCUIT_THREADS = 2
 MEMBER_THREADS = 2
 
 
@@ -449,7 +452,8 @@ def build_report(names, out: Path, opts: RunOptions, title: str, chapter=()) -> 
     from ..circuit.ngspice import interrupt_guard
     with interrupt_guard():
         pool = _Workers(phases, "theory", 1, blas_limit=True)
-        circuit = _Workers(phases, "circuit", CIRCUIT_THREADS)
+        circuit = _Workers(phases, "circuit",
+                           SCHEDULER_CIRCUIT_THREADS if opts.scheduler else CIRCUIT_THREADS)
         family = _Workers(phases, "members", MEMBER_THREADS)
         try:
             return _build(experiments, members, out, opts, title, fails, phases, pool, circuit,

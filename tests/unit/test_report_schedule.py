@@ -172,3 +172,18 @@ def test_schedule_changes_no_number(schedule):
             a = analyse(_fake_runs(exp, schedule["opts"]), cache=False)
         want += [c.as_dict() for c in a.comparisons]
     assert metrics["comparisons"] == json.loads(json.dumps(want, default=str))
+
+
+@pytest.mark.parametrize("scheduler, threads", [(None, 1), ("tcp://127.0.0.1:8786", 2)])
+def test_one_local_circuit_thread_two_with_a_scheduler(tmp_path, monkeypatch, scheduler, threads):
+    """Locally one experiment's runs keep the cores busy; on a Dask cluster (whose workers
+    take an experiment's runs one after another) two experiments run at once."""
+    seen = {}
+
+    def build(experiments, members, out, opts, title, fails, phases, pool, circuit, family,
+              t0, load0):
+        seen.update(circuit=len(circuit.threads), family=len(family.threads))
+        return out / "index.html"
+    monkeypatch.setattr(P, "_build", build)
+    P.build_report([], tmp_path, RunOptions(scheduler=scheduler, progress=False), title="t")
+    assert seen == {"circuit": threads, "family": P.MEMBER_THREADS}
