@@ -300,10 +300,12 @@ def select(results, *, replicas: int, t_end: float, t_cal: float,
 
 
 def reference_spec(spec: CircuitSpec, mapping, tightest: Tolerances) -> CircuitSpec:
-    """The calibration reference: 100x tighter than ``tightest``, a quarter of the step."""
+    """The calibration reference: 100x tighter than ``tightest``, with its method, a quarter
+    of the step (as the report's check: :meth:`~analogue.circuit.experiments.Experiment.
+    check_spec`, which says why the method is kept)."""
     max_step = spec.max_step if spec.max_step is not None else mapping.noise_dt
     return spec.replace(reltol=tightest.reltol / REFERENCE_FACTOR, trtol=FIXED_TRTOL,
-                        method="gear", abstol=spec.abstol / REFERENCE_FACTOR,
+                        method=tightest.method, abstol=spec.abstol / REFERENCE_FACTOR,
                         vntol=mapping.vntol / REFERENCE_FACTOR, max_step=max_step / 4)
 
 
