@@ -80,7 +80,7 @@ def test_gated_task_waits_for_every_gate_and_is_cancelled_by_close():
 @pytest.fixture(params=[1, 2], ids=["one circuit thread", "two circuit threads"])
 def schedule(request, tmp_path, monkeypatch):
     """A report of two experiments given as [small, big] (big: longer stationary run) and
-    one family member.  With two circuit threads, big's runs wait (up to 30 s) until small's
+    one family member.  With two circuit threads, big's runs wait (up to 120 s) until small's
     comparisons have started: the main thread must take small's runs first."""
     threads = request.param
     monkeypatch.setattr(P, "CIRCUIT_THREADS", threads)
@@ -94,7 +94,7 @@ def schedule(request, tmp_path, monkeypatch):
         with lock:
             events.append(("runs start", exp.name))
         if exp.name == "big" and threads == 2:
-            waited = small_compared.wait(30)
+            waited = small_compared.wait(120)  # a hang detector: set within seconds
             with lock:
                 events.append(("big waited for small's comparisons", waited))
         r = _fake_runs(exp, opts)
