@@ -305,22 +305,95 @@ def _mesh_kind(model: Model, h: float, mesh: str) -> str:
 
 
 # ------------------------------------------------------------------ principal eigenpair
-def _top_eigenpair(d: np.ndarray, e: np.ndarray) -> tuple[float, np.ndarray]:
+_II_MAXIT = 30          # inverse iterations before falling back to LAPACK
+_II_RES = 64.0          # residual target, in units of eps ||T||_inf (the matrix's own rounding)
+
+
+def _top_eigenpair(d: np.ndarray, e: np.ndarray,
+                   guess: float | None = None) -> tuple[float, np.ndarray]:
+    """Principal eigenpair of the symmetric tridiagonal (d, e) with e > 0 (every tilted
+    operator here).  Without ``guess``: LAPACK bisection + inverse iteration
+    (``eigh_tridiagonal``), ~2 ms at 4400 nodes, almost all of it bisection from the
+    Gershgorin interval.  With a ``guess`` of the eigenvalue (a neighbouring k, or the
+    coarse grid's value for the refined grid): :func:`_top_eigenpair_shifted`, falling back to
+    LAPACK if it does not converge."""
+    if guess is not None and d.size >= 3 and math.isfinite(guess):
+        out = _top_eigenpair_shifted(d, e, float(guess))
+        if out is not None:
+            return out
     n = d.size
     lam, vec = linalg.eigh_tridiagonal(d, e, select="i", select_range=(n - 1, n - 1))
     return float(lam[0]), vec[:, 0]
 
 
-def _principal(model: Model, k: float, grid: Grid) -> tuple[float, float]:
+def _top_eigenpair_shifted(d: np.ndarray, e: np.ndarray,
+                           guess: float) -> tuple[float, np.ndarray] | None:
+    """Certified shifted inverse iteration for the principal eigenpair (None: not converged).
+
+    A shift sigma is accepted only if the Cholesky factorisation (``pttrf``) of ``sigma - T``
+    succeeds, i.e. ``sigma - T`` is positive definite: sigma lies above the top eigenvalue
+    (a failed factorisation moves it up, from ``guess + 1e-7 max(1, |guess|)`` by factors 8).
+    ``sigma - T`` is then a nonsingular M-matrix (off-diagonal ``-e < 0``), its inverse is
+    entrywise positive, so the iterates from a positive start stay positive and converge to
+    the only positive eigenvector, the top one (Perron-Frobenius): never to another state.
+    After each solve the Rayleigh quotient rho (<= lambda_max) and the residual r = ||T x -
+    rho x|| give the next shift rho + r when it factorises (superlinear, as Rayleigh quotient
+    iteration, but never below the top eigenvalue).  Stops at ``r <= 64 eps ||T||_inf``, the
+    rounding of the matrix entries themselves.  Measured against LAPACK on the open question's
+    operators (gamma 10-1000, a = 0.5, 1.5, k = -2 gamma .. gamma, refined meshes): eigenvalues
+    within 3e-10 relative (|d lambda| <= eps ||T||: both are at the data's rounding), F <v>
+    within 1e-10; 2-3 factorisations and 3-4 solves (0.03 ms each) instead of ~2 ms."""
+    if not np.all(e > 0):
+        return None
+    from scipy.linalg import lapack
+    n = d.size
+    rad = np.zeros(n)
+    rad[:-1] += e
+    rad[1:] += e
+    top = float(np.max(d + rad))                     # Gershgorin: lambda_max <= top
+    tol = _II_RES * np.finfo(float).eps * float(np.max(np.abs(d) + rad))
+    step = 1e-7 * max(1.0, abs(guess))
+    while True:
+        sigma = min(guess + step, top)
+        c, f, info = lapack.dpttrf(sigma - d, -e)
+        if info == 0:
+            break
+        if sigma >= top:                             # pragma: no cover - Gershgorin bound
+            return None
+        step *= 8.0
+    x = np.full(n, 1.0 / math.sqrt(n))
+    for _ in range(_II_MAXIT):
+        x, info = lapack.dpttrs(c, f, x)
+        if info != 0:                                # pragma: no cover
+            return None
+        x /= math.sqrt(float(x @ x))
+        tx = d * x
+        tx[:-1] += e * x[1:]
+        tx[1:] += e * x[:-1]
+        rho = float(x @ tx)
+        res = tx - rho * x
+        r = math.sqrt(float(res @ res))
+        if r <= tol:
+            return rho, x
+        if rho + r < sigma:
+            c2, f2, info = lapack.dpttrf(rho + r - d, -e)
+            if info == 0:
+                sigma, c, f = rho + r, c2, f2
+    return None
+
+
+def _principal(model: Model, k: float, grid: Grid,
+               guess: float | None = None) -> tuple[float, float]:
     """Principal eigenvalue and Hellmann-Feynman derivative ``F <phi| v |phi>``."""
     d, e = tilted_operator(model, grid, k)
-    lam, phi = _top_eigenpair(d, e)
+    lam, phi = _top_eigenpair(d, e, guess)
     return lam, model.force * float(np.dot(phi * phi, grid.v))
 
 
-def _principal_nodes(model: Model, k: float, v: np.ndarray, h: float) -> tuple[float, float]:
+def _principal_nodes(model: Model, k: float, v: np.ndarray, h: float,
+                     guess: float | None = None) -> tuple[float, float]:
     d, e = _mesh_operator(model, v, k, _kink_half_width(model, h))
-    lam, phi = _top_eigenpair(d, e)
+    lam, phi = _top_eigenpair(d, e, guess)
     return lam, model.force * float(np.dot(phi * phi, v))
 
 
@@ -334,24 +407,26 @@ def _scgf_pair(model: Model, k: float, h: float, check: bool = True,
     return lam, der
 
 
-def _grid_pairs(model: Model, k: float, h: float,
-                mesh: str) -> tuple[float, float, float, float]:
+def _grid_pairs(model: Model, k: float, h: float, mesh: str,
+                guess: float | None = None) -> tuple[float, float, float, float]:
     """(l1, d1, l2, d2): principal eigenvalue and derivative on the grid of spacing h and on
-    its refinement."""
+    its refinement.  ``guess``: an estimate of l1 (then both solves use the shifted inverse
+    iteration of :func:`_top_eigenpair`, the refinement seeded with l1); None: LAPACK."""
     if mesh == "graded":
         v1 = _graded_nodes(model, k, h)
-        l1, d1 = _principal_nodes(model, k, v1, h)
-        l2, d2 = _principal_nodes(model, k, _refined(v1), h / 2.0)
+        l1, d1 = _principal_nodes(model, k, v1, h, guess)
+        l2, d2 = _principal_nodes(model, k, _refined(v1), h / 2.0,
+                                  None if guess is None else l1)
     else:
         g1 = _grid_for(model, k, h)
         g2 = Grid(h / 2.0, 2 * g1.i_min, 2 * g1.i_max)
-        l1, d1 = _principal(model, k, g1)
-        l2, d2 = _principal(model, k, g2)
+        l1, d1 = _principal(model, k, g1, guess)
+        l2, d2 = _principal(model, k, g2, None if guess is None else l1)
     return l1, d1, l2, d2
 
 
-def _scgf_pair_raw(model: Model, k: float, h: float,
-                   mesh: str) -> tuple[float, float, float, float]:
+def _scgf_pair_raw(model: Model, k: float, h: float, mesh: str,
+                   guess: float | None = None) -> tuple[float, float, float, float]:
     """(lambda, lambda', l1, l2), Richardson-extrapolated from the two grids.
 
     Where the stuck and the sliding state cross (large gamma: lambda' jumps there), the two
@@ -363,7 +438,7 @@ def _scgf_pair_raw(model: Model, k: float, h: float,
     that window).  (Continuing a consistent pair from k +- 1e-4 |k| instead was worse at
     gamma = 10, where the crossing is not sharp: 2e-4 in I.)
     """
-    l1, d1, l2, d2 = _grid_pairs(model, k, h, mesh)
+    l1, d1, l2, d2 = _grid_pairs(model, k, h, mesh, guess)
     # derivative difference between the grids: <= 0.03 of this scale elsewhere (gamma = 10)
     scale = abs(model.force) * (model.tau_m * (model.delta + abs(model.a)) + model.velocity_scale)
     if abs(d2 - d1) > 0.1 * scale:
@@ -443,7 +518,9 @@ def _k_guess(model: Model, w: float) -> float:
 
 def _legendre_root(model: Model, w: float, h: float, mean: float, mesh: str = "uniform",
                    near: tuple[float, float, float] | None = None,
-                   counter: list[float] | None = None) -> tuple[float, ...]:
+                   counter: list[float] | None = None,
+                   memo: dict[float, tuple[float, float, float, float]] | None = None,
+                   ) -> tuple[float, ...]:
     """k with lambda'(k) = w (lambda' increases with k) and lambda(k).
 
     Without ``near`` the root is bracketed from k = 0 (where lambda'(0) = <w>) outwards by
@@ -452,17 +529,29 @@ def _legendre_root(model: Model, w: float, h: float, mean: float, mesh: str = "u
     jumps where the stuck and the sliding state cross, and the root can sit on the jump) with
     the first step ``slope |w - d1|`` (slope ~ dk/dw from the previous two roots), so that a
     sorted sweep over w needs fewer eigen-pairs per point than bracketing from k = 0.  ``counter``: optional list, appended one
-    item per eigen-pair (for benchmarks)."""
+    item per eigen-pair (for benchmarks).
+
+    ``memo``: optional ``{k: (lambda, lambda', l1, l2)}`` shared by the roots of a sweep (the
+    previous root's pair is not recomputed when Brent starts from it).  With it every new k is
+    solved by the shifted inverse iteration of :func:`_top_eigenpair`, seeded with the tangent
+    ``l1(k') + lambda'(k') (k - k')`` at the nearest solved k' (a lower estimate: lambda is
+    convex); without it (the old route, ``memo=None``) by LAPACK alone."""
     if w == mean:
         return 0.0, 0.0
-    memo: dict[float, tuple[float, float, float, float]] = {}
+    seeded = memo is not None
+    pairs: dict[float, tuple[float, float, float, float]] = {} if memo is None else memo
 
     def pair(k: float) -> tuple[float, float, float, float]:
-        if k not in memo:
-            memo[k] = _scgf_pair_raw(model, k, h, mesh)
+        if k not in pairs:
+            guess = None
+            if seeded and pairs:
+                near_k = min(pairs, key=lambda q: abs(q - k))
+                _, der, l1, _ = pairs[near_k]
+                guess = l1 + der * (k - near_k)
+            pairs[k] = _scgf_pair_raw(model, k, h, mesh, guess)
             if counter is not None:
                 counter.append(k)
-        return memo[k]
+        return pairs[k]
 
     def f(k: float) -> float:
         return pair(k)[1] - w
@@ -498,7 +587,11 @@ def _legendre_sweep(model: Model, w: np.ndarray, h: float, mesh: str,
                     counter: list[float] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(k, lambda(k)) at the Legendre points of every w (flat array), solved in two sorted
     sweeps outwards from the mean, each root continued from the previous one."""
-    mean = float(_scgf_pair(model, 0.0, h, mesh=mesh)[1])
+    # one memo for the whole sweep: k = 0 seeds the first roots' eigen-solves (LAPACK there)
+    memo: dict[float, tuple[float, float, float, float]] = {}
+    memo[0.0] = raw0 = _scgf_pair_raw(model, 0.0, h, mesh)
+    _check_converged(model, 0.0, h, raw0[0], raw0[2], raw0[3])
+    mean = float(raw0[1])
     ks = np.zeros(w.size)
     lams = np.zeros(w.size)
     order = np.argsort(w, kind="stable")
@@ -517,7 +610,8 @@ def _legendre_sweep(model: Model, w: np.ndarray, h: float, mesh: str,
             if len(prev) >= 2:
                 slope = (k1 - prev[-2][0]) / (w1 - prev[-2][1])
             ks[i], lams[i], d = _legendre_root(model, wi, h, mean, mesh,
-                                               near=(k1, d1, max(slope, 0.0)), counter=counter)
+                                               near=(k1, d1, max(slope, 0.0)), counter=counter,
+                                               memo=memo)
             prev.append((ks[i], wi, lams[i], d))
     return ks, lams
 
