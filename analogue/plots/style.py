@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import threading
+from collections import OrderedDict
 from pathlib import Path
 
 import matplotlib as mpl
@@ -45,6 +46,9 @@ def new_figure(nrows: int = 1, ncols: int = 1, *, width: float = 5.0, height: fl
 # (108 parses for the 21 figures of stick, slip and work, 55 distinct strings).
 _MATHTEXT = MathTextParser("path")
 _RENDERERS = threading.local()
+# renderers kept per thread (most recently used sizes): a report's figures come in about six
+# sizes (the budget figures' heights vary); a 1920x768 renderer holds 6 MB of pixels
+_RENDERERS_KEPT = 6
 
 
 class _Canvas(FigureCanvasAgg):
@@ -56,11 +60,14 @@ class _Canvas(FigureCanvasAgg):
     def get_renderer(self):
         w, h = self.get_width_height(physical=True)
         key = (w, h, self.figure.dpi)
-        cache = _RENDERERS.__dict__.setdefault("by_size", {})
-        renderer = cache.get(key)
+        cache: OrderedDict = _RENDERERS.__dict__.setdefault("by_size", OrderedDict())
+        renderer = cache.pop(key, None)
         if renderer is None:
-            renderer = cache[key] = RendererAgg(w, h, self.figure.dpi)
+            renderer = RendererAgg(w, h, self.figure.dpi)
             renderer.mathtext_parser = _MATHTEXT
+        cache[key] = renderer
+        while len(cache) > _RENDERERS_KEPT:
+            cache.popitem(last=False)
         self.renderer = renderer
         return renderer
 
@@ -130,6 +137,8 @@ def freeze_layout(fig: Figure) -> None:
 
 
 def save(fig: Figure, path: Path) -> Path:
+    """Write ``fig`` as a PNG at :data:`DPI`, its layout computed once (:func:`freeze_layout`);
+    the last thing done with a figure (its layout is fixed afterwards)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     freeze_layout(fig)
