@@ -72,6 +72,8 @@ __all__ = [
     "CAL_HOLDS",
     "CAL_REPLICAS",
     "CANDIDATES",
+    "STATIONARY_OBSERVABLES",
+    "TRANSITION_OBSERVABLES",
     "DEFAULT_FRACTION",
     "FIXED",
     "MIN_CALIBRATED_REPLICA_HOLDS",
@@ -131,6 +133,17 @@ class Tolerances:
 
 FIXED = Tolerances(FIXED_RELTOL, FIXED_TRTOL, FIXED_METHOD)
 
+# The observables of path_observables a report compares on each kind of run: a stationary
+# run's rows are time averages (moments, P(v > 0), the stick fraction, the work and D_x from
+# x), so it is judged on those (the report does); a transition run's rows are velocities at
+# given times, but the instantaneous observables here are read at the end of paths started
+# in the stationary state, which err less than transitions from far-off v0: the report
+# judges transition runs on every observable (analogue.report.runs says what was measured).
+TRANSITION_OBSERVABLES = ("v(T)", "v(T)^2", "1[v(T)<0]")
+STATIONARY_OBSERVABLES = ("time mean v", "time mean v^2", "P(v>0)", "stick fraction",
+                          "displacement x(T)")
+ALL_OBSERVABLES = STATIONARY_OBSERVABLES + TRANSITION_OBSERVABLES
+
 # Candidates, roughly loosest first (the choice is by measured cost, not by this order).
 # trtol 20 saves about 10 % of the steps at reltol 1e-3 (theory.md, "Measured later"); trap
 # is measured like gear: if it rang at the noise steps, the calibration would see it.
@@ -170,12 +183,15 @@ class CandidateResult:
     time_average: dict = field(default_factory=dict)  # observable -> bool
 
     def ratios(self, replicas: int, t_end: float, t_cal: float,
-               check_replicas: int | None = None) -> dict:
+               check_replicas: int | None = None, observables=None) -> dict:
         """ratio_O (module docstring) for a run of ``replicas`` paths of length ``t_end``,
-        as the report's integration check of ``check_replicas`` paths would show it."""
+        as the report's integration check of ``check_replicas`` paths would show it;
+        ``observables``: only those (names of :func:`path_observables`; None: all)."""
         out = {}
         rand = _random_factor(replicas, check_replicas)
         for k, s in self.sigma.items():
+            if observables is not None and k not in observables:
+                continue
             n_eff = replicas * (max(1.0, t_end / t_cal) if self.time_average[k] else 1.0)
             err = rand * self.sd[k] + abs(self.mean[k]) * math.sqrt(n_eff)
             if s > 0:
@@ -185,8 +201,8 @@ class CandidateResult:
         return out
 
     def worst(self, replicas: int, t_end: float, t_cal: float,
-              check_replicas: int | None = None) -> tuple[str, float]:
-        r = self.ratios(replicas, t_end, t_cal, check_replicas)
+              check_replicas: int | None = None, observables=None) -> tuple[str, float]:
+        r = self.ratios(replicas, t_end, t_cal, check_replicas, observables)
         k = max(r, key=lambda name: r[name])
         return k, r[k]
 
@@ -219,6 +235,7 @@ class ToleranceChoice:
     calibration: tuple = ()          # CandidateResult, in candidate order
     t_cal: float | None = None
     check_replicas: int | None = None
+    observables: tuple | None = None   # the observables the run is compared on (None: all)
 
     def as_dict(self) -> dict:
         """JSON-safe (an infinite ratio, from an observable without spread, becomes None)."""
@@ -227,12 +244,13 @@ class ToleranceChoice:
              "worst_ratio": _finite(self.worst_ratio), "for_replicas": self.replicas,
              "for_t_end": self.t_end, "calibration_t_end": self.t_cal,
              "calibration_replicas": CAL_REPLICAS if self.calibration else None,
-             "check_replicas": self.check_replicas}
+             "check_replicas": self.check_replicas,
+             "observables": list(self.observables) if self.observables is not None else None}
         if self.calibration:
             d["candidates"] = []
             for c in self.calibration:
                 name, ratio = c.worst(self.replicas, self.t_end, self.t_cal,
-                                      self.check_replicas)
+                                      self.check_replicas, self.observables)
                 d["candidates"].append({**c.tolerances.as_dict(),
                                         "points_per_replica_hold": c.points_per_replica_hold,
                                         "worst_observable": name,
@@ -284,13 +302,14 @@ def candidate_result(tol: Tolerances, cand, ref, threshold: float, *, points: fl
 
 def select(results, *, replicas: int, t_end: float, t_cal: float,
            fraction: float = DEFAULT_FRACTION,
-           check_replicas: int | None = None) -> tuple[CandidateResult, bool, str, float]:
+           check_replicas: int | None = None,
+           observables=None) -> tuple[CandidateResult, bool, str, float]:
     """The cheapest candidate whose worst ratio is <= fraction, else the most accurate one:
     ``(result, criterion_met, worst observable, worst ratio)``."""
     results = list(results)
     if not results:
         raise ValueError("select needs at least one candidate result")
-    worst = [c.worst(replicas, t_end, t_cal, check_replicas) for c in results]
+    worst = [c.worst(replicas, t_end, t_cal, check_replicas, observables) for c in results]
     ok = [i for i, (_, r) in enumerate(worst) if r <= fraction]
     if ok:
         i = min(ok, key=lambda j: (results[j].points_per_replica_hold, j))
@@ -359,13 +378,22 @@ def choose_tolerances(model: Model, spec: CircuitSpec | None = None, *, replicas
                       t_end: float, fraction: float = DEFAULT_FRACTION, candidates=CANDIDATES,
                       store=None, workers=None, scheduler=None, executor=None,
                       min_replica_holds: int = 0,
-                      check_replicas: int | None = None) -> ToleranceChoice:
+                      check_replicas: int | None = None,
+                      observables=None) -> ToleranceChoice:
     """The tolerances for a run of ``replicas`` paths of length ``t_end`` (model units) of
     ``model`` in the circuit ``spec`` (module docstring).  Values set in ``spec`` win.
     Runs of fewer than ``min_replica_holds`` replica-holds get the fixed values instead of a
     calibration (source "fixed").  ``check_replicas``: the run's integration error will be
     measured on that many of its paths (the report's check), which adds its own noise
-    (module docstring)."""
+    (module docstring).  ``observables``: the run is compared on those only
+    (:data:`TRANSITION_OBSERVABLES` for a transition run, :data:`STATIONARY_OBSERVABLES` for
+    a stationary one; None: every one of :func:`path_observables`)."""
+    if observables is not None:
+        observables = tuple(observables)
+        unknown = [o for o in observables if o not in ALL_OBSERVABLES]
+        if not observables or unknown:
+            raise ValueError(f"observables must be a non-empty subset of {ALL_OBSERVABLES}, "
+                             f"got {observables!r}")
     spec = checks.instance("spec", spec if spec is not None else CircuitSpec(), CircuitSpec,
                            description="a CircuitSpec")
     replicas = checks.integer("replicas", replicas, minimum=1)
@@ -396,9 +424,10 @@ def choose_tolerances(model: Model, spec: CircuitSpec | None = None, *, replicas
                                 store=store, workers=workers, scheduler=scheduler,
                                 executor=executor)
     best, met, name, ratio = select(results, replicas=replicas, t_end=float(t_end), t_cal=t_cal,
-                                    fraction=fraction, check_replicas=check_replicas)
+                                    fraction=fraction, check_replicas=check_replicas,
+                                    observables=observables)
     return ToleranceChoice(best.tolerances, "measured", fraction, met, name, ratio, replicas,
-                           float(t_end), tuple(results), t_cal, check_replicas)
+                           float(t_end), tuple(results), t_cal, check_replicas, observables)
 
 
 def resolve_spec(model: Model, spec: CircuitSpec, *, replicas: int, t_end: float,

@@ -41,6 +41,7 @@ import numpy as np
 
 from ..circuit.experiments import Experiment
 from ..circuit.simulate import DEFAULT_REPLICAS_PER_DECK
+from ..circuit.tolerances import STATIONARY_OBSERVABLES
 from ..circuit.store_index import indexing_runs
 from ..ensemble import Ensemble
 from ..model import Model
@@ -188,15 +189,25 @@ def _noise_free_run(exp: Experiment, seed: int, kw: dict) -> Ensemble:
     return Ensemble(times, v, x, meta)
 
 
-def _choose(model, spec, replicas: int, t_end: float, kw: dict, check: int):
+# The report's integration terms must stay below 0.1 statistical errors (issue 10); the
+# chooser's prediction comes from 16 calibration paths and the report's term is measured on
+# other paths (the check): measured up to 1.4x the prediction (quick stick stationary run,
+# trap 1e-4: predicted 0.069, the report's stick-fraction term 0.098), so the report asks
+# the chooser for 0.07.
+REPORT_FRACTION = 0.07
+
+
+def _choose(model, spec, replicas: int, t_end: float, kw: dict, check: int, observables):
     """(spec with its tolerances set, replicas per deck, why) for one run of the report whose
-    integration error is measured on about ``check`` of its paths."""
+    integration error is measured on about ``check`` of its paths, compared on
+    ``observables`` (circuit.tolerances.STATIONARY_OBSERVABLES, or None: all)."""
     from ..circuit.deck_size import choose_deck_size
     from ..circuit.tolerances import resolve_spec
     common = {k: kw[k] for k in ("store", "scheduler") if k in kw}
     workers = kw.get("workers") or os.cpu_count() or 1
     spec, tol = resolve_spec(model, spec, replicas=replicas, t_end=t_end, workers=workers,
-                             check_replicas=min(check, replicas), **common)
+                             check_replicas=min(check, replicas), observables=observables,
+                             fraction=REPORT_FRACTION, **common)
     deck = choose_deck_size(model, spec, replicas=replicas, t_end=t_end, workers=workers,
                             **common)
     return spec, deck.replicas_per_deck, {"tolerances": tol.as_dict(),
@@ -312,9 +323,15 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
     # tolerance chooser's model of the check's noise holds for it as for the transition check.
     n_stat = settings.stationary_replicas
     check = settings.check_replicas
-    trans_spec, trans_deck, trans_why = _choose(model, spec, replicas, exp.t_end, kw, check)
+    # transition runs are judged on every calibration observable, not only on the
+    # instantaneous ones their rows read: those come from paths started in the stationary
+    # state, and transitions from far-off v0 err more (measured: judged on v(T), v(T)^2,
+    # 1[v(T)<0] alone, the quick stick and work transitions took trap 1e-4 and 1e-3 with
+    # trtol 20, and their P(v<0) rows' integration terms reached 0.14 and 0.12 SE)
+    trans_spec, trans_deck, trans_why = _choose(model, spec, replicas, exp.t_end, kw, check,
+                                                None)
     stat_spec, stat_deck, stat_why = _choose(model, spec, n_stat, settings.stationary_t_end, kw,
-                                             check)
+                                             check, STATIONARY_OBSERVABLES)
     v0_stat = np.asarray(sample_stationary(model_eff, n_stat, seeds["stationary"]), dtype=float)
     for i, v0 in enumerate(exp.v0):
         seeds[f"transition v0={v0:g}"] = plan.transition(i)

@@ -176,3 +176,32 @@ def test_a_measured_check_counts_its_own_noise():
     best, _, _, ratio = tl.select(res, replicas=100, t_end=1.0, t_cal=1.0, fraction=0.1,
                                   check_replicas=100)
     assert best.tolerances == LOOSE and ratio == pytest.approx(0.06)
+
+
+def test_a_run_is_judged_on_its_own_observables():
+    """The loose candidate is poor on a time average ("A") but fine on an instantaneous
+    observable ("B"): a run compared on B alone takes it, one compared on both does not."""
+    def res(tol, bias_a, bias_b, points):
+        return tl.CandidateResult(tol, points, 0.0, {"A": bias_a, "B": bias_b},
+                                  {"A": 0.0, "B": 0.0}, {"A": 1.0, "B": 1.0},
+                                  {"A": True, "B": False})
+    results = [res(LOOSE, 0.5, 0.01, 1.0), res(FINE, 0.01, 0.01, 3.0)]
+    best, _, name, _ = tl.select(results, replicas=1, t_end=1.0, t_cal=1.0)
+    assert best.tolerances == FINE
+    best, met, name, ratio = tl.select(results, replicas=1, t_end=1.0, t_cal=1.0,
+                                       observables=("B",))
+    assert best.tolerances == LOOSE and met and name == "B" and ratio == pytest.approx(0.01)
+
+
+def test_the_report_kinds_of_run_cover_every_path_observable():
+    import numpy as np
+    v = np.zeros((2, 5))
+    names, _ = tl.path_observables(v, v, 0.1)
+    assert set(tl.TRANSITION_OBSERVABLES) | set(tl.STATIONARY_OBSERVABLES) == set(names)
+    assert not set(tl.TRANSITION_OBSERVABLES) & set(tl.STATIONARY_OBSERVABLES)
+
+
+@pytest.mark.parametrize("bad", [(), ("no such",), ("v(T)", "x")])
+def test_unknown_observables_are_refused(bad):
+    with pytest.raises(ValueError, match="observables"):
+        tl.choose_tolerances(STICK, CircuitSpec(), replicas=4, t_end=1.0, observables=bad)
