@@ -24,6 +24,10 @@ k = 0, ``work_pdf(..., share=False)``), the new one, their ratio and the largest
    work runs from the store, or runs them); the open question's curves at the
    quick gammas (10, 100) and at gamma 1000 (what the full report adds).  Run it with the old
    checkout on PYTHONPATH too for the side-by-side.
+9. The rate functions' principal eigenpairs in the Legendre sweep: LAPACK bisection (forced by
+   disabling ``_top_eigenpair_shifted``) against the certified shifted inverse iteration, CPU
+   seconds and the largest |dI|, on the open question's curves (quick gammas 10, 100; and
+   1000) and the work experiment's 61-point curve (Fig. 8 model, gamma 10).
 5. work_pdf's contour generating function: eigen-decomposition (``propagator="eig"``) vs
    batched Pade matrix exponential (``"expm"``, default) on the report's range, with the
    load average printed (2 cores shared by other jobs: times are comparable only side by side).
@@ -257,10 +261,48 @@ def bench_report_pieces(quick):
           f"  load {os.getloadavg()[0]:.1f}")
 
 
+def bench_eigenpairs(quick):
+    import resource
+    from unittest import mock
+    from analogue.plots.open_question import CASES, open_question_data
+
+    def cpu():
+        r = resource.getrusage(resource.RUSAGE_SELF)
+        return r.ru_utime + r.ru_stime
+
+    def curves(gammas):
+        out = {}
+        for a, half in CASES:
+            for g, (_, rate) in open_question_data(a, half, gammas=gammas, cache=False).items():
+                out[(a, g)] = rate
+        return out
+
+    print("\n9. principal eigenpairs of the sweeps: LAPACK vs shifted inverse iteration, CPU s")
+    print(f"{'case':<36} {'LAPACK [s]':>10} {'shifted [s]':>11} {'ratio':>6} {'max |dI|':>9} {'load':>5}")
+    fig8 = Model(1.0, 1.0, 0.5, 10.0)
+    cases = [("open question, gamma 10 and 100", lambda: curves((10.0, 100.0))),
+             ("Fig. 8 curve, 61 points, gamma 10",
+              lambda: {0: ws.rate_function_curve(fig8, np.linspace(-2, 2, 61))[1]})]
+    if not quick:
+        cases.append(("open question, gamma 1000", lambda: curves((1000.0,))))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for name, run in cases:
+            c = cpu()
+            with mock.patch.object(ws, "_top_eigenpair_shifted", lambda d, e, g: None):
+                old = run()
+            c1 = cpu()
+            new = run()
+            c2 = cpu()
+            diff = max(float(np.max(np.abs(old[k] - new[k]))) for k in old)
+            print(f"{name:<36} {c1 - c:10.2f} {c2 - c1:11.2f} {(c1 - c) / (c2 - c1):6.1f} "
+                  f"{diff:9.1e} {os.getloadavg()[0]:5.1f}")
+
+
 def main(quick=False, only=None):
     sections = {"1": bench_rate, "2": bench_gamma, "3": bench_pdf, "4": lambda q: bench_cache(),
                 "5": bench_propagator, "6": bench_transition, "7": bench_work_variance,
-                "8": bench_report_pieces}
+                "8": bench_report_pieces, "9": bench_eigenpairs}
     for key, run in sections.items():
         if only is None or key in only:
             run(quick)
