@@ -11,7 +11,11 @@ repeated report costs nothing) and use the graded mesh of
 :func:`analogue.theory.work_statistics.scgf`, whose cost does not grow with gamma: measured
 under load (2 cores shared, load ~8), per curve of 21 points at gamma = 100 / 9 points at
 gamma = 1000: 2.7-5.3 s / 2.6-3.3 s, against 52-99 s / 119-171 s with the uniform grid; the
-whole figure (gamma = 10, 100, 1000; 41/21/17 points; a = 0.5 and 1.5): 17 s cold.
+whole figure (gamma = 10, 100, 1000; 41/21/17 points; a = 0.5 and 1.5): 17 s cold.  Since
+the sweep's eigen-solves are seeded shifted inverse iterations
+(:func:`analogue.theory.work_statistics._top_eigenpair`), the data of the quick report
+(gamma = 10, 100) cost 0.9 CPU s cold and gamma = 1000 adds 0.5 (3.6-4.1 and 2.2-2.5 s
+with LAPACK bisection; load 1.6, benchmarks/bench_theory.py sections 8 and 9).
 """
 from __future__ import annotations
 
