@@ -312,7 +312,7 @@ class _Workers:
       shared the cores, so the longest one (work, queued first) ended last anyway, at 108 s
       of the quick paper, and its theory curves trailed after it;
     - the **members** threads: the family members' analyses (circuit and theory), queued
-      once every paper run is done (:meth:`submit_after`).  Two threads: a member's runs are
+      once the paper's chapters are complete (:meth:`submit_after`).  Two threads: a member's runs are
       few decks, which alone leave a core idle.
 
     The threads are daemons: an interrupt does not wait for a task under way (see
@@ -520,8 +520,8 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
     # - the theory thread takes the experiments in the same order: each experiment's exact
     #   theory, then its bandwidth term (held/white Monte Carlo pairs: no circuit data), so
     #   that both are ready when its runs are; the open question last (only drawn);
-    # - the family members' circuit work waits until every paper run is done, then runs
-    #   beside the paper's comparisons and figures.
+    # - the family members' circuit work waits until the paper's chapters are complete
+    #   (every paper run compared, every figure drawn), then has both cores.
     order = sorted(range(len(experiments)), key=lambda i: -_circuit_cost(experiments[i], opts))
     theory_f: dict = {}
     band_f: dict = {}
@@ -540,7 +540,12 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
     runs_f = {i: circuit.submit("circuit runs", experiments[i].name,
                                 lambda exp=experiments[i]: _runs_task(exp, opts))
               for i in order}
-    members_f = [family.submit_after(list(runs_f.values()),
+    # the members start once the paper's chapters are complete (runs compared, figures and
+    # Fig. 1 drawn), not when the paper's runs are: measured on the quick paper, two members'
+    # ngspice beside the last experiment's figures made those take 6.3 s of wall time for
+    # ~2.4 CPU-s, and the paper's chapters ended 8.5 s after its last run
+    paper_done: Future = Future()
+    members_f = [family.submit_after([*runs_f.values(), paper_done],
                                       "family member (circuit and theory)", exp.name,
                                       lambda exp=exp: _member_task(exp, opts))
                  for exp in members]
@@ -635,6 +640,7 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
                                figures=[fig] if fig is not None else [], error=err)
     paper_wall = time.perf_counter() - t0
     _log(f"the paper's chapters are complete ({paper_wall:.0f} s)")
+    paper_done.set_result(None)
 
     member_analyses = []
     for exp, ma_f in zip(members, members_f):
