@@ -119,9 +119,13 @@ def schedule(request, tmp_path, monkeypatch):
     from analogue.plots.style import new_figure, save
     fig, ax = new_figure()
     png = save(fig, tmp_path / "stub.png")
+    def drawn(n):
+        with lock:
+            events.append(("figure", n))
+        return png, n
     for name in ("fig_prehistory", "fig_boundaries", "fig_propagator", "fig_stationary",
                  "fig_work_paths", "fig_rate_function", "fig_budget", "fig_deterministic"):
-        monkeypatch.setattr(P.figures, name, lambda *a, n=name, **k: (png, n))
+        monkeypatch.setattr(P.figures, name, lambda *a, n=name, **k: drawn(n))
     monkeypatch.setattr(P, "run_experiment_runs", runs)
     monkeypatch.setattr(P, "analyse", analyse_)
     monkeypatch.setattr(P, "_member_task", member)
@@ -149,6 +153,9 @@ def test_schedule_longest_first_completion_order_members_last(schedule):
         assert compared == ["big", "small"]
     i_member = ev.index(("member start", "cubic"))
     assert {e[1] for e in ev[:i_member] if e[0] == "runs done"} == {"big", "small"}
+    # ... and once the paper's chapters are complete: every figure, Fig. 1 the last
+    assert ev.index(("figure", "fig_deterministic")) < i_member
+    assert not [e for e in ev[i_member:] if e[0] == "figure"]
     # the member's failure is its own section; the page keeps the given order
     assert [f["experiment"] for f in schedule["exc"].failures] == ["cubic"]
     html = (schedule["out"] / "index.html").read_text()
