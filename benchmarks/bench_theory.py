@@ -41,6 +41,7 @@ alone carries them: see tests/unit/test_theory_fast_paths.py.
 from __future__ import annotations
 
 import os
+import resource
 import sys
 import tempfile
 import time
@@ -222,17 +223,18 @@ def bench_work_variance(quick):
               f"{np.max(np.abs(new / old - 1)):12.1e} {fine:>18}")
 
 
+def cpu() -> float:
+    """CPU seconds of this process (user + sys)."""
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+
+
 def bench_report_pieces(quick):
-    import resource
     from analogue.circuit.experiments import load_experiment
     from analogue.plots.open_question import CASES, open_question_data
     from analogue.report.plan import RunOptions
     from analogue.report.runs import run_experiment_runs
     from analogue.report.theory_curves import experiment_theory, figure_curves
-
-    def cpu():
-        r = resource.getrusage(resource.RUSAGE_SELF)
-        return r.ru_utime + r.ru_stime
 
     print("\n8. the quick report's theory pieces, CPU s, cold cache")
     opts = RunOptions(quick=True, workers=1, progress=False)
@@ -262,13 +264,8 @@ def bench_report_pieces(quick):
 
 
 def bench_eigenpairs(quick):
-    import resource
     from unittest import mock
     from analogue.plots.open_question import CASES, open_question_data
-
-    def cpu():
-        r = resource.getrusage(resource.RUSAGE_SELF)
-        return r.ru_utime + r.ru_stime
 
     def curves(gammas):
         out = {}

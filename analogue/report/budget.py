@@ -40,8 +40,9 @@ def integration_term(values, check: Ensemble, nominal: Ensemble, h: float) -> di
     (term, d_h, se, kernel)}``."""
     from ..estimators.resampling import jackknife_difference
     diff = jackknife_difference(values(h), check, nominal)
-    half = values(0.5 * h) if h > 0 else values(h)
-    a, b = half(check), half(nominal)
+    if h > 0:
+        half = values(0.5 * h)
+        a, b = half(check), half(nominal)
     out = {}
     for k, (d, se) in diff.items():
         kernel = RICHARDSON * abs(d - (a[k] - b[k])) if h > 0 else 0.0

@@ -9,24 +9,18 @@ import signal
 import subprocess
 import sys
 import time
-import uuid
 from pathlib import Path
 
 import pytest
 
-from test_faults_signals import CLI_TOML, _assert_clean, _env, _interrupt_when_busy
+from test_faults_signals import CLI_TOML, _assert_clean, _interrupt_when_busy, _workspace
 
 pytestmark = [pytest.mark.slow, pytest.mark.timeout(300)]
 
 
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
 def test_cli_report_interrupted_in_the_circuit_threads_cleans_up(tmp_path, sig):
-    tmp, store = tmp_path / "tmp", tmp_path / "store"
-    tmp.mkdir()
-    toml = tmp_path / "sigtest.toml"
-    toml.write_text(CLI_TOML)
-    marker = uuid.uuid4().hex
-    env = _env(tmp, marker)
+    tmp, store, toml, marker, env = _workspace(tmp_path, "sigtest.toml", CLI_TOML)
     env["ANALOGUE_THEORY_CACHE"] = "off"
     exe = Path(sys.executable).with_name("analogue")
     cmd = [str(exe), "report", str(toml), "--out", str(tmp_path / "out"), "--store", str(store),

@@ -63,6 +63,18 @@ def _env(tmp: Path, marker: str) -> dict:
     return env
 
 
+def _workspace(tmp_path: Path, name: str, text: str) -> tuple[Path, Path, Path, str, dict]:
+    """``(tmp, store, file, marker, env)`` of one signal test: a private TMPDIR, a run store,
+    ``text`` written to ``tmp_path / name`` (the script or TOML the test runs) and the
+    environment whose ngspice processes carry ``marker`` (:func:`_env`)."""
+    tmp, store = tmp_path / "tmp", tmp_path / "store"
+    tmp.mkdir()
+    f = tmp_path / name
+    f.write_text(text)
+    marker = uuid.uuid4().hex
+    return tmp, store, f, marker, _env(tmp, marker)
+
+
 def _marked(marker: str, exclude: int) -> set[int]:
     """Live processes (not zombies) whose environment carries ``marker``, except ``exclude``."""
     found = set()
@@ -106,12 +118,7 @@ def _assert_clean(marker, pid, tmp, store, seen):
 
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
 def test_simulate_interrupted_cleans_up_and_resumes(tmp_path, sig):
-    tmp, store = tmp_path / "tmp", tmp_path / "store"
-    tmp.mkdir()
-    script = tmp_path / "run.py"
-    script.write_text(SCRIPT)
-    marker = uuid.uuid4().hex
-    env = _env(tmp, marker)
+    tmp, store, script, marker, env = _workspace(tmp_path, "run.py", SCRIPT)
     proc = subprocess.Popen([sys.executable, str(script), str(store), str(tmp_path / "v.npy"),
                              "catch"], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True)
@@ -149,13 +156,9 @@ def test_simulate_interrupted_cleans_up_and_resumes(tmp_path, sig):
 def test_uncaught_sigterm_in_a_script_still_cleans_up(tmp_path):
     """A user script that does not catch anything: the exit is abnormal (the exception is
     KeyboardInterrupt), but no ngspice and no temporary directory outlive it."""
-    tmp, store = tmp_path / "tmp", tmp_path / "store"
-    tmp.mkdir()
-    script = tmp_path / "run.py"
-    script.write_text(SCRIPT)
-    marker = uuid.uuid4().hex
+    tmp, store, script, marker, env = _workspace(tmp_path, "run.py", SCRIPT)
     proc = subprocess.Popen([sys.executable, str(script), str(store), str(tmp_path / "v.npy"),
-                             "plain"], env=_env(tmp, marker), stdout=subprocess.PIPE,
+                             "plain"], env=env, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
     seen = _interrupt_when_busy(proc, store, tmp, marker, signal.SIGTERM)
     _, err = proc.communicate(timeout=60)
@@ -199,12 +202,7 @@ check_replicas = 16
 
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
 def test_cli_run_interrupted_cleans_up_and_resumes(tmp_path, sig):
-    tmp, store = tmp_path / "tmp", tmp_path / "store"
-    tmp.mkdir()
-    toml = tmp_path / "sigtest.toml"
-    toml.write_text(CLI_TOML)
-    marker = uuid.uuid4().hex
-    env = _env(tmp, marker)
+    tmp, store, toml, marker, env = _workspace(tmp_path, "sigtest.toml", CLI_TOML)
     exe = Path(sys.executable).with_name("analogue")
     cmd = [str(exe), "run", str(toml), "--store", str(store), "--workers", "1",
            "--no-progress"]
