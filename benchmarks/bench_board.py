@@ -34,7 +34,7 @@ def main() -> None:
                 deck = build_board_deck(d, board, v0=v0, t_end=t_end, sample_dt=0.01, seed=1,
                                         noise_dir=tmp, reltol=reltol)
                 t0 = time.perf_counter()
-                res = ng.run_deck(deck.text, t_stop=t_end * d.theta)
+                res = ng.run_deck(deck.text, t_stop=t_end * d.theta, files=deck.noise_files)
                 wall = time.perf_counter() - t0
                 samples = t_end * d.theta / d.noise_ts
                 print(f"{per_deck:13d}  {reltol:6.0e}  {wall:8.2f}  {wall / (per_deck * t_end):17.4f}"

@@ -36,7 +36,7 @@ from . import noise_chain
 from .design import BoardDesign
 from .netlist import BoardInstance, build_board_deck
 
-__all__ = ["ADC_SPEC", "V_TEST", "Calibration", "calibrate_board"]
+__all__ = ["ADC_SPEC", "NOISE_GAIN_RANGE", "V_TEST", "Calibration", "CalibrationError", "calibrate_board"]
 
 ADC_SPEC = {"coupling": "DC", "sampling": "simultaneous (velocity, DAC monitor)",
             "range_V": 10.0, "bits": 16, "rate": "the DAC rate 1/TS (100 kS/s at TS = 10 us)",
@@ -72,10 +72,30 @@ class Calibration:
 def _run(design, board, *, t_end, noise, seed, noise_dir, v0=0.0):
     deck = build_board_deck(design, board, v0=[v0], t_end=t_end, sample_dt=0.01, seed=seed,
                             noise_dir=noise_dir, reltol=1e-4, noise_off=not noise)
-    res = ng.run_deck(deck.text, t_stop=t_end * design.theta)
+    res = ng.run_deck(deck.text, t_stop=t_end * design.theta, files=deck.noise_files)
     t = np.arange(round(t_end / 0.01) + 1) * 0.01
     v = ng.resample(res.plot, deck.vectors["v"], t * design.theta)[0] * design.to_model_v
     return t, v
+
+
+#: noise gains k (measured / nominal noise amplitude) a built board can show: its tolerances
+#: (R_N, C, the DAC's gain and the chain's parts, a few % each) move k by a few %; outside
+#: this range the noise source did not deliver its noise (a DAC file ngspice could not open
+#: gave k ~ 0 and gamma = 1e11-1e15) and the calibration is refused, never passed on.
+NOISE_GAIN_RANGE = (0.5, 2.0)
+
+
+class CalibrationError(RuntimeError):
+    """A board's calibration failed; its parameters must not be used."""
+
+
+def _check_noise_gain(k: float, board: BoardInstance) -> None:
+    lo, hi = NOISE_GAIN_RANGE
+    if not (math.isfinite(k) and lo <= k <= hi):
+        raise CalibrationError(
+            f"calibration of board {board.label!r} failed: its noise source delivered "
+            f"{k:.3g} times the nominal noise amplitude (a built board gives {lo:g}-{hi:g}); "
+            f"the DAC noise did not reach the integrator, so no gamma is reported")
 
 
 def _fit_step(t, v):
@@ -129,6 +149,7 @@ def calibrate_board(design: BoardDesign, board: BoardInstance, *, seed: int, noi
     keep = t > 3.0 * tau
     A = np.column_stack([pred_t[keep], np.ones(keep.sum())])
     (k, _c0), *_ = np.linalg.lstsq(A, v[keep], rcond=None)
+    _check_noise_gain(float(k), board)
     gamma_nom = design.realised.gamma
     gamma = gamma_nom / k ** 2
     # variance route, with the chain's coloured-noise factor at lambda = 1/tau

@@ -218,7 +218,9 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
     matched = recommend_matching(sens)
     write_bom(design, out / "bom.csv", matched=tuple(matched["bom_refs"]))
     deck = build_board_deck(design, nominal, v0=[float(exp.v0[0])], t_end=exp.t_end,
-                            sample_dt=SAMPLE_DT, seed=seed, noise_dir=out / "noise")
+                            sample_dt=SAMPLE_DT, seed=seed, noise_dir=out)
+    # the deck names its DAC file without a directory (ngspice lower-cases paths): it lies
+    # next to board.cir, so `ngspice board.cir` run in the output directory finds it
     (out / "board.cir").write_text(deck.text)
     wall = _time.perf_counter() - t_start
     metrics = {

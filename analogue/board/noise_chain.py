@@ -88,21 +88,19 @@ def write_dac_file(directory: Path, volts: np.ndarray, ts: float) -> tuple[Path,
     return path, sha
 
 
-def check_path(path) -> str:
-    s = str(Path(path).resolve())
-    if SAFE_PATH.fullmatch(s) is None or ".." in s.split("/"):
-        raise ValueError(f"noise file path must be absolute and contain only letters, digits and "
-                         f"_ . / + -, got {s!r}")
-    return s
-
-
 def dac_lines(prefix: str, node: str, path, sha256: str) -> list[str]:
-    """XSPICE filesource (zero-order hold) reading ``path``, driving ``node``."""
+    """XSPICE filesource (zero-order hold) reading ``path``, driving ``node``.  The deck names
+    the file without its directory; whoever runs the deck passes ``path`` along
+    (:attr:`analogue.board.netlist.BoardDeck.noise_files`)."""
     p = checks.identifier("prefix", prefix)
     node = checks.identifier("node", node)
     if re.fullmatch(r"[0-9a-f]{64}", sha256 or "") is None:
         raise ValueError("sha256 must be 64 hex digits")
-    f = check_path(path)
+    # by its name only: ngspice lower-cases the path it opens, so the runner links the file
+    # into the deck's working directory (analogue.circuit.ngspice.run_deck(files=...))
+    f = Path(path).name
+    if re.fullmatch(r"dac_[0-9a-f]{64}\.txt", f) is None:
+        raise ValueError(f"noise file must be named dac_<sha256>.txt, got {f!r}")
     return [f"* {p} noise file sha256 {sha256}",
             f"A{p}dac %v([{node}]) fs{p}",
             (f".model fs{p} filesource (file=\"{f}\" amploffset=[0] amplscale=[1] timeoffset=0 "

@@ -462,8 +462,75 @@ def check_deck(text: str) -> str:
     return text
 
 
+# ------------------------------------------------------------------------ files it reads
+# XSPICE models read files named in the deck (filesource's ``file="..."``, d_source's
+# ``input_file``, d_state's ``state_file``).  ngspice 39 lower-cases the name before opening it
+# (measured: ``file="/tmp/X/dac.txt"`` -> "Instance: ad Message: cannot open file
+# /tmp/x/dac.txt", exit status 0, the source then outputs 0 V).  So every such file is linked
+# into the deck's own working directory under a lower-case name, and the deck that ngspice
+# reads names it relatively: the path survives whatever the directories are called.
+_FILE_REF = re.compile(r'(?<![A-Za-z0-9])((?:[A-Za-z]+_)?file\s*=\s*)"([^"]*)"', re.IGNORECASE)
+_LOCAL_NAME = re.compile(r"[a-z0-9_][a-z0-9_.+-]*")
+# What ngspice prints, often without failing, when a deck's file, model or source cannot be
+# loaded: any of these ends the run as an error (a deck never runs without its input).
+_LOAD_FAILED = re.compile(r"cannot open|can't open|could not open|unable to open|no such file|"
+                          r"can't find|cannot find|could not find|unable to find|"
+                          r"failed to load|could not load|cannot load", re.IGNORECASE)
+
+
+def _stage_files(text: str, files, work: Path) -> str:
+    """The deck ngspice is given: every file reference of ``text`` points to a lower-case name
+    linked (or copied) into ``work``.  A reference is a file of ``files`` by its name, or an
+    absolute path; anything else is an NgspiceError naming it."""
+    given: dict[str, Path] = {}
+    for f in files or ():
+        p = Path(f)
+        if _LOCAL_NAME.fullmatch(p.name) is None:
+            raise ValueError(f"files: {p.name!r} must be a lower-case file name (letters a-z, "
+                             f"digits and _ . + -) that the deck names")
+        given[p.name] = p
+    staged: dict[str, str] = {}
+
+    def local(ref: str) -> str:
+        if ref in staged:
+            return staged[ref]
+        if ref in given:
+            src, name = given[ref], ref
+        elif os.path.isabs(ref):
+            src = Path(ref)
+            name = f"f{len(staged)}_" + (re.sub(r"[^a-z0-9_.+-]", "_", src.name.lower()) or "file")
+        else:
+            raise NgspiceError(f"the deck reads the file {ref!r}, which is neither an absolute "
+                               f"path nor one of the files given to run_deck")
+        if not src.is_file():
+            raise NgspiceError(f"the deck reads the file {str(src)!r}, which does not exist or "
+                               f"is not a readable file")
+        dest = work / name
+        if dest.resolve() != src.resolve():
+            dest.unlink(missing_ok=True)
+            try:
+                os.symlink(src.resolve(), dest)
+            except OSError:
+                shutil.copyfile(src, dest)
+        staged[ref] = name
+        return name
+
+    out = []
+    for line in text.splitlines(keepends=True):
+        if not line.lstrip().startswith("*"):
+            line = _FILE_REF.sub(lambda m: f'{m.group(1)}"{local(m.group(2))}"', line)
+        out.append(line)
+    return "".join(out)
+
+
+def _load_failures(stdout: str, stderr: str) -> str:
+    """ngspice's lines saying that a file, model or source could not be loaded, as one line."""
+    return _one_line("\n".join(ln for ln in (stdout + "\n" + stderr).splitlines()
+                               if _LOAD_FAILED.search(ln)))
+
+
 def run_deck(text: str, *, timeout: float = 3600.0, t_stop: float | None = None,
-             keep_dir=None, group=None) -> RunResult:
+             keep_dir=None, group=None, files=()) -> RunResult:
     """Run one complete deck (``.end``-terminated, no ``.control`` block) in batch mode.
 
     Parameters
@@ -477,6 +544,11 @@ def run_deck(text: str, *, timeout: float = 3600.0, t_stop: float | None = None,
     keep_dir : if given, the deck, raw file and logs are written there and kept (debugging);
         otherwise a temporary directory is used and removed.
     group : any hashable; the process can be stopped by :func:`terminate_group` (group).
+    files : paths of files the deck reads (an XSPICE ``filesource``), each named in the deck
+        by its lower-case file name; they are linked into the deck's working directory.  An
+        absolute path in the deck is linked there too (ngspice lower-cases it otherwise).  A
+        message of ngspice that a file, model or source could not be loaded is an
+        NgspiceError even when ngspice exits 0.
     """
     check_deck(text)
     timeout = checks.positive("timeout (seconds)", timeout)
@@ -488,7 +560,7 @@ def run_deck(text: str, *, timeout: float = 3600.0, t_stop: float | None = None,
     with tempfile.TemporaryDirectory(prefix=_tmp_prefix()) as tmp:
         work = Path(keep_dir) if keep_dir is not None else Path(tmp)
         work.mkdir(parents=True, exist_ok=True)
-        (work / "deck.cir").write_text(text)
+        (work / "deck.cir").write_text(_stage_files(text, files, work))
         raw = work / "out.raw"
         out_p, err_p = work / "stdout.txt", work / "stderr.txt"
         t0 = _time.perf_counter()
@@ -508,6 +580,10 @@ def run_deck(text: str, *, timeout: float = 3600.0, t_stop: float | None = None,
                 raise NgspiceError(_with_said(f"ngspice was stopped by signal {-returncode} "
                                               f"({_signal_name(-returncode)})", said))
             raise NgspiceError(_with_said(f"ngspice exited with status {returncode}", said))
+        failed = _load_failures(stdout, stderr)
+        if failed:
+            raise NgspiceError(f"ngspice could not load what the deck needs (it would have run "
+                               f"without it): {failed}")
         if not raw.exists():
             raise NgspiceError(_with_said("ngspice wrote no raw file", said))
         # The reader holds the file and a copy of its data: refuse what cannot fit, unread.

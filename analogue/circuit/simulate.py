@@ -163,7 +163,9 @@ class Deck(Protocol):
     model value = raw value * ``to_model_v`` (``to_model_x``); model time = raw time /
     ``time_scale``; ``replicas``: how many replicas the deck holds.  Optional attributes, read
     when present: ``noise_dt`` and ``to_model_noise`` (the held noise the deck records) and
-    ``x_spring_initial`` (the spring position at t = 0).
+    ``x_spring_initial`` (the spring position at t = 0), ``noise_files`` (paths of the files
+    the deck reads, named in it by their file name: see
+    :func:`analogue.circuit.ngspice.run_deck`).
     """
 
     @property
@@ -201,6 +203,7 @@ class BatchTask:
     to_model_noise: float = 1.0
     xs_names: tuple | None = None           # spring: position read back from the inductor
     xs_initial: float = 0.0                 # its value at t = 0 (x0, model units)
+    files: tuple = ()                       # paths of files the deck reads (DAC tables)
 
 
 def held_values(t_raw, rows, t_end, hold) -> np.ndarray:
@@ -222,7 +225,8 @@ def run_batch(task: BatchTask) -> dict:
     prepended before the linear resampling (see :func:`analogue.circuit.ngspice.resample`).
     """
     t_s = task.times * task.time_scale
-    res = _ng.run_deck(task.text, timeout=task.timeout, t_stop=float(t_s[-1]), group=task.group)
+    res = _ng.run_deck(task.text, timeout=task.timeout, t_stop=float(t_s[-1]), group=task.group,
+                       files=task.files)
     v_raw0 = task.v0 / task.to_model_v
     v = _ng.resample(res.plot, task.v_names, t_s, initial=v_raw0) * task.to_model_v
     if task.x_names:
@@ -448,7 +452,8 @@ def run_decks(decks: Sequence[Deck], times: ArrayLike, v0: ArrayLike, *,
                                noise_dt=float(getattr(deck, "noise_dt", 0.0) or 0.0),
                                to_model_noise=float(getattr(deck, "to_model_noise", 1.0)),
                                xs_names=tuple(vec["x_spring"]) if vec.get("x_spring") else None,
-                               xs_initial=float(getattr(deck, "x_spring_initial", 0.0))))
+                               xs_initial=float(getattr(deck, "x_spring_initial", 0.0)),
+                               files=tuple(str(f) for f in getattr(deck, "noise_files", ()))))
         keys.append(batch_key(deck.text, times, version))
     note_keys(keys)  # an experiment's index (analogue store ls) lists every entry it used
     if offsets[-1] != len(v0):

@@ -71,6 +71,11 @@ def resolved_grid(model: Model, extra: Iterable[float] = (), h: float | None = N
         h = checks.positive("h", h)
     grid = Grid.span(lo, hi, h)
     if grid.n > max_nodes:
-        raise ValueError(f"the grid would need {grid.n} nodes (> {max_nodes}); pass a coarser h "
-                         "or a smaller range of starts")
+        # said in terms of the inputs that reach it: a huge gamma (or a tiny epsilon or t_min)
+        # makes the spacing fine, far starts make the range wide
+        raise ValueError(
+            f"the grid would need {grid.n} nodes (> {max_nodes}) for the model tau_m="
+            f"{model.tau_m:.6g}, delta={model.delta:.6g}, a={model.a:.6g}, gamma={model.gamma:.6g}, "
+            f"epsilon={model.epsilon:.6g}: velocities [{lo:.6g}, {hi:.6g}] at spacing h={h:.3g}; "
+            "a smaller gamma, a coarser h or a smaller range of starts fits")
     return grid

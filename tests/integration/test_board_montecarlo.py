@@ -55,7 +55,7 @@ def test_ngspice_noise_chain_follows_the_seeded_sequence(tmp_path):
     t_end = 1.0
     deck = build_board_deck(DESIGN, nominal_instance(DESIGN), v0=[0.0], t_end=t_end, sample_dt=0.01,
                             seed=5, noise_dir=tmp_path, save_all=True)
-    plot = ng.run_deck(deck.text, t_stop=t_end * DESIGN.theta).plot
+    plot = ng.run_deck(deck.text, t_stop=t_end * DESIGN.theta, files=deck.noise_files).plot
     i_spice = (plot["v(ac0)"] - plot["v(sj0)"]) / DESIGN.values["R_N"]
     n = int(np.ceil(t_end * DESIGN.theta / DESIGN.noise_ts)) + 2
     seq = noise_chain.dac_sequence(DESIGN, 5, 0, n)
@@ -106,7 +106,7 @@ def test_vendor_model_file_is_validated_and_used(tmp_path):
     deck = build_board_deck(DESIGN, nominal_instance(DESIGN), v0=[0.5], t_end=0.5, sample_dt=0.01,
                             seed=2, noise_dir=tmp_path, vendor=(lib, "VENDAMP"))
     assert "X1 inp inn vcc vee out VENDAMP" in deck.text and ".include" not in deck.text
-    plot = ng.run_deck(deck.text, t_stop=0.5 * DESIGN.theta).plot
+    plot = ng.run_deck(deck.text, t_stop=0.5 * DESIGN.theta, files=deck.noise_files).plot
     assert plot.n_points > 10
     bad = tmp_path / "bad.lib"
     bad.write_text(".subckt VENDAMP 1 2 3 4 5\n.ends\n.control\nshell echo hi\n.endc\n")
