@@ -25,6 +25,10 @@ class Ensemble:
         Velocities in model velocity units.
     x : (replicas, n_t) array
         Positions ``x(t) = integral_0^t v ds`` (x[:, 0] == 0); work ``W = F (x(t+tau) - x(t))``.
+        Spring members: the position relative to ``model.x0`` (the position is
+        ``model.x0 + x``); a circuit gives the spring's own position, read back from its
+        inductor (``records["x_integral"]`` keeps the integral of v, which the inductor's
+        series resistance lets creep away: :mod:`analogue.circuit.mapping`).
     meta : dict
         Provenance: model parameters, source ("circuit" / "sde"), seeds, mapping, ngspice
         version, deck hash, ...  JSON-serialisable.
@@ -34,7 +38,8 @@ class Ensemble:
         attaches them whenever the circuit's decks record their noise).
     records : dict or None
         Per-replica extras of a circuit run, when it has any: ``"x_spring"`` (replicas, n_t) the
-        spring position read back from the inductor, ``"kicks"`` the shot-noise kicks per
+        spring position read back from the inductor, ``"x_integral"`` the integral of v (spring
+        members), ``"kicks"`` the shot-noise kicks per
         replica (see :func:`analogue.simulate`).  Not compared, not written to files, and not
         carried over by :meth:`window` / :meth:`concatenate`.
 

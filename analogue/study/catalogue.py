@@ -296,9 +296,20 @@ def _relative(*keys: str) -> Callable:
     return lambda bias, model, ref: sum(bias.get(k, 0.0) for k in keys) * abs(ref)
 
 
+def _leak_mean_x(bias, model, ref) -> float:
+    # the leaky inductor's error of the spring's mean position (absolute; issue 18)
+    return bias.get("spring_leak_mean_x", 0.0)
+
+
 def _creep(bias, model, ref) -> float:
     # the leaky inductor lets a stuck object creep: a velocity bias (absolute)
     return bias.get("spring_creep", 0.0) * model.velocity_scale
+
+
+def _creep_force(bias, model, ref) -> float:
+    # the force balance of the leaky spring (the position its inductor reads back) misses the
+    # viscous force of the creep, <v>/tau_m (absolute; issue 18)
+    return _creep(bias, model, ref) / model.tau_m
 
 
 # -------------------------------------------------------------------------------- kinds
@@ -432,7 +443,8 @@ KINDS: tuple[Kind, ...] = (
          description="moving forward (above the stick window)",
          window=lambda thr: (thr, math.inf)),
     Kind("mean x", STATIONARY, (), lambda s, tau=None: float(s.x.mean()), exact=no_exact,
-         classes=frozenset({SPRING_MEMBER}), description="stationary mean position"),
+         classes=frozenset({SPRING_MEMBER}), element=_leak_mean_x,
+         description="stationary mean position"),
     Kind("var x", STATIONARY, (), lambda s, tau=None: float(s.x.var()), exact=no_exact,
          classes=frozenset({SPRING_MEMBER}), element=_relative("spring_leak_var_x"),
          description="stationary position variance"),
@@ -446,7 +458,7 @@ KINDS: tuple[Kind, ...] = (
          element=_creep, description="stationary <v> = 0 (a bounded position)"),
     Kind("identity spring <x> - a + <Delta(v) sgn v> + cubic <v^3> = 0", STATIONARY, (),
          _force_balance, exact=lambda th=None, tau=None: 0.0, identity=True,
-         classes=frozenset({SPRING_MEMBER}), element=_creep,
+         classes=frozenset({SPRING_MEMBER}), element=_creep_force,
          applies=lambda m: _kick_force(m) == 0.0,
          description="the circuit's own friction law Delta(v) tanh(v/epsilon) in "
                      "<Delta(v) sgn v>; time averages after the burn-in (the identity holds "
@@ -455,7 +467,7 @@ KINDS: tuple[Kind, ...] = (
     # that the label says what is balanced)
     Kind("identity spring <x> - a - rate <z> + <Delta(v) sgn v> + cubic <v^3> = 0", STATIONARY,
          (), _force_balance, exact=lambda th=None, tau=None: 0.0, identity=True,
-         classes=frozenset({SPRING_MEMBER}), element=_creep,
+         classes=frozenset({SPRING_MEMBER}), element=_creep_force,
          applies=lambda m: _kick_force(m) != 0.0,
          description="rate <z>: the mean force of the one-sided kicks; the circuit's own "
                      "friction law Delta(v) tanh(v/epsilon) in <Delta(v) sgn v>; time "
