@@ -66,8 +66,11 @@ class BoardSpec:
     rails: supply voltage (V, symmetric); machine_unit: full-scale signal (V); sigma_volts:
     target stationary standard deviation of the velocity node (V); kappa: volts per unit
     velocity (None: from sigma_volts and machine_unit); time_scale: seconds per model time unit;
-    capacitance: mass capacitor (F, an E12 value); opamp: macromodel name (``TL072``,
-    ``OPA2140`` or their ``_worst`` sets); diode: bridge diode (``1N4148``, ``BAT54``);
+    capacitance: mass capacitor (F, an E12 value); opamp: macromodel name of the integrator and
+    the Bessel buffer (``TL072``, ``OPA2140``, ``OPA2197`` or their ``_worst`` sets);
+    servo_opamp: the current sources' servos, whose inputs sit ``v_set`` from a rail (a
+    rail-to-rail-input part: ``OPA2197``; a TL072's guaranteed range ends 4 V from the rails);
+    diode: bridge diode (``1N4148``, ``BAT54``);
     v_set: the current sources' sense voltage (V, from a 2.5 V-class reference);
     v_force: magnitude of the force voltage (V); resistor_series / capacitor_series: E-series
     for rounding; dac_bits, dac_rms (V rms of the noise DAC, clip at dac_range), dac_range (V),
@@ -83,6 +86,7 @@ class BoardSpec:
     time_scale: float = 1e-3
     capacitance: float = 10e-9
     opamp: str = "TL072"
+    servo_opamp: str = "OPA2197"
     diode: str = "1N4148"
     v_set: float = 2.5
     v_force: float = 2.5
@@ -123,6 +127,13 @@ class BoardSpec:
             if getattr(self, name) not in allowed:
                 raise ValueError(f"{name} must be one of {allowed}, got {getattr(self, name)!r}")
         get_opamp(self.opamp)
+        servo = get_opamp(self.servo_opamp)
+        lo, hi = servo.guaranteed.common_mode_range(self.rails)
+        if not (-self.rails + self.v_set > lo and self.rails - self.v_set < hi):
+            raise ValueError(f"servo_opamp {self.servo_opamp!r}: its guaranteed input common-mode "
+                             f"range [{lo:g}, {hi:g}] V does not hold the servo inputs at "
+                             f"+-{self.rails - self.v_set:g} V (rails - v_set); choose a "
+                             f"rail-to-rail-input part (OPA2197) or v_set > {self.rails - hi:g} V")
         get_part(self.diode)
 
     def replace(self, **changes) -> BoardSpec:

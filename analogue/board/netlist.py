@@ -30,7 +30,7 @@ from ..circuit.parts import get_part
 from . import friction, noise_chain, opamp
 from .design import BoardDesign
 
-__all__ = ["BoardDeck", "BoardInstance", "build_board_deck", "nominal_instance"]
+__all__ = ["BoardDeck", "BoardInstance", "build_board_deck", "nominal_instance", "role_part"]
 
 ROLES = ("int", "st", "sb", "bf")  # integrator, source top, source bottom, Bessel buffer
 
@@ -66,13 +66,20 @@ def nominal_instance(design: BoardDesign, offsets: bool = False) -> BoardInstanc
     unless ``offsets`` (then the typical values of the part, as drawn on a datasheet)."""
     v = dict(design.values)
     v["R_S_top"] = v["R_S_bot"] = v.pop("R_S")
-    amp = opamp.get_opamp(design.spec.opamp).at_temperature(design.spec.temperature)
-    if not offsets:
-        amp = amp.replace(vos=0.0, ib=0.0, ios=0.0)
+    amps = {}
+    for role in ROLES:
+        amp = opamp.get_opamp(role_part(design, role)).at_temperature(design.spec.temperature)
+        amps[role] = amp if offsets else amp.replace(vos=0.0, ib=0.0, ios=0.0)
     return BoardInstance(values=v, v_set_top=design.spec.v_set, v_set_bot=design.spec.v_set,
                          v_force=design.force_sign * design.spec.v_force,
-                         opamps={r: amp for r in ROLES}, temperature=design.spec.temperature,
+                         opamps=amps, temperature=design.spec.temperature,
                          rails=design.spec.rails)
+
+
+def role_part(design: BoardDesign, role: str) -> str:
+    """The op-amp part of ``role``: the servos (``st``, ``sb``) use ``spec.servo_opamp``,
+    the integrator and the Bessel buffer ``spec.opamp``."""
+    return design.spec.servo_opamp if role in ("st", "sb") else design.spec.opamp
 
 
 @dataclass(frozen=True)
@@ -108,7 +115,9 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
     ``"ota"`` (then ``ota`` = dict(i_abc, k, vos, asymmetry)).  ``noise_off``: the DAC stays
     at mid-scale (0 V; calibration runs).  ``vendor``: ``(path, subckt)`` of an op-amp model the
     user downloaded (validated by :func:`analogue.board.opamp.vendor_model_path`, pins in+ in-
-    V+ V- out); every op-amp of the board then uses it.  ngspice runs here refuse ``.include``
+    V+ V- out); every op-amp of the board then uses it, so it must be a part whose input
+    common-mode range reaches ``v_set`` from both rails (the servos; an OPA2140 model makes the
+    sourcing servo's gain collapse at V+ - 3.5 V, as the real part would).  ngspice runs here refuse ``.include``
     (:func:`analogue.circuit.ngspice.run_deck`), so the validated file's text is inlined into the
     deck built on the user's machine (it is never part of this repository).
     """

@@ -9,7 +9,15 @@ The subcircuit (pins ``inp inn vcc vee out``) is a one-pole voltage-feedback amp
   ``i_max / c1`` (the tanh is the input pair running out of tail current);
 - rail clamps: diodes from ``g`` to ``vcc - headroom`` and ``vee + headroom``, referenced to the
   *supply pins*, so the output follows the rails it is given;
-- a unity buffer and the open-loop output resistance ``rout``.
+- a unity buffer and the open-loop output resistance ``rout`` behind a current limit ``i_sc``
+  (``I = x/(1 + |x/i_sc|^6)^(1/6)``, ``x = V/rout``: linear, then flat at ``i_sc``): the output swing against a load current ``I`` is
+  ``headroom + rout I`` from the rail, and a short draws at most ``i_sc``
+  (:func:`output_swing` is that law; a test checks the subcircuit against it);
+- the input common-mode range ``[V- + cm_neg, V+ - cm_pos]`` (issue 21): beyond it the
+  transconductance of a part with ``phase_reversal`` (TL07x: beyond the negative limit)
+  changes sign, so the output runs to the wrong rail; for a part without it the gain
+  collapses (a 50 mV-wide tanh edge).  The range is read at the non-inverting pin (in closed
+  loop both inputs sit within microvolts of each other).
 
 The parameter sets are "class" values read off typical and guaranteed (min/max) datasheet
 columns for a JFET-input TL072 and a JFET-input precision OPA2140 at +-15 V, 25 C.  They are
@@ -30,6 +38,7 @@ __all__ = [
     "OpAmp",
     "forbidden_deck_lines",
     "get_opamp",
+    "output_swing",
     "subcircuit",
     "vendor_model_path",
 ]
@@ -47,7 +56,10 @@ class OpAmp:
     ib: input bias current (A) at 25 C; ios: input offset current (A); ib_doubling: the
     temperature rise (K) that doubles ib (JFET inputs: about 10 K); rin: differential input
     resistance (ohm); rout: open-loop output resistance (ohm); headroom: how close the output
-    gets to either rail (V).
+    gets to either rail at no load (V); cm_neg / cm_pos: the input common-mode range reaches
+    ``V- + cm_neg`` and ``V+ - cm_pos`` (V; negative: beyond the rail); phase_reversal:
+    the output inverts beyond the negative common-mode limit; i_sc: output short-circuit
+    current (A).
     """
 
     name: str
@@ -63,14 +75,18 @@ class OpAmp:
     rout: float
     headroom: float
     source: str = ""
+    cm_neg: float = 4.0
+    cm_pos: float = 4.0
+    phase_reversal: bool = False
+    i_sc: float = 0.02
 
     def __post_init__(self):
         checks.identifier("op-amp name", self.name)
         for f in fields(self):
-            if f.name in ("name", "source"):
+            if f.name in ("name", "source", "phase_reversal"):
                 continue
             value = getattr(self, f.name)
-            if f.name in ("vos", "vos_drift", "ib", "ios"):
+            if f.name in ("vos", "vos_drift", "ib", "ios", "cm_neg", "cm_pos"):
                 object.__setattr__(self, f.name, checks.finite(f.name, value))
             else:
                 object.__setattr__(self, f.name, checks.positive(f.name, value))
@@ -97,22 +113,55 @@ class OpAmp:
     def replace(self, **changes) -> OpAmp:
         return replace(self, **changes)
 
+    def common_mode_range(self, rails: float) -> tuple[float, float]:
+        """(lowest, highest) input common-mode voltage at symmetric supplies ``+-rails``."""
+        return -rails + self.cm_neg, rails - self.cm_pos
 
-# Datasheet "class" values (typical column / worst-case column), +-15 V, 25 C.
+    @property
+    def guaranteed(self) -> OpAmp:
+        """The part's guaranteed-limits set (``NAME_worst``), or itself when it is one."""
+        return OPAMPS.get(self.name.split("_")[0] + "_worst", self)
+
+
+def output_swing(p: OpAmp, rails: float, load: float) -> float:
+    """Largest output magnitude (V) into ``load`` ohms to ground at supplies ``+-rails``:
+    ``V = rails - headroom - rout I`` with ``I = V/load``, capped by ``i_sc load``."""
+    v = (rails - p.headroom) / (1.0 + p.rout / load)
+    return min(v, p.i_sc * load)
+
+
+# Datasheet "class" values (typical column / worst-case column), +-15 V, 25 C.  Output stage:
+# headroom and rout fitted to the swing at 10 kOhm and 2 kOhm (TL072: 13.5/12 V typical,
+# 12/10 V guaranteed -> rout 320/530 Ohm, no-load headroom 1.07/2.36 V).  Common-mode range:
+# TL072 -12 to +15 V typical, +-11 V guaranteed, phase reversal beyond the negative limit;
+# OPA2140 (V-) - 0.1 to (V+) - 3.5 V; OPA2197 (V-) - 0.1 to (V+) + 0.1 V (rail-to-rail input,
+# no phase reversal).
 OPAMPS: dict[str, OpAmp] = {
     "TL072": OpAmp("TL072", a0=2e5, gbw=3e6, slew=13e6, vos=3e-3, vos_drift=18e-6, ib=65e-12,
-                   ios=5e-12, ib_doubling=10.0, rin=1e12, rout=100.0, headroom=1.5,
-                   source="TL072-class typical values (JFET input, +-15 V)"),
+                   ios=5e-12, ib_doubling=10.0, rin=1e12, rout=320.0, headroom=1.07,
+                   source="TL072-class typical values (JFET input, +-15 V)", cm_neg=3.0,
+                   cm_pos=0.0, phase_reversal=True, i_sc=0.04),
     "TL072_worst": OpAmp("TL072_worst", a0=2.5e4, gbw=2e6, slew=8e6, vos=10e-3, vos_drift=30e-6,
-                         ib=200e-12, ios=100e-12, ib_doubling=10.0, rin=1e11, rout=200.0,
-                         headroom=3.0, source="TL072-class guaranteed limits (min gain, max offset)"),
+                         ib=200e-12, ios=100e-12, ib_doubling=10.0, rin=1e11, rout=530.0,
+                         headroom=2.36, source="TL072-class guaranteed limits (min gain, max offset)",
+                         cm_neg=4.0, cm_pos=4.0, phase_reversal=True, i_sc=0.01),
     "OPA2140": OpAmp("OPA2140", a0=2e6, gbw=11e6, slew=20e6, vos=30e-6, vos_drift=0.35e-6,
                      ib=0.5e-12, ios=0.5e-12, ib_doubling=10.0, rin=1e13, rout=20.0, headroom=0.2,
-                     source="OPA2140-class typical values (precision JFET, rail-to-rail output)"),
+                     source="OPA2140-class typical values (precision JFET, rail-to-rail output)",
+                     cm_neg=-0.1, cm_pos=3.5, i_sc=0.036),
     "OPA2140_worst": OpAmp("OPA2140_worst", a0=1e6, gbw=8e6, slew=15e6, vos=120e-6,
                            vos_drift=1e-6, ib=10e-12, ios=10e-12, ib_doubling=10.0, rin=1e12,
                            rout=40.0, headroom=0.35,
-                           source="OPA2140-class guaranteed limits"),
+                           source="OPA2140-class guaranteed limits", cm_neg=0.0, cm_pos=3.5,
+                           i_sc=0.02),
+    "OPA2197": OpAmp("OPA2197", a0=3e6, gbw=10e6, slew=20e6, vos=25e-6, vos_drift=0.5e-6,
+                     ib=5e-12, ios=2e-12, ib_doubling=10.0, rin=1e13, rout=40.0, headroom=0.1,
+                     source="OPA2197-class typical values (rail-to-rail input and output, 36 V)",
+                     cm_neg=-0.1, cm_pos=-0.1, i_sc=0.065),
+    "OPA2197_worst": OpAmp("OPA2197_worst", a0=1e6, gbw=8e6, slew=15e6, vos=250e-6,
+                           vos_drift=2.5e-6, ib=20e-12, ios=20e-12, ib_doubling=10.0, rin=1e12,
+                           rout=80.0, headroom=0.3, source="OPA2197-class guaranteed limits",
+                           cm_neg=0.0, cm_pos=0.0, i_sc=0.03),
 }
 
 
@@ -134,26 +183,43 @@ def subcircuit(p: OpAmp, name: str | None = None) -> str:
     if not isinstance(p, OpAmp):
         raise TypeError(f"p must be an OpAmp, got {type(p).__name__}")
     name = checks.identifier("subcircuit name", name or p.name)
+    # the clamp diode's own forward drop at the full transconductance current (N = 0.2:
+    # 0.15 V for a TL072), added to the clamp voltage so that the swing is ``headroom``
+    clamp = 0.2 * 0.025852 * math.log(p.i_max / 1e-14)
+    u = f"(v(o1)-v(out))/{_n('rout i_sc', p.rout * p.i_sc)}"
+    u2 = f"({u}*{u})"
     return "\n".join([
         f".subckt {name} inp inn vcc vee out",
         f"Vos inp ip1 dc {_n('vos', p.vos)}",
         f"Ibp ip1 0 dc {_n('ib', p.ib + 0.5 * p.ios)}",
         f"Ibn inn 0 dc {_n('ib', p.ib - 0.5 * p.ios)}",
         f"Rin ip1 inn {_n('rin', p.rin)}",
-        # transconductance with slew limiting (tail current i_max)
-        f"Bgm 0 g i={_n('i_max', p.i_max)}*tanh({_n('gm / i_max', p.gm / p.i_max)}*(v(ip1)-v(inn)))",
+        # transconductance with slew limiting (tail current i_max), times the common-mode
+        # factor: -1 (phase reversal) or 0 (gain collapse) beyond the input range
+        (f"Bgm 0 g i={_n('i_max', p.i_max)}*tanh({_n('gm / i_max', p.gm / p.i_max)}*(v(ip1)-v(inn)))"
+         f"*{_cm_factor(p)}"),
         f"R1 g 0 {_n('R1', R1)}",
         f"C1 g 0 {_n('c1', p.c1)}",
         # rail clamps referenced to the supply pins
-        f"Vhp vcc chp dc {_n('headroom', p.headroom)}",
-        f"Vhn chn vee dc {_n('headroom', p.headroom)}",
+        f"Vhp vcc chp dc {_n('headroom', p.headroom + clamp)}",
+        f"Vhn chn vee dc {_n('headroom', p.headroom + clamp)}",
         f"Dhp g chp {CLAMP_MODEL}",
         f"Dhn chn g {CLAMP_MODEL}",
         f".model {CLAMP_MODEL} D(IS=1e-14 N=0.2)",
         "Ebuf o1 0 g 0 1",
-        f"Rout o1 out {_n('rout', p.rout)}",
+        # open-loop output resistance behind the short-circuit current limit
+        # (u^6 written as a product: ngspice differentiates pow(x, 6) through ln x, NaN at 0)
+        (f"Bout o1 out i=(v(o1)-v(out))/{_n('rout', p.rout)}/pow(1+{u2}*{u2}*{u2},1/6)"),
         f".ends {name}",
     ])
+
+
+def _cm_factor(p: OpAmp) -> str:
+    """B-source factor of the common-mode range (50 mV edges at the limits)."""
+    lo = f"(v(inp)-v(vee)-({_n('cm_neg', p.cm_neg)}))/0.05"
+    hi = f"(v(vcc)-v(inp)-({_n('cm_pos', p.cm_pos)}))/0.05"
+    low_edge = f"tanh({lo})" if p.phase_reversal else f"0.5*(1+tanh({lo}))"
+    return f"{low_edge}*0.5*(1+tanh({hi}))"
 
 
 # ---------------------------------------------------------------------- vendor models

@@ -32,7 +32,7 @@ from ..circuit.parts import get_part, thermal_voltage
 from ..model import Model
 from . import opamp
 from .design import BoardDesign
-from .netlist import ROLES, BoardInstance, nominal_instance
+from .netlist import ROLES, BoardInstance, nominal_instance, role_part
 
 __all__ = [
     "CLASSES",
@@ -109,10 +109,10 @@ def draw_board(design: BoardDesign, tol: Tolerances, seed: int, board: int) -> B
         values[k] = values[k] * f
         draws[k] = f - 1.0
     ref = (1.0 + tol.ref_tol * u_ref) if "references" in on else np.ones(3)
-    amp0 = opamp.get_opamp(design.spec.opamp)
-    worst = opamp.OPAMPS.get(amp0.name + "_worst", amp0)
     amps = {}
     for i, role in enumerate(ROLES):
+        amp0 = opamp.get_opamp(role_part(design, role))
+        worst = amp0.guaranteed
         a = amp0.at_temperature(temp) if "temperature" in on else amp0.at_temperature(27.0)
         vos = float(np.clip(z_vos[i] * amp0.vos, -worst.vos, worst.vos)) if "opamp_offsets" in on else 0.0
         vos += (a.vos - amp0.vos) if "temperature" in on else 0.0  # drift only

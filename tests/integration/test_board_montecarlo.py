@@ -99,10 +99,12 @@ def test_board_cli_refuses_unknown_experiment(tmp_path):
 
 
 def test_vendor_model_file_is_validated_and_used(tmp_path):
-    from analogue.board import opamp
     lib = tmp_path / "my_amp.lib"
-    # a "downloaded" model: here our own macromodel text under another name
-    lib.write_text("* user's vendor file\n" + opamp.subcircuit(opamp.get_opamp("OPA2140"), "VENDAMP") + "\n")
+    # a "downloaded" model: a plain one-pole rail-to-rail-input amplifier (the vendor model
+    # serves every op-amp, and the servos' inputs sit 2.5 V from a rail)
+    lib.write_text("* user's vendor file\n.subckt VENDAMP inp inn vcc vee out\n"
+                   "Rin inp inn 1e12\nBgm 0 g i=1e-3*tanh(3*(v(inp)-v(inn)))\nR1 g 0 1e9\n"
+                   "C1 g 0 1.6e-11\nEbuf o1 0 g 0 1\nRout o1 out 50\n.ends VENDAMP\n")
     deck = build_board_deck(DESIGN, nominal_instance(DESIGN), v0=[0.5], t_end=0.5, sample_dt=0.01,
                             seed=2, noise_dir=tmp_path, vendor=(lib, "VENDAMP"))
     assert "X1 inp inn vcc vee out VENDAMP" in deck.text and ".include" not in deck.text
