@@ -36,7 +36,7 @@ def test_every_node_stays_within_the_rails(tmp_path):
     d = design_board(STICK, v0=[2.0, -2.0])
     deck = build_board_deck(d, nominal_instance(d), v0=[2.0, -2.0], t_end=2.0, sample_dt=0.01,
                             seed=3, noise_dir=tmp_path, save_all=True)
-    plot = ng.run_deck(deck.text, t_stop=2.0 * d.theta).plot
+    plot = ng.run_deck(deck.text, t_stop=2.0 * d.theta, files=deck.noise_files).plot
     volts = [n for n in plot.names if n.startswith("v(")]
     peak = max(float(np.max(np.abs(plot[n]))) for n in volts)
     assert peak <= d.spec.rails + 1e-9

@@ -17,7 +17,7 @@ STICK = Model(tau_m=1.0, delta=0.7, a=0.2, gamma=10.0)
 def _margins(d, board, tmp_path, v0=(2.0, -2.0), t_end=2.0):
     deck = build_board_deck(d, board, v0=list(v0), t_end=t_end, sample_dt=0.01, seed=3,
                             noise_dir=tmp_path, save_all=True)
-    plot = ng.run_deck(deck.text, t_stop=t_end * d.theta).plot
+    plot = ng.run_deck(deck.text, t_stop=t_end * d.theta, files=deck.noise_files).plot
     return common_mode_margins(d, board, deck.text, plot), plot, deck
 
 
@@ -44,7 +44,7 @@ def test_a_tl072_servo_would_leave_its_common_mode_range(tmp_path):
     old = nom.replace(opamps={**nom.opamps, "st": tl, "sb": tl})
     deck = build_board_deck(d, old, v0=[2.0], t_end=1.0, sample_dt=0.01, seed=3,
                             noise_dir=tmp_path, save_all=True)
-    plot = ng.run_deck(deck.text, t_stop=1.0 * d.theta).plot
+    plot = ng.run_deck(deck.text, t_stop=1.0 * d.theta, files=deck.noise_files).plot
     bot = plot["v(b0rb)"]
     lo, _ = opamp.get_opamp("TL072_worst").common_mode_range(15.0)
     assert np.max(bot) < lo - 1.0        # -12.5 V against -11 V
