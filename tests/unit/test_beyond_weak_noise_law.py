@@ -35,8 +35,11 @@ def test_weak_noise_law_is_the_exact_law(name):
     exp, m, v, dens, r = _member(name)
     wn = r["weak_noise_density"]
     assert np.trapezoid(wn, v) == pytest.approx(1.0, rel=1e-12)
-    # exp(-gamma U) is exact at every gamma for 1-D Gaussian members: the grid law agrees
-    assert r["weak_noise_l1"] < 1e-6
+    # exp(-gamma U) is exact at every gamma for 1-D Gaussian members and stationary_law is
+    # exp(-gamma U)/Z with the exact Z: the L1 distance is the trapezoid's normalisation error
+    # of the weak-noise law alone (the cusp at v = 0; measured 4.8e-7 cubic, 3.3e-5 stribeck)
+    assert r["weak_noise_l1"] == pytest.approx(abs(1.0 - np.trapezoid(dens, v)), abs=1e-9)
+    assert r["weak_noise_l1"] < 1e-4
     h = float(np.max(np.diff(v)))
     mins = np.asarray(r["u_minima"])
     assert abs(mins[np.argmin(r["u_at_minima"])] - _slide(m)) <= h
