@@ -90,7 +90,7 @@ from ..model import Model
 # the mapping's callers (board, tests)
 from ..theory.stationary import CENTRAL_BIN, central_bin_bias, stationary_std  # noqa: F401
 from .. import checks
-from .parts import IDEAL_IS, DiodePart, get_part, ideal_diode, thermal_voltage, PARTS
+from .parts import IDEAL_IS, DiodePart, bridge_dc_current, get_part, ideal_diode, thermal_voltage, PARTS
 from . import nonlinear as nl
 
 __all__ = ["CircuitSpec", "CircuitMapping", "map_model", "COULOMB_KINDS", "DIODES",
@@ -322,6 +322,29 @@ class CircuitMapping:
         """The dry-friction element in the deck: ``spec.coulomb``, or None for Delta = 0
         (no element at all: the circuit is the Ornstein-Uhlenbeck RC circuit)."""
         return self.spec.coulomb if self.model.delta > 0 else None
+
+    def friction_law(self, v):
+        """The normalised friction law ``c(v)`` the Coulomb element realises at DC (model
+        units: the element's current is ``I_Delta_total c(v)`` once the viscous compensation of
+        ``R`` is taken off).  A real bridge: its exact DC I-V from every DC parameter of the
+        part (IS, N, RS, the parallel resistor rp; :func:`~analogue.circuit.parts.bridge_dc_current`)
+        minus the conductance ``2/rp`` that ``R`` compensates, over ``I_Delta_total``; it is not
+        the slope-matched ``tanh(v/epsilon)`` (the series resistance makes it saturate sooner).
+        The ideal diode and the ``behavioural`` B-source: ``tanh(v/epsilon)``;
+        ``behavioural-sgn``: ``sgn(v)``; no element (Delta = 0): 0.  Junction and diffusion
+        capacitances carry no DC current (``bias["junction_capacitance"]``: 2 CJO/C)."""
+        v = np.asarray(v, dtype=float)
+        element = self.coulomb_element
+        if element is None:
+            return np.zeros_like(v)
+        if element == "behavioural-sgn":
+            return np.sign(v)
+        part = self.part
+        if element == "behavioural" or part is None or part.ideal:
+            return np.tanh(v / self.epsilon)
+        g_extra = 2.0 / part.rp if part.rp else 0.0
+        volts = self.kappa * v
+        return (bridge_dc_current(part, self.i_delta, volts) - g_extra * volts) / self.i_delta_total
 
     @property
     def smoothing_fraction(self) -> float:

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field, replace
 from ..circuit.experiments import Experiment
 from ..circuit.mapping import map_model
 from ..theory.exact import sample_stationary
-from .budget import SE_MULTIPLIER, held_noise_pair, integration_term
+from .budget import SE_MULTIPLIER, held_noise_pair, integration_term, real_diode_element
 from .metrics import Budget, compare
 from ..estimators.resampling import jackknife, jackknife_difference
 from ..estimators.smoothed_indicator import kernel_width
@@ -57,6 +57,11 @@ _NULL_SE_NOTE = ("SE: the replica jackknife rescaled to the theory's value (p(1-
 _THEORY_SE_NOTE = ("SE: the larger of the replica jackknife and that of n draws from the "
                    "exact law (sigma/sqrt(n) for the mean, sqrt(mu4/n - sigma^4 (n-3)/(n(n-1))) "
                    "for the variance)")
+
+
+def _element_note(mapping) -> str:
+    return (f"element: the {mapping.part.name} bridge's DC law (exact numerics on it minus "
+            f"exact numerics on tanh(v/epsilon))")
 
 
 def _prob_floor(kind: Kind, value: float, se: float, n: int) -> float:
@@ -216,11 +221,16 @@ def analyse(runs: ExperimentRuns, *, theory: ExperimentTheory | None = None,
     integ = integration_term(lambda s: replace(stationary_fn, smoothing=s),
                              *runs.check_pair("stationary"), h)
     stat_entries = {o.label: o.entry for o in stationary_observables(taus)}
+    # a real bridge's own DC law against the tanh the smoothing term assumes (issue 18)
+    mapping = map_model(model, exp.spec)
+    element = real_diode_element(mapping, threshold=thr, taus=taus, stationary_eff=ex_eff)
     for k, (val, se) in circ.items():
         b = Budget(smoothing=ex_eff[k] - ex[k], bandwidth=_bias(band, k),
-                   integration=integ[k][0])
+                   integration=integ[k][0], element=element.get(k, 0.0))
         se_null = stationary_null_se(stat_entries[k], val, se, ex_eff[k])
         note = _NULL_SE_NOTE if se_null > se else ""
+        if k in element:
+            note = "; ".join(x for x in (note, _element_note(mapping)) if x)
         se = se_null
         res.budgets[k] = b
         res.circuit[k], res.exact[k], res.exact_eff[k] = (val, se), ex[k], ex_eff[k]
