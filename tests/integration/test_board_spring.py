@@ -20,7 +20,7 @@ def test_spring_board_follows_the_noise_free_equations(tmp_path):
     t_end = 8.0
     deck = build_board_deck(d, nominal_instance(d), v0=[0.0], t_end=t_end, sample_dt=0.01, seed=1,
                             noise_dir=tmp_path, noise_off=True, reltol=1e-5)
-    plot = ng.run_deck(deck.text, t_stop=t_end * d.theta).plot
+    plot = ng.run_deck(deck.text, t_stop=t_end * d.theta, files=deck.noise_files).plot
     t = np.linspace(0.0, t_end, 801)
     v = ng.resample(plot, deck.vectors["v"], t * d.theta)[0] * deck.to_model_v
     x = ng.resample(plot, deck.vectors["x"], t * d.theta)[0] * deck.to_model_x
