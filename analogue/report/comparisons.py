@@ -13,7 +13,8 @@ from dataclasses import dataclass, field, replace
 from ..circuit.experiments import Experiment
 from ..circuit.mapping import map_model
 from ..theory.exact import sample_stationary
-from .budget import SE_MULTIPLIER, held_noise_pair, integration_term, real_diode_element
+from .budget import (SE_MULTIPLIER, held_noise_pair, integration_term, real_diode_element,
+                     real_diode_transition_element)
 from .metrics import Budget, compare
 from ..estimators.resampling import jackknife, jackknife_difference
 from ..estimators.smoothed_indicator import kernel_width
@@ -157,6 +158,8 @@ def analyse(runs: ExperimentRuns, *, theory: ExperimentTheory | None = None,
     res = ExperimentAnalysis(runs, theory=theory)
     # kernel width of the smoothed indicators in the integration differences
     h = kernel_width(theory.threshold, model_eff.epsilon)
+    # a real bridge's own DC law against the tanh the smoothing term assumes (issue 18)
+    mapping = map_model(model, exp.spec)
 
     # ---------------------------------------------------------------- transition runs
     times = [t for t in exp.histogram_times]
@@ -180,18 +183,21 @@ def analyse(runs: ExperimentRuns, *, theory: ExperimentTheory | None = None,
             integ = integration_term(
                 lambda s, v0=v0: (lambda e: transition_values(e, v0, times, smoothing=s)),
                 *runs.check_pair("transition"), h)
+        element = real_diode_transition_element(mapping, v0, times)
         for k, (val, se) in circ.items():
             b = Budget(smoothing=ex_eff[k] - ex[k], bandwidth=_bias(band, k),
-                       integration=integ[k][0] if integ else 0.0)
+                       integration=integ[k][0] if integ else 0.0, element=element.get(k, 0.0))
             res.budgets[k] = b
             res.circuit[k], res.exact[k], res.exact_eff[k] = (val, se), ex[k], ex_eff[k]
             note = "" if integ else "integration checked on the first v0 only"
             if k in se_theory:
                 note = "; ".join(x for x in (note, _THEORY_SE_NOTE) if x)
+            if k in element:
+                note = "; ".join(x for x in (note, _element_note(mapping)) if x)
             res.comparisons.append(compare(exp.name, k, val, se, ex[k], "exact", b, note))
             if k in weak and entries[k].compare_weak_noise:
                 bw = Budget(smoothing=b.smoothing, bandwidth=b.bandwidth, integration=b.integration,
-                            finite_noise=ex[k] - weak[k])
+                            finite_noise=ex[k] - weak[k], element=b.element)
                 res.comparisons.append(compare(
                     exp.name, k, val, se, weak[k], "weak-noise", bw,
                     "saddle-point propagator (eqs. (46)-(51)) normalised on a grid; "
@@ -221,8 +227,6 @@ def analyse(runs: ExperimentRuns, *, theory: ExperimentTheory | None = None,
     integ = integration_term(lambda s: replace(stationary_fn, smoothing=s),
                              *runs.check_pair("stationary"), h)
     stat_entries = {o.label: o.entry for o in stationary_observables(taus)}
-    # a real bridge's own DC law against the tanh the smoothing term assumes (issue 18)
-    mapping = map_model(model, exp.spec)
     element = real_diode_element(mapping, threshold=thr, taus=taus, stationary_eff=ex_eff)
     for k, (val, se) in circ.items():
         b = Budget(smoothing=ex_eff[k] - ex[k], bandwidth=_bias(band, k),

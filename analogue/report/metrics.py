@@ -27,7 +27,8 @@ class Budget:
     sampling: float = 0.0       # output grid / histogram binning
     finite_noise: float = 0.0   # weak-noise comparisons: exact(gamma) - (gamma -> infinity)
     element: float = 0.0        # the model family's circuit elements (issue 9): cubic network
-    #                             approximation, inductor series resistance, shot pulse shape
+    #                             approximation, inductor series resistance, shot pulse shape;
+    #                             a real diode bridge's DC law against its tanh (issue 18)
 
     def total(self) -> float:
         return sum(abs(v) for v in asdict(self).values())

@@ -1,6 +1,8 @@
 """Issue 18, item 6: the exact stationary law with any friction law (analogue.theory.friction_law),
 against the package's independent routes for the tanh law (half-line quadrature for the
 moments, the Scharfetter-Gummel grid with Richardson extrapolation for D_x)."""
+import math
+
 import numpy as np
 import pytest
 
@@ -43,3 +45,40 @@ def test_refuses_family_members_and_bad_laws():
         stationary_law_with_friction(MODELS[0], lambda v: np.full(3, 1.0), 0.01)
     with pytest.raises(ValueError, match="width"):
         stationary_law_with_friction(MODELS[0], np.tanh, -1.0)
+
+
+@pytest.mark.parametrize("v0", [2.0, pytest.param(-3.0, marks=pytest.mark.slow)])
+# -3.0: deep in the tail, the expm_multiply route (8 s)
+def test_transition_tanh_law_matches_exact_propagator(v0):
+    """Transition moments on the tanh law against analogue.theory.exact.propagator (its own
+    grid and contour route) at the default spacings: mean to 1e-4 of the spread, variance to
+    1e-3 (measured 1e-4 and 1e-3 at worst, t = 0.5)."""
+    from analogue.theory.exact import propagator
+    from analogue.theory.friction_law import transition_moments_with_friction
+    m = MODELS[0]
+    times = [0.5, 3.0]
+    mine = transition_moments_with_friction(m, lambda v: np.tanh(v / m.epsilon), m.epsilon,
+                                            v0, times)
+    v = np.linspace(-5.0, 5.0, 100001)
+    f = propagator(m, v, np.array(times), v0)
+    for t, fi in zip(times, f):
+        z = np.trapezoid(fi, v)
+        mean = np.trapezoid(v * fi, v) / z
+        var = np.trapezoid((v - mean) ** 2 * fi, v) / z
+        neg = np.trapezoid(fi * (v < 0), v) / z
+        got = mine[t]
+        assert abs(got[0] - mean) < 1e-4 * math.sqrt(var)
+        assert got[1] == pytest.approx(var, rel=1e-3)
+        assert got[2] == pytest.approx(neg, abs=5e-4)
+
+
+def test_transition_mirror_symmetry():
+    """(v0, a) -> (-v0, -a) with an odd law: f(v, t | v0; a) = f(-v, t | -v0; -a)."""
+    from analogue.theory.friction_law import transition_moments_with_friction
+    m = MODELS[0]
+    law = lambda v: np.clip(v / m.epsilon, -1.0, 1.0)  # noqa: E731
+    p = transition_moments_with_friction(m, law, m.epsilon, 1.0, [0.7])[0.7]
+    q = transition_moments_with_friction(m.replace(a=-m.a), law, m.epsilon, -1.0, [0.7])[0.7]
+    assert q[0] == pytest.approx(-p[0], rel=1e-9)
+    assert q[1] == pytest.approx(p[1], rel=1e-9)
+    assert q[2] == pytest.approx(1.0 - p[2], abs=1e-9)
