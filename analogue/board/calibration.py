@@ -5,7 +5,8 @@ DAC monitor), +-10 V range, 16 bits, at the DAC rate (100 kS/s at theta = 1 ms, 
 
 Procedure (each step a short ngspice run of the drawn board, exactly what the bench does):
 
-1. **Step responses, friction off** (both current sources' references at 0 V, noise DAC at
+1. **Step responses, friction off** (the friction enable low: both sources' drains steered to
+   ground by the enable switch, so no threshold or servo swing leaves a residual current; noise DAC at
    mid-scale), force input at ``+V_t`` and ``-V_t`` (V_t = 10 V, the force DAC's full scale),
    from v = 0: ``v(t) = v_inf (1 - e^{-t/tau})`` fitted for ``tau`` and ``v_inf``.  With
    ``v_inf(+-) = tau (+-g V_t + o)``: the force gain ``g`` (per volt) and the offset force
@@ -107,7 +108,7 @@ def _fit_step(t, v):
 
 def calibrate_board(design: BoardDesign, board: BoardInstance, *, seed: int, noise_dir) -> Calibration:
     """Run the calibration procedure (module docstring) on ``board``."""
-    off = board.replace(v_set_top=0.0, v_set_bot=0.0)
+    off = board.replace(enable=False)
     v_f = board.v_force  # the experiment's force voltage (as set on the board)
     v_nom_f = design.force_sign * design.spec.v_force  # what the experimenter dialled
     res = {}

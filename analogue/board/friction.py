@@ -31,15 +31,31 @@ from __future__ import annotations
 from .. import checks
 from ..circuit.parts import DiodePart
 
-__all__ = ["MOSFET_MODELS", "bridge_lines", "floating_bridge_deck", "ota_lines"]
+_n = checks.spice_number  # a deck number: _n(name, value)
+
+__all__ = ["MOSFET_VTO", "SWITCH_MODELS", "bridge_lines", "floating_bridge_deck", "mosfet_models",
+           "ota_lines"]
 
 # Our own level-1 small-signal MOSFETs (BSS84/2N7002 class); their gates draw no current,
-# so the source current is exactly the sense-resistor current.
-MOSFET_MODELS = (".model pmosx PMOS(LEVEL=1 VTO=-1.8 KP=0.05 LAMBDA=0.01)",
-                 ".model nmosx NMOS(LEVEL=1 VTO=1.8 KP=0.05 LAMBDA=0.01)")
+# so the source current is exactly the sense-resistor current.  Threshold 1.8 V (typical);
+# the datasheets allow 0.8-2.5 V (2N7002) and 0.8-2.0 V (BSS84): :func:`mosfet_models`.
+MOSFET_VTO = 1.8
 
 
-_n = checks.spice_number  # a deck number: _n(name, value)
+def mosfet_models(vto: float = MOSFET_VTO) -> tuple[str, str]:
+    """The P and N models with threshold magnitude ``vto`` (V)."""
+    vto = checks.positive("mosfet vto", vto)
+    return (f".model pmosx PMOS(LEVEL=1 VTO={_n('vto', -vto)} KP=0.05 LAMBDA=0.01)",
+            f".model nmosx NMOS(LEVEL=1 VTO={_n('vto', vto)} KP=0.05 LAMBDA=0.01)")
+
+
+# Analogue switches (DG413 / DG412 class at +-15 V, TTL control 0/5 V): on-resistance 35 Ohm
+# (datasheet maximum at 25 C), off leakage 0.25 nA at 15 V (maximum at 25 C) -> 6e10 Ohm.
+# ``swno`` closes for a control voltage above 2.5 V, ``swnc`` (control pins swapped) below.
+SWITCH_RON = 35.0
+SWITCH_ROFF = 6e10
+SWITCH_MODELS = (f".model swno SW(VT=2.5 VH=0.2 RON={SWITCH_RON:g} ROFF={SWITCH_ROFF:g})",
+                 f".model swnc SW(VT=-2.5 VH=0.2 RON={SWITCH_RON:g} ROFF={SWITCH_ROFF:g})")
 
 
 def diode_model_line(name: str, part: DiodePart, is_scale: float = 1.0, temp_shift: float = 0.0) -> str:
@@ -51,30 +67,41 @@ def diode_model_line(name: str, part: DiodePart, is_scale: float = 1.0, temp_shi
 
 def bridge_lines(prefix: str, a: str, b: str, *, part: DiodePart, diode_models, r_s_top: float,
                  r_s_bot: float, v_set_top: float, v_set_bot: float, opamp_top: str,
-                 opamp_bot: str) -> list[str]:
+                 opamp_bot: str, enable: str = "en") -> list[str]:
     """Element lines of one bridge between nodes ``a`` (virtual ground) and ``b`` (output),
     with its two current sources (op-amp subcircuits ``opamp_top``/``opamp_bot``, supplies
     ``vcc``/``vee``).  ``diode_models``: four model names (D1 top->a, D2 top->b, D3 a->bot,
-    D4 b->bot), so that each diode can carry its own mismatch."""
+    D4 b->bot), so that each diode can carry its own mismatch.
+
+    Enable (issue 21): each MOSFET's drain goes through an SPDT analogue switch (controlled by
+    node ``enable``, 0/5 V) to the bridge (enabled) or to ground (disabled).  The sources keep
+    running and their servos stay in regulation whatever the MOSFET threshold or the servo's
+    output swing; with the enable low the bridge floats and only the switch's off leakage
+    and the diodes' saturation currents reach it.  ``V{p}ia`` (0 V) in series with the bridge
+    at ``a`` measures the friction current into the virtual ground."""
     p = checks.identifier("prefix", prefix)
-    top, bot = f"{p}top", f"{p}bot"
+    en = checks.identifier("enable node", enable)
+    top, bot, ia = f"{p}top", f"{p}bot", f"{p}ia"
     d1, d2, d3, d4 = diode_models
-    lines = [f"D{p}1 {top} {a} {d1}", f"D{p}2 {top} {b} {d2}",
-             f"D{p}3 {a} {bot} {d3}", f"D{p}4 {b} {bot} {d4}"]
+    lines = [f"V{p}ia {ia} {a} dc 0",
+             f"D{p}1 {top} {ia} {d1}", f"D{p}2 {top} {b} {d2}",
+             f"D{p}3 {ia} {bot} {d3}", f"D{p}4 {b} {bot} {d4}",
+             f"S{p}et {p}dt {top} {en} 0 swno", f"S{p}dt {p}dt 0 0 {en} swnc",
+             f"S{p}eb {p}db {bot} {en} 0 swno", f"S{p}db {p}db 0 0 {en} swnc"]
     if part.rp:
-        for i, (x, y) in enumerate(((top, a), (top, b), (a, bot), (b, bot)), 1):
+        for i, (x, y) in enumerate(((top, ia), (top, b), (ia, bot), (b, bot)), 1):
             lines.append(f"R{p}p{i} {x} {y} {_n('rp', part.rp)}")
     lines += [
         # sourcing: V(ref) = Vcc - v_set, op-amp forces V(s) = V(ref): I = v_set/R_S
         f"V{p}rt vcc {p}rt dc {_n('v_set', v_set_top)}",
         f"R{p}st vcc {p}st {_n('R_S', r_s_top)}",
         f"X{p}ut {p}rt {p}st vcc vee {p}gt {opamp_top}",
-        f"M{p}t {top} {p}gt {p}st {p}st pmosx",
+        f"M{p}t {p}dt {p}gt {p}st {p}st pmosx",
         # sinking: V(ref) = Vee + v_set
         f"V{p}rb {p}rb vee dc {_n('v_set', v_set_bot)}",
         f"R{p}sb {p}sb vee {_n('R_S', r_s_bot)}",
         f"X{p}ub {p}rb {p}sb vcc vee {p}gb {opamp_bot}",
-        f"M{p}b {bot} {p}gb {p}sb {p}sb nmosx",
+        f"M{p}b {p}db {p}gb {p}sb {p}sb nmosx",
     ]
     return lines
 

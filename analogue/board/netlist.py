@@ -30,7 +30,8 @@ from ..circuit.parts import get_part
 from . import friction, noise_chain, opamp
 from .design import BoardDesign
 
-__all__ = ["BoardDeck", "BoardInstance", "build_board_deck", "nominal_instance", "role_part"]
+__all__ = ["RESET_TIME", "R_IC", "BoardDeck", "BoardInstance", "build_board_deck", "ic_voltage",
+           "nominal_instance", "role_part"]
 
 ROLES = ("int", "st", "sb", "bf")  # integrator, source top, source bottom, Bessel buffer
 
@@ -43,7 +44,9 @@ class BoardInstance:
     ``R_S_bot`` separate); ``v_set_top``/``v_set_bot``: the two reference voltages;
     ``v_force``: force voltage (signed); ``opamps``: role -> :class:`~analogue.board.opamp.OpAmp`;
     ``diode_is``: four IS scale factors (bridge diode mismatch); ``temperature`` (C);
-    ``label``: for reports.
+    ``label``: for reports; ``mosfet_vto``: the current-source MOSFETs' threshold magnitude
+    (V; datasheet range 0.8-2.5 V); ``enable``: the friction enable (False: both sources'
+    drains steered to ground, friction off, as the calibration's first step runs).
     """
 
     values: dict
@@ -56,6 +59,8 @@ class BoardInstance:
     rails: float = 15.0
     label: str = "nominal"
     draws: dict = field(default_factory=dict)
+    mosfet_vto: float = friction.MOSFET_VTO
+    enable: bool = True
 
     def replace(self, **changes) -> BoardInstance:
         return replace(self, **changes)
@@ -97,16 +102,37 @@ class BoardDeck:
     noise_files: tuple
     noise_dt: float = 0.0
     to_model_noise: float = 1.0
+    t_offset: float = 0.0
 
 
 _n = checks.spice_number  # a deck number: _n(name, value)
+
+# The bench start (issue 21): R_IC across C through the reset switch and from the IC voltage
+# into the virtual ground through the IC switch.  R_IC C = 100 us; the switches stay closed
+# for RESET_TIME = 20 R_IC C (settled to e^-20) with the friction disabled.  10 kOhm keeps the
+# integrator's output current at 1 mA for a 10 V start (a TL072's guaranteed 10 mA limit).
+R_IC = 10e3
+RESET_TIME = 2e-3
+
+
+def ic_voltage(design: BoardDesign, v0: float, v_force: float, values: dict | None = None) -> float:
+    """The IC voltage that puts the integrator output at ``-kappa v0`` during reset: with
+    both switches closed (on-resistance ``r_on``) the output settles at
+    ``-(V_IC/(R_IC + r_on) + V_F/R_F) (R_IC + r_on || R)``, the viscous resistor ``R`` in
+    parallel with the reset branch and the force current still flowing."""
+    v = values or design.values
+    r_branch = R_IC + friction.SWITCH_RON
+    r_fb = 1.0 / (1.0 / r_branch + 1.0 / v["R"])
+    i_f = v_force / v["R_F"] if np.isfinite(v["R_F"]) else 0.0
+    return r_branch * (design.kappa * float(v0) / r_fb - i_f)
 
 
 def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: float,
                      sample_dt: float, seed: int, noise_dir, first_replica: int = 0,
                      reltol: float = 1e-4, save_all: bool = False,
                      friction_kind: str = "bridge", ota: dict | None = None,
-                     noise_off: bool = False, vendor: tuple | None = None) -> BoardDeck:
+                     noise_off: bool = False, vendor: tuple | None = None,
+                     start: str = "ic") -> BoardDeck:
     """Deck for ``len(v0)`` replicas of ``board`` started at ``v0`` (model units).
 
     Replica ``j`` is driven by the DAC sequence ``(seed, first_replica + j)``
@@ -120,12 +146,22 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
     sourcing servo's gain collapse at V+ - 3.5 V, as the real part would).  ngspice runs here refuse ``.include``
     (:func:`analogue.circuit.ngspice.run_deck`), so the validated file's text is inlined into the
     deck built on the user's machine (it is never part of this repository).
+
+    ``start``: ``"ic"`` sets the initial velocities with ``.ic`` (the integrator held through the
+    operating point; what the Monte Carlo runs); ``"reset"`` starts them as the bench does
+    (issue 21): for ``RESET_TIME`` the reset switch closes ``R_IC`` across ``C``, the IC switch
+    feeds the IC voltage (:func:`ic_voltage`, a DAQ output) through ``R_IC`` into the virtual
+    ground, the friction enable is low and the noise DAC at mid-scale; at ``RESET_TIME`` both
+    switches open, the enable goes high and the DAC sequence starts.  The deck's time axis then
+    runs to ``RESET_TIME + t_end`` (:attr:`BoardDeck.t_offset`).
     """
     from pathlib import Path
     if not isinstance(design, BoardDesign):
         raise TypeError(f"design must be a BoardDesign, got {type(design).__name__}")
     if not isinstance(board, BoardInstance):
         raise TypeError(f"board must be a BoardInstance, got {type(board).__name__}")
+    if start not in ("ic", "reset"):
+        raise ValueError(f"start must be 'ic' or 'reset', got {start!r}")
     if friction_kind not in ("bridge", "ota"):
         raise ValueError(f"friction_kind must be 'bridge' or 'ota', got {friction_kind!r}")
     v0 = np.atleast_1d(np.asarray(v0, dtype=float))
@@ -162,9 +198,18 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
     dmodels = [f"dbr{k}" for k in range(4)]
     for name, scale in zip(dmodels, b.diode_is):
         lines.append(friction.diode_model_line(name, part, is_scale=scale))
-    lines += list(friction.MOSFET_MODELS)
+    lines += list(friction.mosfet_models(b.mosfet_vto)) + list(friction.SWITCH_MODELS)
     lines += [f"Vcc vcc 0 dc {_n('rails', b.rails)}", f"Vee vee 0 dc {_n('rails', -b.rails)}",
               f"Vf f 0 dc {_n('v_force', b.v_force)}"]
+    t0 = RESET_TIME if start == "reset" else 0.0
+    logic = 5.0 if b.enable else 0.0
+    if start == "reset":
+        # reset/IC switches closed and enable low until t0, then released within 100 ns
+        edge = t0 + 100e-9
+        lines += [f"Vsr sr 0 pwl(0 5 {_n('t0', t0)} 5 {_n('edge', edge)} 0)",
+                  f"Ven en 0 pwl(0 0 {_n('t0', t0)} 0 {_n('edge', edge)} {_n('logic', logic)})"]
+    else:
+        lines.append(f"Ven en 0 dc {_n('logic', logic)}")
     files, ic = [], []
     val_ = b.values
     for j in range(v0.size):
@@ -177,7 +222,7 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
             lines += friction.bridge_lines(
                 f"b{j}", sj, o, part=part, diode_models=dmodels, r_s_top=val_["R_S_top"],
                 r_s_bot=val_["R_S_bot"], v_set_top=b.v_set_top, v_set_bot=b.v_set_bot,
-                opamp_top="opa_st", opamp_bot="opa_sb")
+                opamp_top="opa_st", opamp_bot="opa_sb", enable="en")
         else:
             lines += friction.ota_lines(f"b{j}", sj, o, temperature_k=temp_k, **(ota or {}))
         if np.isfinite(val_["R_F"]):
@@ -186,7 +231,7 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
                  else noise_chain.dac_sequence(design, seed, r, n_samples))
         path, sha = noise_chain.write_dac_file(noise_dir, volts, ts)
         files.append(str(path))
-        lines += noise_chain.dac_lines(f"n{j}", f"d{j}", path, sha)
+        lines += noise_chain.dac_lines(f"n{j}", f"d{j}", path, sha, time_offset=t0)
         lines += noise_chain.bessel_lines(f"n{j}", f"d{j}", f"bo{j}", design, "opa_bf", val_)
         lines += [f"C{j}ac bo{j} ac{j} {_n('C_AC', val_['C_AC'])}",
                   f"R{j}n ac{j} {sj} {_n('R_N', val_['R_N'])}"]
@@ -205,6 +250,12 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
             ic.append(f"v(ox{j})={_n('vx', vx)} v(xu{j}x.g)={_n('vx', vx)} v(sx{j})=0 "
                       f"v(oi{j})={_n('vx', -vx)} v(xu{j}i.g)={_n('vx', -vx)} v(si{j})=0")
         vo = -design.kappa * v0[j]
+        if start == "reset":
+            v_ic = ic_voltage(design, v0[j], b.v_force, values=val_)
+            lines += [f"Vic{j} ic{j} 0 dc {_n('v_ic', v_ic)}",
+                      f"S{j}r {o} {j}rr sr 0 swno", f"R{j}r {j}rr {sj} {_n('R_IC', R_IC)}",
+                      f"S{j}i ic{j} {j}ri sr 0 swno", f"R{j}i {j}ri {sj} {_n('R_IC', R_IC)}"]
+            continue
         # the virtual ground's own equilibrium, -vos - V(out)/a0: holding it at 0 through the
         # operating point would charge the AC-coupling capacitor to the offset, which then
         # bleeds a current vos/R_N into sj for ~R_N C_AC = 170 tau_m (measured: 0.5 uA, a
@@ -212,7 +263,8 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
         amp = b.opamps["int"]
         v_sj = -amp.vos - vo / amp.a0
         ic.append(f"v({o})={_n('vo', vo)} v(xu{j}.g)={_n('vo', vo)} v({sj})={_n('v_sj', v_sj)}")
-    lines.append(".ic " + " ".join(ic))
+    if ic:
+        lines.append(".ic " + " ".join(ic))
     lines.append(f".options reltol={_n('reltol', reltol)} abstol=1e-12 vntol=1e-7 method=gear "
                  f"temp={_n('temperature', b.temperature)} tnom=27")
     spring = "R_K" in val_
@@ -222,7 +274,7 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
     if not save_all:
         lines.append(".save " + " ".join(v_names + (x_names or [])))
     max_step = ts / 2.0
-    lines.append(f".tran {_n('tstep', sample_dt * theta)} {_n('tstop', t_end * theta)} 0 "
+    lines.append(f".tran {_n('tstep', sample_dt * theta)} {_n('tstop', t_end * theta + t0)} 0 "
                  f"{_n('max_step', max_step)}")
     lines.append(".end")
     text = "\n".join(lines) + "\n"
@@ -235,4 +287,4 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
                      to_model_x=1.0 / design.x_volts if spring else 1.0,
                      time_scale=theta, seed=int(seed), replicas=int(v0.size),
                      sha256=hashlib.sha256(text.encode()).hexdigest(), noise_files=tuple(files),
-                     noise_dt=0.0)
+                     noise_dt=0.0, t_offset=t0)

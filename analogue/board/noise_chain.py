@@ -88,8 +88,9 @@ def write_dac_file(directory: Path, volts: np.ndarray, ts: float) -> tuple[Path,
     return path, sha
 
 
-def dac_lines(prefix: str, node: str, path, sha256: str) -> list[str]:
-    """XSPICE filesource (zero-order hold) reading ``path``, driving ``node``.  The deck names
+def dac_lines(prefix: str, node: str, path, sha256: str, time_offset: float = 0.0) -> list[str]:
+    """XSPICE filesource (zero-order hold) reading ``path``, driving ``node``, its table
+    delayed by ``time_offset`` seconds (a bench start by the reset switch).  The deck names
     the file without its directory; whoever runs the deck passes ``path`` along
     (:attr:`analogue.board.netlist.BoardDeck.noise_files`)."""
     p = checks.identifier("prefix", prefix)
@@ -103,7 +104,8 @@ def dac_lines(prefix: str, node: str, path, sha256: str) -> list[str]:
         raise ValueError(f"noise file must be named dac_<sha256>.txt, got {f!r}")
     return [f"* {p} noise file sha256 {sha256}",
             f"A{p}dac %v([{node}]) fs{p}",
-            (f".model fs{p} filesource (file=\"{f}\" amploffset=[0] amplscale=[1] timeoffset=0 "
+            (f".model fs{p} filesource (file=\"{f}\" amploffset=[0] amplscale=[1] "
+             f"timeoffset={_n('time_offset', float(time_offset))} "
             f"timescale=1 timerelative=false amplstep=true)")]
 
 
