@@ -276,6 +276,10 @@ def _store_dir_option(ctx, param, value):
                                  "option out for $ANALOGUE_STORE or ~/.cache/analogue/runs)",
                                  param_hint="--store")
     path = Path(value).expanduser()
+    from .circuit.store import root_problem
+    problem = root_problem(path)  # a dangling or looping link: nothing could ever be stored
+    if problem is not None:
+        raise click.BadParameter(problem, param_hint="--store")
     if path.exists() and not path.is_dir():
         raise click.BadParameter(f"{value!r} exists and is not a directory", param_hint="--store")
     # a path below a file can never be created (run printed one "not writable" warning per

@@ -167,11 +167,19 @@ def ensemble_from_xarray(ds) -> Ensemble:
     for name in ("v", "x"):
         if name not in ds or ds[name].dims != ("replica", "time"):
             raise ValueError(f"dataset variable {name!r} must have dims ('replica', 'time')")
+    try:
+        meta = json.loads(ds.attrs[META_ATTR])
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"attribute {META_ATTR!r} is not JSON ({' '.join(str(exc).split())})"
+                         ) from None
+    if not isinstance(meta, dict):
+        raise ValueError(f"attribute {META_ATTR!r} is JSON {type(meta).__name__}, not the "
+                         f"object (dict) an ensemble's meta is")
     noise = None
     if "noise" in ds:
         noise = np.asarray(ds["noise"].transpose("replica", "noise_time").values)
     return Ensemble(np.asarray(ds["time"].values), np.asarray(ds["v"].values),
-                    np.asarray(ds["x"].values), json.loads(ds.attrs[META_ATTR]), noise)
+                    np.asarray(ds["x"].values), meta, noise)
 
 
 def _encoding(ds) -> dict:
@@ -219,3 +227,5 @@ def open_ensemble(path) -> Ensemble:
             return ensemble_from_xarray(ds)
     except OSError as exc:
         raise ValueError(f"{path}: not a netCDF-4 file ({exc})") from None
+    except ValueError as exc:
+        raise ValueError(f"{path}: {exc}") from None

@@ -486,7 +486,9 @@ def _read_document(path: Path) -> dict:
     except OSError as exc:
         raise ValueError(f"{path}: cannot read the experiment file ({exc.strerror or exc})") from None
     try:
-        text = raw.decode("utf-8")
+        # one byte-order mark at the start is what some editors (Windows Notepad) write:
+        # the same document (TOML itself refuses it)
+        text = raw.decode("utf-8").removeprefix("\ufeff")
     except UnicodeDecodeError as exc:
         raise ValueError(f"{path}: not a UTF-8 text file (byte {exc.start}: "
                          f"{raw[exc.start:exc.start + 1]!r}); TOML files are UTF-8") from None

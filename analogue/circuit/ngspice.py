@@ -48,6 +48,7 @@ __all__ = [
     "interp_rows",
     "interrupt_guard",
     "ngspice_version",
+    "output_problem",
     "resample",
     "run_deck",
     "terminate_all",
@@ -529,6 +530,80 @@ def _load_failures(stdout: str, stderr: str) -> str:
                                if _LOAD_FAILED.search(ln)))
 
 
+# --------------------------------------------------------------- what the deck asked for
+_SPICE_SCALE = {"t": 1e12, "g": 1e9, "meg": 1e6, "k": 1e3, "mil": 25.4e-6, "m": 1e-3,
+                "u": 1e-6, "n": 1e-9, "p": 1e-12, "f": 1e-15}
+_SPICE_NUMBER = re.compile(r"([+-]?(?:\d+\.?\d*|\.\d+)(?:e[+-]?\d+)?)(meg|mil|[tgkmunpf])?[a-z]*",
+                           re.IGNORECASE)
+#: relative slack on the deck's max step: ngspice's largest step measured 1 + 3e-15 times it
+#: (stick decks, tmax = noise_dt); a thinned or squeezed axis exceeds it by a factor >= 2.
+STEP_SLACK = 1e-6
+
+
+def _spice_float(token: str) -> float | None:
+    m = _SPICE_NUMBER.fullmatch(token.strip())
+    if m is None:
+        return None
+    return float(m.group(1)) * _SPICE_SCALE.get((m.group(2) or "").lower(), 1.0)
+
+
+def _tran(text: str) -> tuple[float, float, float, float] | None:
+    """(tstep, tstop, tstart, tmax) of the deck's ``.tran`` line (seconds), or None.  Without
+    a tmax ngspice takes the smaller of tstep and (tstop - tstart)/50: the larger is used
+    here, so that the check below never refuses what ngspice may do."""
+    found = None
+    for line in text.splitlines():
+        if re.match(r"\s*\.tran\b", line, re.IGNORECASE):
+            found = line.split()[1:]
+    if not found:
+        return None
+    parsed = [_spice_float(tok) for tok in found if tok.lower() != "uic"]
+    nums = [n for n in parsed if n is not None]
+    if len(nums) < 2 or len(nums) != len(parsed):
+        return None
+    tstep, tstop = nums[0], nums[1]
+    tstart = nums[2] if len(nums) > 2 else 0.0
+    tmax = nums[3] if len(nums) > 3 and nums[3] > 0 else max(tstep, (tstop - tstart) / 50.0)
+    return tstep, tstop, tstart, tmax
+
+
+def _saved(text: str) -> list[str]:
+    """The node voltages and branch currents named by the deck's ``.save`` lines."""
+    out: list[str] = []
+    for line in text.splitlines():
+        if re.match(r"\s*\.save\b", line, re.IGNORECASE):
+            out += [tok.lower() for tok in line.split()[1:]
+                    if re.fullmatch(r"[vi]\([^(),]+\)", tok, re.IGNORECASE)]
+    return out
+
+
+def output_problem(text: str, plot: RawPlot) -> str | None:
+    """Why ``plot`` is not what the deck ``text`` asked for (one line), or None: every vector
+    its ``.save`` names is there, and the time axis runs from ``tstart`` to ``tstop`` with no
+    step longer than the deck's max step (the points ngspice took; a thinned, squeezed or
+    truncated axis breaks this)."""
+    missing = [n for n in _saved(text) if n not in plot.names]
+    if missing:
+        return (f"the raw file lacks the vectors {', '.join(missing[:5])}"
+                f"{' ...' if len(missing) > 5 else ''} that the deck saves (it holds "
+                f"{', '.join(plot.names[:6])}{' ...' if len(plot.names) > 6 else ''})")
+    tran = _tran(text)
+    if tran is None or "time" not in plot.names or not plot.n_points:
+        return None
+    _tstep, tstop, tstart, tmax = tran
+    t = plot["time"]
+    if t[-1] > tstop * (1.0 + 1e-9) or t[0] < tstart - 1e-12 * tstop:
+        return (f"its time axis [{t[0]:.6g}, {t[-1]:.6g}] s leaves the deck's interval "
+                f"[{tstart:.6g}, {tstop:.6g}] s")
+    gaps = np.diff(np.concatenate([[tstart], t]))
+    worst = int(np.argmax(gaps))
+    if gaps[worst] > tmax * (1.0 + STEP_SLACK):
+        return (f"its time axis has a step of {gaps[worst]:.6g} s at t = {t[worst]:.6g} s, "
+                f"longer than the deck's max step {tmax:.6g} s ({plot.n_points} points for "
+                f"{tstop - tstart:.6g} s): points are missing or the axis is distorted")
+    return None
+
+
 def run_deck(text: str, *, timeout: float = 3600.0, t_stop: float | None = None,
              keep_dir=None, group=None, files=()) -> RunResult:
     """Run one complete deck (``.end``-terminated, no ``.control`` block) in batch mode.
@@ -615,6 +690,15 @@ def run_deck(text: str, *, timeout: float = 3600.0, t_stop: float | None = None,
         if reached < t_stop * (1.0 - 1e-9):
             raise NgspiceError(_with_said(f"transient stopped at t = {reached:.6g} s before "
                                           f"t_stop = {t_stop:.6g} s", said))
+    if not np.all(np.isfinite(plot.values)):
+        bad = [n for i, n in enumerate(plot.names) if not np.all(np.isfinite(plot.values[:, i]))]
+        raise NgspiceError(_with_said(f"ngspice exited normally but its vectors "
+                                      f"{', '.join(bad[:5])} hold NaN or infinite values; the "
+                                      f"circuit diverged", said))
+    wrong = output_problem(text, plot)
+    if wrong is not None:
+        raise NgspiceError(_with_said(f"ngspice's output is not what the deck asked for: {wrong}",
+                                      said))
     return RunResult(plot=plot, stdout=stdout, stderr=stderr, wall_time=wall, version=version)
 
 

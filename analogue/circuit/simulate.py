@@ -204,6 +204,7 @@ class BatchTask:
     xs_names: tuple | None = None           # spring: position read back from the inductor
     xs_initial: float = 0.0                 # its value at t = 0 (x0, model units)
     files: tuple = ()                       # paths of files the deck reads (DAC tables)
+    limits: tuple = ()                      # (array name, largest physical |value|) pairs
 
 
 def held_values(t_raw, rows, t_end, hold) -> np.ndarray:
@@ -228,6 +229,14 @@ def run_batch(task: BatchTask) -> dict:
     res = _ng.run_deck(task.text, timeout=task.timeout, t_stop=float(t_s[-1]), group=task.group,
                        files=task.files)
     v_raw0 = task.v0 / task.to_model_v
+    wanted = [*task.v_names, *(task.x_names or ()), *(task.noise_names or ()),
+              *(task.xs_names or ())]
+    missing = [n for n in wanted if n.lower() not in res.plot.names]
+    if missing:
+        raise _ng.NgspiceError(f"deck {task.index}: the raw file lacks the vectors "
+                               f"{', '.join(missing[:5])} (it holds "
+                               f"{', '.join(res.plot.names[:6])}); ngspice's output is not "
+                               f"this deck's")
     v = _ng.resample(res.plot, task.v_names, t_s, initial=v_raw0) * task.to_model_v
     if task.x_names:
         x = _ng.resample(res.plot, task.x_names, t_s,
@@ -281,6 +290,82 @@ def _n_hold(task: BatchTask) -> int:
     return int(math.floor(t_end / (task.noise_dt * task.time_scale) + 1e-9))
 
 
+# ------------------------------------------------------------------- result validation
+#: the velocity bound sits where the stationary density has fallen by e^-VALUE_LEVEL below
+#: its peak (Gaussian noise: sqrt(2 VALUE_LEVEL) = 45 standard deviations): no run of any
+#: length reaches it (P ~ e^-1000 per relaxation time).
+VALUE_LEVEL = 1000.0
+#: the held Gaussian noise (ngspice's trrandom): 40 standard deviations, never drawn
+#: (P ~ 1e-349 per sample).
+NOISE_SIGMAS = 40.0
+#: the circuit realises the model to within a few % (the bias budget of the mapping); a
+#: factor 2 on the model's bound is never reached by a working circuit.
+VALUE_SAFETY = 2.0
+
+
+def value_limits(mapping, v0, t_end: float) -> dict[str, float]:
+    """Largest |value| (model units) each array of a correct run of ``mapping`` can hold,
+    started at ``v0`` and run for ``t_end`` (the physical bound a result is checked against).
+
+    Friction of every family member only dissipates, so the deterministic motion keeps
+    ``|v| <= |v0| + tau_m |a|`` (the viscous term wins beyond ``tau_m |a|``) and, with a
+    spring, the energy ``v^2/2 + (spring x - a)^2/(2 spring)`` of the start.  The noise adds
+    at most its reach ``sqrt(2 VALUE_LEVEL tau_m/gamma)`` (Gaussian) and ``rate tau_m mean +
+    VALUE_LEVEL mean`` (shot), as in :func:`analogue.circuit.mapping.velocity_range`.  The
+    sum, times VALUE_SAFETY, bounds v; ``|x| <= v_max t_end`` (x is its integral, from 0; the
+    spring's position from x0); the held noise stays within NOISE_SIGMAS of its law."""
+    model = mapping.model_effective
+    v0_max = float(np.max(np.abs(np.asarray(v0, dtype=float)))) if np.size(v0) else 0.0
+    reach = v0_max + model.tau_m * abs(model.a) + model.tau_m * model.static_friction
+    if model.spring > 0:
+        reach += abs(model.spring * model.x0 - model.a) / math.sqrt(model.spring)
+    if math.isfinite(model.gamma):
+        reach += math.sqrt(2.0 * VALUE_LEVEL * model.tau_m / model.gamma)
+    if model.shot is not None:
+        reach += model.shot.rate * model.tau_m * model.shot.mean + VALUE_LEVEL * model.shot.mean
+    # a floor for a circuit that should sit still (no noise, no force, v0 = 0): its numerical
+    # noise, far below ngspice's voltage tolerance, in model units
+    v_max = VALUE_SAFETY * reach + 1e3 * mapping.vntol / mapping.kappa
+    out = {"v": v_max, "x": v_max * t_end}
+    if mapping.inductance > 0:
+        out["x_spring"] = abs(model.x0) + v_max * t_end
+    if mapping.noise_stddev > 0:
+        out["noise"] = NOISE_SIGMAS * mapping.noise_stddev
+    return out
+
+
+def _result_problem(task: BatchTask, out: object) -> str | None:
+    """Why ``out`` (what a worker returned for ``task``, or the arrays of a stored entry) is
+    not a result of the deck (one line), or None: a dict with every array the deck produces,
+    floating point, in the right shape, finite, and within the physical limits."""
+    if not isinstance(out, Mapping):
+        return f"it is {type(out).__name__!s}, not the dict of arrays a deck returns"
+    r, n_t = task.v0.shape[0], task.times.size
+    need = {"v": (r, n_t), "x": (r, n_t)}
+    if task.noise_names and task.noise_dt > 0:
+        need["noise"] = (r, _n_hold(task))
+    if task.xs_names:
+        need["x_spring"] = (r, n_t)
+    bounds = dict(task.limits)
+    for name, shape in need.items():
+        a = out.get(name)
+        if a is None:
+            return f"array {name!r} is missing"
+        if not isinstance(a, np.ndarray) or a.dtype.kind != "f":
+            return (f"array {name!r} is {type(a).__name__}"
+                    f"{' of ' + str(a.dtype) if isinstance(a, np.ndarray) else ''}, not floats")
+        if a.shape != shape:
+            return f"array {name!r} has shape {a.shape}, expected {shape}"
+        if not np.all(np.isfinite(a)):
+            return f"array {name!r} holds NaN or infinite values"
+        if name in bounds and a.size:
+            worst = float(np.max(np.abs(a)))
+            if worst > bounds[name]:
+                return (f"array {name!r} reaches |{name}| = {worst:.3g}, beyond the "
+                        f"{bounds[name]:.3g} the circuit can physically reach")
+    return None
+
+
 def _entry_problem(task: BatchTask, version: str, arrays: dict, meta: dict) -> str | None:
     """Why a stored entry is not the result of ``task`` (one line), or None: the deck it
     records must be the requested deck, on the same grid and ngspice, with every array this
@@ -289,17 +374,13 @@ def _entry_problem(task: BatchTask, version: str, arrays: dict, meta: dict) -> s
         return "it records another deck than the one requested"
     if meta.get("ngspice_version") != version or meta.get("schema_version") != SCHEMA_VERSION:
         return "it records another ngspice version or schema"
-    r, n_t = task.v0.shape[0], task.times.size
-    need = {"t": (n_t,), "v": (r, n_t), "x": (r, n_t)}
-    if task.noise_names and task.noise_dt > 0:
-        need["noise"] = (r, _n_hold(task))
-    if task.xs_names:
-        need["x_spring"] = (r, n_t)
-    for name, shape in need.items():
-        if name not in arrays:
-            return f"array {name!r} is missing"
-        if arrays[name].shape != shape:
-            return f"array {name!r} has shape {arrays[name].shape}, expected {shape}"
+    if "t" not in arrays:
+        return "array 't' is missing"
+    if arrays["t"].shape != task.times.shape:
+        return f"array 't' has shape {arrays['t'].shape}, expected {task.times.shape}"
+    problem = _result_problem(task, arrays)
+    if problem is not None:
+        return problem
     if not np.array_equal(arrays["t"], task.times):
         return "it was sampled on another time grid"
     return None
@@ -410,7 +491,8 @@ def run_decks(decks: Sequence[Deck], times: ArrayLike, v0: ArrayLike, *,
               store: str | PathLike[str] | bool | None = None, workers: int | None = None,
               scheduler: str | None = None, progress: bool | None = None,
               timeout: float = DEFAULT_TIMEOUT, records: dict[str, Any] | None = None,
-              label: str = "ngspice decks", executor: Any = None
+              label: str = "ngspice decks", executor: Any = None,
+              limits: Mapping[str, float] | None = None
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, dict[str, Any]]:
     """Run (or load from the store) a list of decks and stack their replicas.
 
@@ -422,7 +504,11 @@ def run_decks(decks: Sequence[Deck], times: ArrayLike, v0: ArrayLike, *,
     from the store).  ``records``: an optional dict, filled with ``"x_spring"`` (replicas, n_t)
     when the decks read the spring's position back from its inductor.  ``label`` names the
     run on its progress bar (or plain line).  ``scheduler`` / ``executor``: where the decks
-    run, as for :func:`simulate`.
+    run, as for :func:`simulate`.  ``limits``: the largest |value| (model units) each array
+    ("v", "x", "noise", "x_spring") of a correct run can hold (:func:`value_limits`).  Every
+    result, from ngspice here or from any executor, and every stored entry is checked (shape,
+    floats, finite, within ``limits``) before it is stored or returned: anything else is an
+    NgspiceError naming the deck, and nothing of it is stored.
     """
     times = np.asarray(times, dtype=float)
     v0 = np.asarray(v0, dtype=float)
@@ -453,7 +539,8 @@ def run_decks(decks: Sequence[Deck], times: ArrayLike, v0: ArrayLike, *,
                                to_model_noise=float(getattr(deck, "to_model_noise", 1.0)),
                                xs_names=tuple(vec["x_spring"]) if vec.get("x_spring") else None,
                                xs_initial=float(getattr(deck, "x_spring_initial", 0.0)),
-                               files=tuple(str(f) for f in getattr(deck, "noise_files", ()))))
+                               files=tuple(str(f) for f in getattr(deck, "noise_files", ())),
+                               limits=tuple(sorted((limits or {}).items()))))
         keys.append(batch_key(deck.text, times, version))
     note_keys(keys)  # an experiment's index (analogue store ls) lists every entry it used
     if offsets[-1] != len(v0):
@@ -503,6 +590,16 @@ def run_decks(decks: Sequence[Deck], times: ArrayLike, v0: ArrayLike, *,
                 for fut in cf.as_completed(futures):
                     task = futures[fut]
                     out = fut.result()
+                    problem = _result_problem(task, out)
+                    if problem is None and not isinstance(out.get("info"), Mapping):
+                        problem = "it carries no info dict"
+                    if problem is not None:
+                        # checked before it is stored or returned, whoever ran it
+                        who = {"local": "ngspice", "dask": "the Dask worker"}.get(
+                            where, f"the executor {where}")
+                        raise _ng.NgspiceError(f"deck {task.index}: what {who} returned is "
+                                               f"not a result of the deck ({problem}); nothing "
+                                               f"of it was stored")
                     results[task.index] = out
                     worker_version = out["info"].get("ngspice_version")
                     if run_store is not None and worker_version != version:
@@ -819,7 +916,8 @@ def simulate(model: Model, *, v0: float | ArrayLike | Literal["stationary"], t_e
     records: dict[str, Any] = {}
     v, x, noise, info = run_decks(decks, times, v0_arr, store=store, workers=workers,
                            scheduler=scheduler, progress=progress, timeout=timeout,
-                           records=records, label=label, executor=executor)
+                           records=records, label=label, executor=executor,
+                           limits=value_limits(mapping, v0_arr, t_end))
     meta = {
         "source": "circuit",
         "model": model.as_dict(),

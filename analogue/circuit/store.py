@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import hashlib
 import io
+import errno
 import json
 import logging
 import math
@@ -434,18 +435,48 @@ def _jsonable(obj):
     return repr(obj)
 
 
+def root_problem(root) -> str | None:
+    """Why ``root`` can never be a run store (one line), or None: it, or the nearest of its
+    parents that exists, is a symbolic link that is dangling or loops.  (Such a store took
+    every run and stored none of them, with one "not writable" warning per deck.)"""
+    p = Path(root).expanduser().absolute()
+    for q in (p, *p.parents):
+        if not os.path.lexists(q):
+            continue
+        if not q.is_symlink():
+            return None
+        try:
+            os.stat(q)
+            return None
+        except OSError as exc:
+            if exc.errno == errno.ELOOP:
+                what = "a symbolic link that loops"
+            else:
+                what = f"a symbolic link to {os.readlink(q)!r}, which does not exist"
+        where = "is" if q == p else f"lies below {str(q)!r}, which is"
+        return f"run store {str(p)!r} {where} {what}; point it at a directory"
+    return None
+
+
+def _checked(root) -> RunStore:
+    problem = root_problem(root)
+    if problem is not None:
+        raise ValueError(problem)
+    return RunStore(root)
+
+
 def open_store(store=None):
     """Resolve the ``store=`` argument: None -> default location, False -> None (disabled),
     a path -> that directory, a RunStore -> itself."""
     if store is False:
         return None
     if store is None or store is True:
-        return RunStore(default_store_path())
+        return _checked(default_store_path())
     if isinstance(store, RunStore):
         return store
     if isinstance(store, (str, os.PathLike)):
         if not str(store).strip():
             raise ValueError("store must be a directory path, not an empty string")
-        return RunStore(store)
+        return _checked(store)
     raise ArgumentTypeError(f"store must be a directory path, a RunStore, None (default "
                             f"location) or False (disabled), got {store!r}")
