@@ -141,6 +141,69 @@ class FlowTable:
         v = np.where(np.abs(v) <= 1e-300, 0.0, v)  # the +-1e-300 markers of the kink
         return v, dx
 
+    def _departs_from_kink(self, p: _Piece) -> bool:
+        return self.kink and (p.lo if p.direction > 0 else p.hi) == 0.0
+
+    def _arrival(self, side: float) -> _Piece | None:
+        """The piece on the side ``side`` of 0 whose flow reaches the kink (finite target)."""
+        for p in self.pieces:
+            if p.finite and p.target == 0.0 and math.copysign(1.0, p.lo + p.hi) == side:
+                return p
+        return None
+
+    def backward(self, v: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(u, valid)``: the velocities ``u`` that the flow takes to ``v`` in the durations
+        ``s >= 0`` (``v != 0``, inside :meth:`covers`).  Backwards each trajectory runs to its
+        source; where ``s`` is longer than the time from the source, ``valid`` is False: the
+        source is the end of the table (``u`` lies beyond it) or an unstable zero (``u``
+        within 1e-9 of the scale of it, where the flow has no speed).  A trajectory that
+        left the kink (slip regime) is continued backwards on the side it came from."""
+        v = np.asarray(v, dtype=float)
+        s = np.asarray(s, dtype=float)
+        v, s = np.broadcast_arrays(v, s)
+        u = np.full(v.shape, np.nan)
+        valid = np.zeros(v.shape, dtype=bool)
+        idx = self._piece_index(v)
+        for j in np.unique(idx):
+            sel = idx == j
+            p = self.pieces[int(j)]
+            t0 = p.time_of(v[sel]) - s[sel]
+            ok = t0 >= 0.0
+            uu = np.where(ok, p.V(np.maximum(t0, 0.0)), np.nan)
+            if self._departs_from_kink(p) and not self.sticks and (~ok).any():
+                q = self._arrival(-p.direction)
+                if q is not None:
+                    tq = q.t_end + t0  # t0 < 0: time left before leaving the kink
+                    more = ~ok & (tq >= 0.0)
+                    uu = np.where(more, q.V(np.maximum(tq, 0.0)), uu)
+                    ok = ok | more
+            u[sel], valid[sel] = uu, ok
+        return u, valid
+
+    def time_from_kink(self, v: np.ndarray) -> np.ndarray:
+        """Time since the flow left the kink, for ``v`` on a trajectory that left it (slip
+        regime, the side of a); inf elsewhere."""
+        v = np.asarray(v, dtype=float)
+        out = np.full(v.shape, math.inf)
+        if not self.kink or self.sticks:
+            return out
+        idx = self._piece_index(v)
+        for j in np.unique(idx):
+            p = self.pieces[int(j)]
+            if self._departs_from_kink(p):
+                sel = idx == j
+                out[sel] = p.time_of(v[sel])
+        return out
+
+    def time_to_kink(self, v0: float) -> float:
+        """Time for the flow from ``v0`` to reach the kink v = 0 (inf if it never does)."""
+        if not self.kink or v0 == 0.0:
+            return 0.0 if v0 == 0.0 else math.inf
+        p = self.pieces[int(self._piece_index(np.array([v0]))[0])]
+        if not (p.finite and p.target == 0.0):
+            return math.inf
+        return float(p.t_end - p.time_of(np.array([v0]))[0])
+
 
 def _zeros(model: Model, lo: float, hi: float) -> list[float]:
     """All zeros of the drift in (lo, hi) away from the kink, by a scan of 20001 points and
