@@ -48,8 +48,8 @@ def test_pure_shot_law_carries_the_moments(m):
 def test_pure_shot_law_against_the_ode_reduction():
     """One-sided kicks, |a| < Delta: p(v) = C e^{-v/mu} (1 + v/(b tau))^{rate tau - 1} on v > 0,
     rate P0 = b C (tests/unit/test_family_exact.py).  Measured: atom 3.0e-5 off (single grid
-    4.9e-3), cell averages 8e-5 of the peak (single grid 7.1e-3) but in the cell next to
-    v = 0 (3.5e-3)."""
+    4.9e-3), cell averages within 6.9e-5 of the peak, the cell next to v = 0 included (single
+    grid 7.1e-3)."""
     a, lam, mu, tau, d = 0.2, 2.0, 0.3, 1.0, 0.7
     b = d - a
     m = Model(tau, d, a, INF, shot=ShotNoise(lam, mu))
@@ -65,8 +65,7 @@ def test_pure_shot_law_against_the_ode_reduction():
     ref = np.array([integrate.quad(shape, v[i] - h / 2, v[i] + h / 2, epsabs=0,
                                    epsrel=1e-12)[0] for i in sel]) * c / h
     err = np.abs(dens[sel] - ref) / c
-    assert err[0] < 5e-3
-    assert err[1:].max() < 3e-4
+    assert err.max() < 2e-4
 
 
 def test_pure_shot_law_against_event_driven_monte_carlo():
