@@ -17,6 +17,7 @@ Run as a script (``python wrapped_ngspice.py MODE RAW``) it does the rewriting.
 from __future__ import annotations
 
 import os
+import shlex
 import shutil
 import stat
 import sys
@@ -38,7 +39,7 @@ def install(bindir: Path, mode: str, say: str = "") -> Path:
                    f'if [ "$1" = "-v" ]; then exec "{real}" -v; fi\n'
                    f'"{real}" "$@" || exit $?\n'
                    f'"{sys.executable}" "{Path(__file__).resolve()}" {mode} "$3" || exit 3\n'
-                   + (f"echo '{say}'\n" if say else "")
+                   + (f"printf '%s\\n' {shlex.quote(say)}\n" if say else "")
                    + "exit 0\n")
     exe.chmod(exe.stat().st_mode | stat.S_IXUSR | stat.S_IXGRP | stat.S_IXOTH)
     return exe

@@ -58,7 +58,10 @@ def run_board(design: BoardDesign, board: BoardInstance, *, v0, t_end: float, sa
                                       first_replica=first_replica + start, reltol=reltol,
                                       friction_kind=friction_kind, ota=ota, vendor=vendor))
     t0 = _time.perf_counter()
-    v, x, _, info = run_decks(decks, times, v0, store=store, workers=workers, progress=False)
+    # no op-amp output leaves its rails: a result beyond twice that is not this board's
+    v_max = 2.0 * board.rails * abs(design.to_model_v)
+    v, x, _, info = run_decks(decks, times, v0, store=store, workers=workers, progress=False,
+                              limits={"v": v_max, "x": v_max * t_end})
     meta = {"source": "board", "board": board.label, "seed": seed, "model": design.model.as_dict(),
             "realised": design.realised.as_dict(), "deck_sha256": [d.sha256 for d in decks],
             "wall_time": _time.perf_counter() - t0, "reltol": reltol, **info}

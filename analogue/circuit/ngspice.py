@@ -472,11 +472,18 @@ def check_deck(text: str) -> str:
 # reads names it relatively: the path survives whatever the directories are called.
 _FILE_REF = re.compile(r'(?<![A-Za-z0-9])((?:[A-Za-z]+_)?file\s*=\s*)"([^"]*)"', re.IGNORECASE)
 _LOCAL_NAME = re.compile(r"[a-z0-9_][a-z0-9_.+-]*")
-# What ngspice prints, often without failing, when a deck's file, model or source cannot be
-# loaded: any of these ends the run as an error (a deck never runs without its input).
-_LOAD_FAILED = re.compile(r"cannot open|can't open|could not open|unable to open|no such file|"
-                          r"can't find|cannot find|could not find|unable to find|"
-                          r"failed to load|could not load|cannot load", re.IGNORECASE)
+# What ngspice 39 prints, often without failing, when a deck's file, model, device or code
+# model cannot be loaded (its message strings): any of these ends the run as an error (a
+# deck never runs without its input).  Notes and warnings about ngspice's own init, log,
+# debug or display files (e.g. "Note: can't find the initialization file spinit.", "Can't
+# open X display") are not about the deck and are not matched.
+_LOAD_FAILED = re.compile(
+    r"(?:cannot|could not) open (?:library )?file (?!debug-out)|no such file|"
+    r"can't find model|could not find (?:a )?model|could not find a valid modelname|"
+    r"unable to find (?:definition of )?(?:given )?(?:t)?model|can't find device|"
+    r"could not find (?:include|library) file|cannot find (?:called )?subcircuit|"
+    r"unknown subckt|couldn't be loaded|failed to load|could not load|cannot load",
+    re.IGNORECASE)
 
 
 def _stage_files(text: str, files, work: Path) -> str:

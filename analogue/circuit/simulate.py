@@ -59,6 +59,7 @@ __all__ = [
     "run_decks",
     "simulate",
     "time_grid",
+    "value_limits",
 ]
 
 log = logging.getLogger(__name__)

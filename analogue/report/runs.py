@@ -169,14 +169,15 @@ class ExperimentRuns:
 
 def _noise_free_run(exp: Experiment, seed: int, kw: dict) -> Ensemble:
     """One replica per v0 on the user's circuit with the noise off (paper Fig. 1)."""
-    from ..circuit.simulate import run_decks, time_grid
+    from ..circuit.simulate import run_decks, time_grid, value_limits
     deck = exp.noise_free_deck(seed=seed)
     times = time_grid(deck.t_end, exp.sample_dt)
     v0 = np.asarray(exp.v0, dtype=float)
     run_kw: dict[str, Any] = {k: kw[k] for k in ("store", "workers", "scheduler", "executor",
                                                 "progress", "timeout") if k in kw}
-    v, x, _, info = run_decks([deck], times, v0, **run_kw)
     mapping = exp.noise_free_mapping()
+    v, x, _, info = run_decks([deck], times, v0, limits=value_limits(mapping, v0, deck.t_end),
+                              **run_kw)
     meta: dict[str, Any] = {"source": "circuit", "noise": "off", "model": exp.model.as_dict(),
             "model_effective": mapping.model_effective.as_dict(), "seed": seed,
             "deck_sha256": [deck.sha256], "t_end": deck.t_end, "sample_dt": exp.sample_dt,

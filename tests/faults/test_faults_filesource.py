@@ -96,6 +96,28 @@ def test_board_noise_under_a_directory_with_capitals_reaches_the_board(tmp_path)
     assert "Capital" not in deck.text and "capital" not in deck.text
 
 
+@pytest.mark.parametrize("said,refused", [
+    ("warning, can't find model 'dx' from line", True),
+    ("Error: Library /usr/lib/ngspice/analog.cm couldn't be loaded!", True),
+    ("Warning: Could not open file table.txt, altermod ignored", True),
+    # ngspice's own files, not the deck's: a run is not refused for them
+    ("Note: can't find the initialization file spinit.", False),
+    ("Warning: Cannot open file debug-out-mc.txt for saving debug info", False),
+    ("Warning: Can't open log file. Parameter checking skipped.", False),
+])
+def test_load_failure_messages_and_ngspice_chatter(said, refused, tmp_path, monkeypatch):
+    bindir = tmp_path / "bin"
+    wrapped_ngspice.install(bindir, "none", say=said)
+    monkeypatch.setenv("PATH", f"{bindir}{os.pathsep}{os.environ['PATH']}")
+    f = tmp_path / "dac_one.txt"
+    f.write_text("0 0\n1e-3 1\n2e-3 1\n")
+    if refused:
+        with pytest.raises(ng.NgspiceError, match="could not load"):
+            ng.run_deck(_filesource_deck("dac_one.txt"), t_stop=2e-3, files=[f])
+    else:
+        assert ng.run_deck(_filesource_deck("dac_one.txt"), t_stop=2e-3, files=[f]).plot.n_points
+
+
 @pytest.mark.slow
 def test_board_quick_under_a_directory_with_capitals(tmp_path, monkeypatch):
     """The README's main command's first step with the store and --out under capitals."""

@@ -139,3 +139,35 @@ def test_a_poisoned_entry_already_in_the_store_is_never_returned(tmp_path, refer
     ens = analogue.simulate(STICK_A02, store=root, **KW)
     assert ens.meta["ran"] == 2 and _same(ens.v, reference.v)
     assert len(RunStore(root).quarantined()) == 2
+
+
+# --------------------------------------------- the routes that run decks without simulate()
+def test_the_reports_noise_free_run_refuses_huge_values(tmp_path, monkeypatch):
+    """Paper Fig. 1's noise-free run (report.runs._noise_free_run) goes through run_decks
+    directly: it gets the same physical limits."""
+    from analogue.circuit.experiments import load_experiment
+    from analogue.report.runs import _noise_free_run
+    exp = load_experiment("stick")
+    bindir = tmp_path / "bin"
+    wrapped_ngspice.install(bindir, "huge")
+    monkeypatch.setenv("PATH", f"{bindir}{os.pathsep}{os.environ['PATH']}")
+    root = tmp_path / "store"
+    with pytest.raises(ng.NgspiceError, match="physically reach"):
+        _noise_free_run(exp, 1, {"store": root, "workers": 1, "progress": False})
+    assert RunStore(root).keys() == []
+
+
+def test_a_board_run_refuses_values_beyond_its_rails(tmp_path, monkeypatch):
+    from analogue import Model
+    from analogue.board.design import design_board
+    from analogue.board.netlist import nominal_instance
+    from analogue.board.runner import run_board
+    design = design_board(Model(tau_m=1.0, delta=0.7, a=0.2, gamma=10.0), v0=[2.0, -2.0])
+    bindir = tmp_path / "bin"
+    wrapped_ngspice.install(bindir, "huge")
+    monkeypatch.setenv("PATH", f"{bindir}{os.pathsep}{os.environ['PATH']}")
+    root = tmp_path / "store"
+    with pytest.raises(ng.NgspiceError, match="physically reach"):
+        run_board(design, nominal_instance(design), v0=[0.0], t_end=0.5, sample_dt=0.01,
+                  seed=1, store=root, workers=1)
+    assert RunStore(root).keys() == []
