@@ -16,6 +16,12 @@ __version__ = "0.1.0"
 _SUBMODULES = ("theory", "estimators", "montecarlo", "circuit", "report", "plots")
 
 
+def __dir__():
+    """The module's names with the lazily loaded ones (``simulate``, ``open_ensemble``,
+    ``load_runs`` and the subpackages), which :func:`__getattr__` imports on first use."""
+    return sorted(set(globals()) | set(__all__) | set(_SUBMODULES))
+
+
 def __getattr__(name):
     # The circuit runner pulls in PySpice and friends; import it only when asked for.
     if name == "simulate":

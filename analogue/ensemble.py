@@ -12,6 +12,20 @@ import numpy as np
 
 __all__ = ["Ensemble"]
 
+# provenance keys shown by Ensemble.__repr__ (when present), in this order
+_REPR_META = ("source", "seed", "scheme", "noise_dt", "ngspice_version")
+
+
+def _short(value) -> str:
+    """A provenance value in a few characters (numbers with %g, long texts cut)."""
+    if isinstance(value, float):
+        return f"{value:g}"
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{k}={_short(v)}" for k, v in list(value.items())[:3]) + \
+            (", ...}" if len(value) > 3 else "}")
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
 
 @dataclass(frozen=True)
 class Ensemble:
@@ -75,6 +89,26 @@ class Ensemble:
                 raise ValueError(f"Ensemble.noise must have shape (replicas, n_hold) = "
                                  f"({v.shape[0]}, n), got {z.shape}")
             object.__setattr__(self, "noise", z)
+
+    def __repr__(self) -> str:
+        """One line: shape, time range, model and a few provenance keys.  The dataclass's own
+        repr printed every array (about 15 kB for a small circuit run, issue 20 item 6)."""
+        meta = self.meta
+        t = (f"t=[{self.t[0]:g}, {self.t[-1]:g}] dt={self.dt:g}" if self.t.size > 1
+             else f"t=[{self.t[0]:g}]" if self.t.size else "t=[]")
+        parts = [f"replicas={self.replicas}", f"n_t={self.t.size}", t]
+        model = meta.get("model")
+        if isinstance(model, dict):
+            keys = [k for k in ("tau_m", "delta", "a", "gamma") if k in model]
+            keys += [k for k in ("cubic", "spring", "stribeck", "shot") if model.get(k)]
+            parts.append("model(" + ", ".join(f"{k}={_short(model[k])}" for k in keys) + ")")
+        parts += [f"{k}={_short(meta[k])}" for k in _REPR_META if k in meta]
+        if self.noise is not None:
+            parts.append(f"noise={self.noise.shape}")
+        hidden = len(set(meta) - set(_REPR_META) - {"model"})
+        if hidden:
+            parts.append(f"+{hidden} meta keys")
+        return "Ensemble(" + ", ".join(parts) + ")"
 
     @property
     def replicas(self) -> int:
