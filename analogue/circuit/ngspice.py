@@ -184,8 +184,12 @@ def _kill_tree(proc) -> None:
 
 
 def _spawn(argv, cwd, stdout, stderr):
+    # ngspice 39 dereferences $HOME while looking for ~/.spiceinit: unset, it dies of SIGSEGV
+    # (measured, exit 139; an empty HOME is fine).  Without one it gets its own working
+    # directory, where no .spiceinit lies.
+    env = None if "HOME" in os.environ else {**os.environ, "HOME": str(cwd)}
     return subprocess.Popen(argv, cwd=cwd, stdin=subprocess.DEVNULL, stdout=stdout,
-                            stderr=stderr, start_new_session=True)
+                            stderr=stderr, start_new_session=True, env=env)
 
 
 def _wait(proc, timeout: float) -> int:

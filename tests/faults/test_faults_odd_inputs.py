@@ -109,3 +109,15 @@ def test_open_ensemble_names_the_file_and_the_attribute(meta, tmp_path):
     msg = str(err.value)
     assert str(path) in msg and META_ATTR in msg and "\n" not in msg
     assert os.path.exists(path)
+
+
+# ---------------------------------------------------------------------------- HOME unset
+@pytest.mark.requires_ngspice
+def test_ngspice_runs_without_home(monkeypatch):
+    """ngspice 39 segfaults (SIGSEGV, exit 139) when HOME is unset (measured); the runner
+    gives it one."""
+    from analogue.circuit import ngspice as ng
+    monkeypatch.delenv("HOME", raising=False)
+    deck = "rc\nC1 a 0 1e-6\nR1 a 0 1e3\n.ic v(a)=1\n.tran 1e-5 1e-3 0 1e-5 uic\n.save v(a)\n.end\n"
+    res = ng.run_deck(deck, t_stop=1e-3)
+    assert res.plot["v(a)"][-1] == pytest.approx(np.exp(-1.0), rel=1e-3)
