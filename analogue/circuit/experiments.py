@@ -304,12 +304,64 @@ def _grid(t_end: float, sample_dt: float, what: str, where: str) -> None:
                          f"{t_end / sample_dt:.6g})")
 
 
+def _prehistory_targets(report: ReportSettings, v0s: tuple, where: str) -> tuple:
+    """``report.prehistory`` as ``(v0, v, t)`` triples: a pair ``[v, t]`` starts from
+    ``experiment.v0[0]``.  A pair whose first number is itself one of experiment.v0 is refused:
+    it reads as well as ``[v0, v]`` with the time left out (``[2.0, 0.2]`` in the stick
+    experiment was taken as "v0 = 2 to v = 2 at t = 0.2" without a word, issue 20 item 2)."""
+    out = []
+    for p in report.prehistory:
+        if len(p) == 2:
+            if any(math.isclose(p[0], u, rel_tol=1e-12, abs_tol=1e-12) for u in v0s):
+                raise ValueError(
+                    f"{where}: report.prehistory entry {list(p)} is ambiguous: a pair is read "
+                    f"as [v, t] from experiment.v0[0] = {v0s[0]:g} (target v = {p[0]:g} at "
+                    f"t = {p[1]:g}), but {p[0]:g} is also one of experiment.v0 = {list(v0s)}; "
+                    f"write the three numbers [v0, v, t], e.g. [{v0s[0]:g}, {p[0]:g}, {p[1]:g}]")
+            p = (v0s[0],) + tuple(p)
+        out.append(tuple(p))
+    return tuple(out)
+
+
+def _check_figures(exp: Experiment, where: str) -> None:
+    """What the paper's figures of this experiment draw, computed from its model when the
+    file is loaded (closed forms, ~10 ms per target), so that a figure that cannot be drawn
+    is refused here, with the key to change, not after the circuit has run (issue 20 item 1:
+    Fig. 5's example time was a constant before the stick time of a user's model).  Family
+    members draw their own figures (analogue.report.family_figures) from exact numerics."""
+    m = exp.model
+    if not m.is_paper:
+        return
+    from ..plots.paper_theory import fig5_layout
+    from ..theory import weak_noise
+    if m.regime == "stick":
+        v0s = exp.v0[:2] if len(exp.v0) > 1 else (exp.v0[0], -exp.v0[0])
+        for v0 in v0s:
+            try:
+                fig5_layout(m, v0)
+            except (ValueError, ArithmeticError) as exc:
+                raise ValueError(f"{where}: paper Fig. 5 (boundaries) from v0 = {v0:g} cannot be "
+                                 f"drawn for this model ({exc}): change experiment.v0 or the "
+                                 f"[model] values") from None
+    for v0, v, t in exp.report.prehistory:
+        try:
+            weak_noise.optimal_path(m, v, t, v0, n=64)
+        except (ValueError, ArithmeticError) as exc:
+            raise ValueError(f"{where}: report.prehistory entry [{v0:g}, {v:g}, {t:g}]: the "
+                             f"optimal path to it cannot be computed ({exc}): choose another "
+                             f"target") from None
+    if exp.report.work_paths and m.a == 0:
+        raise ValueError(f"{where}: report.work_paths {[list(p) for p in exp.report.work_paths]} "
+                         f"needs a force: with model.a = 0 the work W = F x is zero; remove "
+                         f"report.work_paths or set model.a != 0")
+
+
 def _check_plan(exp: Experiment, where: str) -> None:
     """Cross-references and everything the runs will build, before anything runs."""
     st_full, st_quick = exp.report.variants()
     v0s = exp.v0
     for p in exp.report.prehistory:
-        v0, t = (p[0] if len(p) == 3 else v0s[0]), p[-1]
+        v0, t = p[0], p[-1]
         if not any(math.isclose(v0, u, rel_tol=1e-12, abs_tol=1e-12) for u in v0s):
             raise ValueError(f"{where}: report.prehistory entry {list(p)} starts from v0={v0:g}, "
                              f"which is not one of experiment.v0={list(v0s)}")
@@ -418,12 +470,14 @@ def experiment_from_dict(data: dict, where: str = "experiment", source: Path | N
     netlist_replicas = checks.integer(f"{where}: netlist.replicas", ndata.get("replicas", 4), minimum=1, maximum=64)
 
     report = report_settings_from_dict(data.get("report"), where)
+    report = dataclasses.replace(report, prehistory=_prehistory_targets(report, v0, where))
 
     exp = Experiment(name=name, description=description, model=model, spec=spec, v0=v0,
                      replicas=replicas, t_end=t_end, sample_dt=sample_dt, seed=seed,
                      burn_in=burn_in, histogram_times=times, work_taus=taus,
                      netlist_replicas=netlist_replicas, source=source, report=report)
     _check_plan(exp, where)
+    _check_figures(exp, where)
     return exp
 
 

@@ -15,7 +15,7 @@ from .work import (WorkDistribution, FluctuationRatio, RateFunctionEstimate, Lin
                    empirical_rate_function)
 from .stick import StickStatistics, stick_statistics, stick_fraction_theory
 from .transport import TransportEstimate, transport
-from .prehistory import Prehistory, prehistory, stationary_prehistory
+from .prehistory import Prehistory, prehistory, prehistory_count, stationary_prehistory
 
 __all__ = [
     "wilson_interval", "clopper_pearson_interval", "student_interval",
@@ -26,5 +26,5 @@ __all__ = [
     "work_rate_samples", "work_distribution", "fluctuation_ratio", "empirical_rate_function",
     "StickStatistics", "stick_statistics", "stick_fraction_theory",
     "TransportEstimate", "transport",
-    "Prehistory", "prehistory", "stationary_prehistory",
+    "Prehistory", "prehistory", "prehistory_count", "stationary_prehistory",
 ]

@@ -21,7 +21,7 @@ from .. import checks
 from ..ensemble import Ensemble
 from . import _checks
 
-__all__ = ["Prehistory", "prehistory", "stationary_prehistory"]
+__all__ = ["Prehistory", "prehistory", "prehistory_count", "stationary_prehistory"]
 
 _MAX_SEGMENT_VALUES = 50_000_000  # path samples gathered at once (400 MB of float64)
 
@@ -92,6 +92,18 @@ def _summarise(paths: np.ndarray, t: np.ndarray, dt: float, q: tuple[float, floa
         hist = hist / (per_column[:, None] * np.diff(v_edges)[None, :])
     return dict(mean=mean, median=median, lower=lower, upper=upper, hist=hist,
                 hist_t_edges=t_edges, hist_v_edges=v_edges)
+
+
+def prehistory_count(ensemble: Ensemble, v_target: float, t_target: float,
+                     window: float) -> int:
+    """How many replicas have ``|v(t_target) - v_target| < window`` (``t_target`` snapped to
+    the nearest grid time): the paths :func:`prehistory` summarises, 0 included (where
+    :func:`prehistory` raises), so that a report can say what it found for every target."""
+    ens = _checks.ensemble(ensemble)
+    vt = checks.finite("v_target", v_target)
+    win = checks.positive("window", window)
+    i = _checks.time_index(ens, "t_target", t_target)
+    return int(np.count_nonzero(np.abs(ens.v[:, i] - vt) < win))
 
 
 def prehistory(ensemble: Ensemble, v_target: float, t_target: float, window: float,

@@ -20,7 +20,7 @@ from ..model import Model
 from .style import KIND_COLOURS, TIME, VELOCITY, new_figure, save
 
 __all__ = ["fig1_deterministic", "fig2_paths_stick", "fig3_paths_slip_up", "fig4_paths_slip_down",
-           "fig5_boundaries", "fig6_propagator", "fig7_work_paths", "fig8_rate_function",
+           "fig5_boundaries", "fig5_layout", "fig6_propagator", "fig7_work_paths", "fig8_rate_function",
            "fig9_fluctuation_relation", "draw_all", "main"]
 
 _GAMMA = 10.0  # gamma never enters the weak-noise paths; Model needs a value
@@ -129,30 +129,75 @@ def fig4_paths_slip_down(axes=None, tau_m=1.0, delta=0.7, a=1.2, points=FIG4_POI
 
 
 # ------------------------------------------------------------------------- Fig. 5
-def fig5_boundaries(axes=None, tau_m=1.0, delta=0.7, a=0.2, v0s=(2.0, -2.0), t_max=4.0,
-                    t_end=3.0, margin=0.8):
+# Fig. 5's times, in relaxation times tau_m after the stick time t_a(v0) of the panel: the
+# boundaries w, u open at t_a and then grow like e^{(t - t_a)/tau_m}, so the example paths
+# sit at t_a + 1.4 tau_m and the panel ends at t_a + 2.4 tau_m (3.0 and 4.0 for the paper's
+# panel (a): tau_m = 1, t_a+ = ln 5).  The example paths end |v0| * 0.4 beyond the stick band
+# (0.8 for the paper's v0 = 2).  Fixed times (t = 3) failed for a user's model whose t_a is
+# later (tau_m = 2, Delta = 0.5, a = 0.3: t_a+ = 2 ln 6 = 3.58; issue 20 item 1).
+FIG5_EXAMPLE_TAUS = 1.4
+FIG5_END_TAUS = 2.4
+FIG5_MARGIN = 0.4
+
+
+def fig5_layout(model: Model, v0: float) -> dict:
+    """What a Fig. 5 panel from ``v0`` draws, from the model alone: ``t_a`` (the stick time,
+    where the boundaries start), ``t_example`` (where the example paths end), ``t_max`` (the
+    panel's end), ``margin`` (how far beyond the stick band the direct examples end) and
+    ``v_lim`` (the velocity axis, symmetric, holding v0 and every example end).  Raises
+    ValueError outside the stick regime (no boundaries: :func:`weak_noise.boundaries`)."""
+    from ..theory import weak_noise
+    if not abs(model.a) <= model.delta:
+        raise ValueError(f"Fig. 5 needs the stick regime |a| <= Delta (boundaries w, u exist "
+                         f"only there), got a={model.a:g}, Delta={model.delta:g}")
+    t_a = float(model.stick_time(v0))
+    t_example = t_a + FIG5_EXAMPLE_TAUS * model.tau_m
+    t_max = t_a + FIG5_END_TAUS * model.tau_m
+    if v0 != 0:
+        margin = FIG5_MARGIN * abs(v0)
+    else:  # from rest: the band's own width sets the scale
+        b = weak_noise.boundaries(model, t_example, v0)
+        margin = FIG5_MARGIN * abs(float(b["w"]) - float(b["u"]))
+    ends = weak_noise.boundary_examples(model, t_example, v0, margin)
+    v_lim = 1.15 * max([abs(v0)] + [abs(x) for x in ends.values()])
+    return {"t_a": t_a, "t_example": t_example, "t_max": t_max, "margin": margin,
+            "v_lim": v_lim, "examples": ends}
+
+
+def fig5_boundaries(axes=None, tau_m=1.0, delta=0.7, a=0.2, v0s=(2.0, -2.0), t_max=None,
+                    t_end=None, margin=None):
     """Fig. 5: boundary lines w^pm (eq. (41)) and u^pm (eq. (45)) for a < Delta; between them the
     optimal path sticks (indirect / indirect crossing), outside it slips.  Example paths to
-    final velocities above, between and below the boundaries at t = t_end are overlaid."""
+    final velocities above, between and below the boundaries at t = t_end are overlaid.
+    ``t_max``, ``t_end``, ``margin``: None derives each panel's from its model and v0
+    (:func:`fig5_layout`); a value given is used for every panel."""
     from ..theory import weak_noise
 
     axes = _axes(axes, 1, len(v0s))
     m = _model(tau_m, delta, a)
     for ax, v0, tag in zip(axes, v0s, "ab"):
-        t = np.linspace(1e-3, t_max, 800)
+        lay = fig5_layout(m, v0)
+        t_hi = lay["t_max"] if t_max is None else t_max
+        t_ex = lay["t_example"] if t_end is None else t_end
+        t = np.linspace(1e-3, t_hi, 800)
         b = weak_noise.boundaries(m, t, v0)
         ax.plot(t, b["w"], "k--", lw=1.3, label="w (indirect/direct)")
         ax.plot(t, b["u"], "k-.", lw=1.3, label="u (indirect crossing/direct crossing)")
-        t_a = m.stick_time(v0)
+        t_a = lay["t_a"]
         ax.axvline(t_a, color="0.5", ls=":", lw=1)
         ax.annotate("$t_a$", (t_a, 1.0), xycoords=("data", "axes fraction"), ha="center",
                     va="bottom", fontsize=8)
         # one path of each kind around the boundaries (the caption's green path: u/2)
-        for v_end in weak_noise.boundary_examples(m, t_end, v0, margin).values():
-            p = weak_noise.optimal_path(m, v_end, t_end, v0, n=600)
+        ends = (lay["examples"] if t_end is None and margin is None else
+                weak_noise.boundary_examples(m, t_ex, v0, lay["margin"] if margin is None
+                                             else margin))
+        v_lim = 1.15 * max([abs(v0)] + [abs(x) for x in ends.values()])
+        for v_end in ends.values():
+            p = weak_noise.optimal_path(m, v_end, t_ex, v0, n=600)
             ax.plot(p.s, p.v, color=KIND_COLOURS.get(p.kind, "k"), lw=1.8, label=f"{p.kind} path")
         _zero_line(ax)
-        ax.set_ylim(-3.5, 3.5)
+        ax.set_xlim(0.0, t_hi)
+        ax.set_ylim(-v_lim, v_lim)
         ax.set_title(f"Fig. 5({tag}): boundaries, $\\tau_m$={tau_m:g}, $\\Delta$={delta:g}, "
                      f"a={a:g}, $v_0$={v0:g}", fontsize=10, pad=14)
         ax.set_xlabel(TIME)

@@ -9,13 +9,16 @@ I(w) is drawn with one convention at w = 0 everywhere: the Filippov value
 """
 from __future__ import annotations
 
+import logging
 import math
 from pathlib import Path
 
 import numpy as np
 
-from ..estimators import empirical_rate_function, fluctuation_ratio, prehistory, transition_density
+from ..estimators import (empirical_rate_function, fluctuation_ratio, prehistory,
+                          prehistory_count, transition_density)
 from ..model import Model
+from ..plots.paper_theory import FIG5_EXAMPLE_TAUS
 from ..plots.style import KIND_COLOURS, TIME, VELOCITY, new_figure, save
 from .comparisons import ExperimentAnalysis
 from .runs import ExperimentRuns
@@ -24,6 +27,9 @@ from .theory_curves import ExperimentTheory, FigureCurves, propagator_times
 __all__ = ["fig_deterministic", "fig_prehistory", "fig_propagator", "fig_stationary",
            "fig_work_paths", "fig_rate_function", "fig_budget",
            "fig_boundaries"]
+
+# the report's progress logger's family: the command line shows it on stderr (analogue.cli)
+_log = logging.getLogger("analogue.report.figures")
 
 CIRCUIT = "tab:red"
 EXACT = "k"
@@ -85,25 +91,29 @@ def _theory(analysis: ExperimentAnalysis) -> ExperimentTheory:
 # ------------------------------------------------------------------------- Figs. 2-5
 def fig_prehistory(analysis: ExperimentAnalysis, out: Path, tag: str):
     """Optimal paths (eqs. (16) ... (36)) against the circuit's prehistory: the paths of
-    the transition run from v0[0] that end in a window around (v, t)."""
+    the transition run from v0 that end in a window around (v, t).  Every target is named in
+    the caption and the log with the number of circuit paths found, 0 included (an empty
+    panel used to be left out of the caption without a word, issue 20 item 2)."""
     runs = analysis.runs
     paths = _curves(analysis).get("prehistory")
     if not paths:
         return None
+    window = runs.settings.prehistory_window
     n = len(paths)
     ncols = 2 if n == 4 else min(n, 3)
     nrows = -(-n // ncols)
     fig, axes = new_figure(nrows, ncols, squeeze=False)
-    lines = []
+    lines, empty = [], []
     for ax, ((v0, v, t), p) in zip(axes.ravel(), paths):
         ens = runs.transition[v0]
         colour = KIND_COLOURS.get(p.kind, "k")
-        try:
-            ph = prehistory(ens, v, t, runs.settings.prehistory_window, v_bins=60,
-                            lookback=t)
-        except ValueError:
-            ph = None
-        if ph is not None:
+        count = prehistory_count(ens, v, t, window)
+        what = (f"v0={v0:g} to (v={v:g}, t={t:g}): {p.kind}, {count} of {ens.replicas} "
+                "circuit paths")
+        lines.append(what)
+        _log.info("%s: prehistory %s", runs.exp.name, what)
+        if count:
+            ph = prehistory(ens, v, t, window, v_bins=60, lookback=t)
             ext = [ph.hist_t_edges[0], ph.hist_t_edges[-1], ph.hist_v_edges[0], ph.hist_v_edges[-1]]
             ax.imshow(np.nan_to_num(ph.hist).T, origin="lower", aspect="auto", extent=ext,
                       cmap="Greys", alpha=0.6)
@@ -111,7 +121,11 @@ def fig_prehistory(analysis: ExperimentAnalysis, out: Path, tag: str):
             ax.fill_between(ph.t, ph.lower, ph.upper, color="0.55", alpha=0.25,
                             label="circuit 10-90 %")
             ax.plot(ph.t, ph.mean, color="0.15", lw=1.3, label=f"circuit mean ({ph.count} paths)")
-            lines.append(f"v0={v0:g} to (v={v:g}, t={t:g}): {p.kind}, {ph.count} circuit paths")
+        else:
+            empty.append(f"v={v:g}, t={t:g}")
+            ax.annotate(f"no circuit path ends within ±{window:g}\nof v={v:g} at t={t:g} "
+                        f"(of {ens.replicas})", (0.5, 0.9), xycoords="axes fraction",
+                        ha="center", va="top", fontsize=8, color="0.3")
         ax.plot(p.s, p.v, color=colour, lw=2.2, label=f"optimal path: {p.kind}")
         ax.plot([t], [v], "s", color=colour, ms=5)
         ax.axhline(0, color="0.6", lw=0.7)
@@ -123,17 +137,25 @@ def fig_prehistory(analysis: ExperimentAnalysis, out: Path, tag: str):
         ax.set_visible(False)
     fig.suptitle(f"Optimal paths and circuit prehistory — {_title(runs)}", fontsize=10)
     path = save(fig, out / f"fig_{tag}_prehistory_{runs.exp.name}.png")
-    return path, ("Optimal paths (paper Figs. 2-4: direct, crossing, indirect and twice-crossing "
-                  "kinds from eqs. (22)-(36)) against the prehistory of the circuit (Dykman et al. "
-                  "1992): all circuit paths from v0 that end within "
-                  f"±{runs.settings.prehistory_window:g} of the target; dark grey: their mean, "
-                  "light grey: 10-90 % band. At this finite noise the prehistory is broad; "
-                  "the optimal path is its gamma -> infinity limit. " + "; ".join(lines))
+    caption = ("Optimal paths (paper Figs. 2-4: direct, crossing, indirect and twice-crossing "
+               "kinds from eqs. (22)-(36)) against the prehistory of the circuit (Dykman et al. "
+               "1992): all circuit paths from v0 that end within "
+               f"±{window:g} of the target; dark grey: their mean, "
+               "light grey: 10-90 % band. At this finite noise the prehistory is broad; "
+               "the optimal path is its gamma -> infinity limit. " + "; ".join(lines) + ".")
+    if empty:
+        caption += (f" No circuit path reached {' or '.join(empty)}: the target lies where "
+                    "f(v, t | v0) is too small for this run's replicas; widen "
+                    "report.prehistory_window, run more experiment.replicas, or choose a "
+                    "target nearer the bulk of the transition density (Fig. 6).")
+    return path, caption
 
 
 def fig_boundaries(runs: ExperimentRuns, out: Path):
-    """Paper Fig. 5: boundary lines w, u (eqs. (41), (45)) with circuit prehistory means."""
-    from ..plots.paper_theory import fig5_boundaries
+    """Paper Fig. 5: boundary lines w, u (eqs. (41), (45)) and one optimal path of each kind
+    around them (theory only).  Every time and range comes from the experiment's model and
+    v0 (:func:`analogue.plots.paper_theory.fig5_layout`); the stick regime only."""
+    from ..plots.paper_theory import fig5_boundaries, fig5_layout
     m = runs.exp.model
     if m.regime != "stick":
         return None
@@ -141,13 +163,16 @@ def fig_boundaries(runs: ExperimentRuns, out: Path):
     v0s = tuple(v for v in runs.exp.v0[:2])
     if len(v0s) < 2:
         v0s = (v0s[0], -v0s[0])
-    fig5_boundaries(axes.ravel(), tau_m=m.tau_m, delta=m.delta, a=m.a, v0s=v0s,
-                    t_max=min(runs.exp.t_end, 4.0))
+    fig5_boundaries(axes.ravel(), tau_m=m.tau_m, delta=m.delta, a=m.a, v0s=v0s)
     fig.suptitle(f"Fig. 5: boundaries between path kinds — {_title(runs)}", fontsize=10)
     path = save(fig, out / f"fig5_boundaries_{runs.exp.name}.png")
+    lays = [fig5_layout(m, v0) for v0 in v0s]
+    when = "; ".join(f"v0 = {v0:g}: t_a = {lay['t_a']:.3g}, example paths end at t = "
+                     f"{lay['t_example']:.3g}" for v0, lay in zip(v0s, lays))
     return path, ("Boundary lines between direct and indirect optimal paths (paper Fig. 5, "
-                  "eqs. (41) and (45), upper sign for v0 > 0); each checked in the tests by the "
-                  "continuity of the minimal action across it.")
+                  "eqs. (41) and (45), upper sign for v0 > 0), from the stick time t_a on; "
+                  f"example paths {FIG5_EXAMPLE_TAUS:g} tau_m after t_a ({when}). Each boundary "
+                  "is checked in the tests by the continuity of the minimal action across it.")
 
 
 # ------------------------------------------------------------------------------ Fig. 6

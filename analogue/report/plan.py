@@ -75,6 +75,12 @@ class RunOptions:
         return min(int(replicas), max(MIN_QUICK_REPLICAS, int(replicas) // QUICK_DIVISOR))
 
 
+# what the numbers of a list entry mean (in the message that refuses a malformed one)
+_MEANING = {"prehistory": "[v0, v, t]: paths from v0 (one of experiment.v0) reaching v at t; "
+                          "[v, t]: from experiment.v0[0]",
+            "work_paths": "[w, tau]: work rate w over windows tau"}
+
+
 @dataclass(frozen=True)
 class ReportSettings:
     stationary_replicas: int = 128
@@ -108,7 +114,13 @@ class ReportSettings:
                         and math.isfinite(x) for x in p) for p in items)
             if not ok:
                 shape = " or ".join(f"[{', '.join(['number'] * k)}]" for k in sizes)
-                raise ValueError(f"report.{name} must be a list of {shape} entries")
+                bad = next((p for p in items if not (
+                    isinstance(p, (list, tuple)) and len(p) in sizes
+                    and all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                            and math.isfinite(x) for x in p))), items) \
+                    if isinstance(items, (list, tuple)) else items
+                raise ValueError(f"report.{name} must be a list of {shape} entries "
+                                 f"({_MEANING[name]}), got {bad!r}")
             object.__setattr__(self, name, tuple(tuple(float(x) for x in p) for p in items))
         for p in self.prehistory:
             if p[-1] <= 0:
