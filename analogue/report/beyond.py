@@ -604,30 +604,68 @@ def _prov(exp: Experiment, ens: Ensemble, sizes: MemberSizes, seeds: dict) -> di
 # ------------------------------------------------------------------------------ chapter
 CHAPTER_TITLE = "Beyond the paper"
 
-_PHYSICS = {
-    "shot": ("Shot noise instead of vibrations: the plate kicks the object at random times "
-             "(Poisson, exponential jumps) and does nothing in between. Between kicks the object "
-             "follows the deterministic dry-friction flow, which in the stick regime reaches "
-             "v = 0 in a finite time: the object sticks until the next kick. The stationary law "
-             "therefore has an atom at v = 0 - a finite probability of being exactly at rest, "
-             "which Gaussian noise (a density everywhere) never gives."),
-    "spring": ("A linear spring on the object turns the steady slide into stick-slip "
-               "oscillations: released from x0 the object swings back, Coulomb friction takes "
-               "2 Delta/spring off the amplitude every half period, and it sticks once "
-               "|spring x - a| < Delta; the noise unsticks it again. The state (x, v) is "
-               "two-dimensional, so the reference is the Monte Carlo, and the stationary "
-               "identities <v> = 0 and spring <x> = a - <Delta(v) sgn v> - cubic <v^3> are "
-               "checked on the circuit."),
-    "stribeck": ("Velocity weakening (the Stribeck curve): the friction drops from its static "
-                 "value delta_s to the kinetic Delta over the speed v_s. Between Delta and "
-                 "delta_s both sticking and sliding are stable without noise, and the "
-                 "stationary law exp(-gamma U) becomes bimodal: a cusp at v = 0 and a peak at "
-                 "the sliding velocity, instead of the paper's single peak at the same Delta."),
-    "cubic": ("A cubic viscous term (lubricated or hydrodynamic friction) confines fast "
-              "velocities: the potential gains cubic v^4/4, the slide slows and the stationary "
-              "law's fast tail is cut, so the variance shrinks against the paper's law at the "
-              "same Delta."),
-}
+def _num(x: float) -> str:
+    return f"{x:.4g}"
+
+
+def _member_kind(m: Model) -> str:
+    """Which extension a member's text describes (the spring first: a spring member has the
+    spring's analysis, Monte Carlo reference and no exact P(v = 0), whatever its noise)."""
+    return ("spring" if m.spring > 0 else "shot" if m.shot is not None
+            else "stribeck" if m.stribeck is not None else "cubic")
+
+
+def physics_text(m: Model) -> str:
+    """What the member's extension changes, with the member's own numbers and only the
+    claims that hold for them (issue 20 item 3: a shot member with rate 2.5 and mean 0.35
+    read the shipped file's "rate 1, mean 0.5"; an atom at v = 0 was claimed in the slip
+    regime too)."""
+    kind = _member_kind(m)
+    stuck_free = abs(m.a) < m.static_friction
+    if kind == "shot":
+        assert m.shot is not None
+        side = ("two-sided: up or down with probability 1/2" if m.shot.two_sided
+                else "one-sided: every kick pushes up")
+        text = (f"Shot noise instead of vibrations: the plate kicks the object at random times "
+                f"(Poisson, rate {_num(m.shot.rate)} per unit time; exponentially distributed "
+                f"velocity jumps of mean {_num(m.shot.mean)}, {side}) and does nothing in "
+                "between. Between kicks the object follows the deterministic dry-friction flow")
+        if stuck_free:
+            text += (f", which here (|a| = {_num(abs(m.a))} < Delta(0) = "
+                     f"{_num(m.static_friction)}) reaches v = 0 in a finite time: the object "
+                     "sticks until the next kick.")
+            if not math.isfinite(m.gamma):
+                text += (" The stationary law therefore has an atom at v = 0 - a finite "
+                         "probability of being exactly at rest, which Gaussian noise (a density "
+                         "everywhere) never gives.")
+        else:
+            text += (f", which here (|a| = {_num(abs(m.a))} >= Delta(0) = "
+                     f"{_num(m.static_friction)}) does not stop at v = 0: the object slides "
+                     "between kicks, and the stationary law has no atom at v = 0.")
+        return text
+    if kind == "spring":
+        return (f"A linear spring (spring = {_num(m.spring)}) on the object turns the steady "
+                f"slide into stick-slip oscillations: released from x0 = {_num(m.x0)} the object "
+                f"swings back, Coulomb friction takes 2 Delta/spring = "
+                f"{_num(2 * m.delta / m.spring)} off the amplitude every half period, and it "
+                "sticks once |spring x - a| < Delta; the noise unsticks it again. The state "
+                "(x, v) is two-dimensional, so the reference is the Monte Carlo, and the "
+                "stationary identities <v> = 0 and spring <x> = a - <Delta(v) sgn v> - cubic "
+                "<v^3> are checked on the circuit.")
+    if kind == "stribeck":
+        assert m.stribeck is not None
+        d_s, v_s = m.stribeck
+        between = m.delta < abs(m.a) < d_s
+        return (f"Velocity weakening (the Stribeck curve): the friction drops from its static "
+                f"value delta_s = {_num(d_s)} to the kinetic Delta = {_num(m.delta)} over the "
+                f"speed v_s = {_num(v_s)}. For a force between Delta and delta_s both sticking "
+                "and sliding can be stable without noise, and the stationary law exp(-gamma U) "
+                f"can then have two peaks (a cusp at v = 0 and one at the sliding velocity); "
+                f"here a = {_num(m.a)} is {'between them' if between else 'not between them'}.")
+    return (f"A cubic viscous term (cubic = {_num(m.cubic)}: lubricated or hydrodynamic "
+            "friction) confines fast velocities: the potential gains cubic v^4/4, the slide "
+            "slows and the stationary law's fast tail is cut, so the variance shrinks against "
+            "the paper's law at the same Delta.")
 
 
 def _fmt(c: Comparison) -> str:
@@ -639,12 +677,9 @@ def _fmt(c: Comparison) -> str:
 def member_text(a: MemberAnalysis) -> list[str]:
     """Paragraphs of a member's section: what the extension changes, and its numbers."""
     m, f, _name = a.exp.model, a.facts, a.exp.name
-    # the spring first: a spring member has the spring's analysis (Monte Carlo reference, no
-    # exact P(v = 0)) whatever its noise
-    key = ("spring" if m.spring > 0 else "shot" if m.shot is not None
-           else "stribeck" if m.stribeck is not None else "cubic")
+    key = _member_kind(m)
     pure_shot = key == "shot" and not math.isfinite(m.gamma)
-    text = [_PHYSICS[key]]
+    text = [physics_text(m)]
     if key == "shot" and not pure_shot:
         text.append("With the Gaussian noise on as well (gamma finite) the diffusion spreads the "
                     "stuck state: the stationary law has a density and no atom at v = 0.")
@@ -734,31 +769,81 @@ def member_section(a: MemberAnalysis, out: Path, attempt=None):
             errs.append(f"figure '{what}': {err}")
         elif r is not None:
             figs.append(Figure(*r))
-    desc = " ".join(a.exp.description.split())
-    return Section(f"{CHAPTER_TITLE}: {a.exp.name}", member_text(a) + ([desc] if desc else []),
+    from .prose import experiment_paragraphs
+    return Section(f"{CHAPTER_TITLE}: {a.exp.name}", member_text(a) + experiment_paragraphs(a.exp),
                    figures=figs, tables=[member_table(a)], error="; ".join(errs) or None)
 
 
+def _is_paper_chapter(analyses: list) -> bool:
+    """The paper report's chapter: the shipped members, from the standard circuits."""
+    if sorted(a.exp.name for a in analyses) != sorted(MEMBERS):
+        return False
+    try:
+        return all(a.exp.source is not None and Path(a.exp.source).resolve()
+                   == standard_circuit(a.exp.name).resolve() for a in analyses)
+    except (OSError, ValueError):
+        return False
+
+
+_KIND_WORDS = {"shot": "shot noise", "spring": "a spring", "stribeck": "velocity weakening "
+               "(Stribeck) friction", "cubic": "cubic viscous friction"}
+_ELEMENT_TERMS = {"cubic": "cubic network approximation", "spring": "inductor series resistance",
+                  "shot": "shot pulse width and edges"}
+
+
 def chapter_intro(analyses: list, wall: float, quick: bool) -> list[str]:
+    """The chapter's opening, naming only the members it has and their own sizes."""
     n = sum(len(a.comparisons) for a in analyses)
     ok = sum(c.within_budget for a in analyses for c in a.comparisons)
-    return [
-        ("The paper's concluding section proposes extensions it does not treat: shot noise "
-        "instead of Gaussian vibrations, a spring on the object, a measured (velocity "
-        "weakening) friction law, and nonlinear viscous friction. Each is one member of the "
-        "model family, run on its own circuit (circuits/<member>.toml) and held against the "
-        "exact finite-noise numerics of its one-dimensional law (Fokker-Planck, or "
-        "Kolmogorov-Feller for shot noise with the atom at v = 0) or, for the spring, "
-        "against the Monte Carlo."),
-        (f"{n} comparisons, {ok} within their error budget (3 SE + smoothing + noise bandwidth "
-        "+ integration (the first 8 replicas of the stationary run re-run 100x tighter on the "
-        "same noise) + the family's circuit-element terms: cubic network approximation, "
-        "inductor series resistance, shot pulse width and edges). This chapter took "
-        f"{wall:.1f} s ({'quick' if quick else 'full'} sizes: small replica counts, short "
-        "runs; the paper's own chapters keep theirs)."),
-        "What survives of the paper: the stationary law is still exp(-gamma U) for every "
-        "Gaussian one-dimensional member (cubic, Stribeck) with U gaining cubic v^4/4 or the "
-        "Stribeck term, so the paper's weak-noise method carries over through U; shot noise "
-        "breaks it (no potential: a master equation, an atom at rest), and the spring makes "
-        "the state two-dimensional (no closed stationary law; the Monte Carlo is the "
-        "reference)."]
+    kinds = [_member_kind(a.exp.model) for a in analyses]
+    present = [k for k in ("shot", "spring", "stribeck", "cubic") if k in kinds]
+    # an element term is booked wherever the member has that circuit element, whatever the
+    # kind its text is filed under (a spring member with cubic friction has both)
+    elements = [_ELEMENT_TERMS[k] for k in ("cubic", "spring", "shot")
+                if any((k == "cubic" and a.exp.model.cubic) or (k == "spring" and a.exp.model.spring)
+                       or (k == "shot" and a.exp.model.shot is not None) for a in analyses)]
+    if _is_paper_chapter(analyses):
+        first = ("The paper's concluding section proposes extensions it does not treat: shot "
+                 "noise instead of Gaussian vibrations, a spring on the object, a measured "
+                 "(velocity weakening) friction law, and nonlinear viscous friction. Each is one "
+                 "member of the model family, run on its own circuit (circuits/<member>.toml)")
+    else:
+        names = ", ".join(f"{a.exp.name} ({_KIND_WORDS[k]})" for a, k in zip(analyses, kinds))
+        first = (f"Members of the model family in this report: {names}. Each runs on its own "
+                 "circuit")
+    refs = []
+    if any(k != "spring" for k in kinds):
+        refs.append("the exact finite-noise numerics of its one-dimensional law (Fokker-Planck"
+                    + (", or Kolmogorov-Feller for shot noise" if "shot" in kinds else "") + ")")
+    if "spring" in kinds:
+        refs.append("for the spring, the Monte Carlo")
+    first += " and is held against " + " or, ".join(refs) + "."
+    sizes = ("quick sizes: small replica counts, short runs" if quick else
+             "full sizes: each member's own [experiment] replicas and [report] stationary "
+             "length")
+    second = (f"{n} comparisons, {ok} within their error budget (3 SE + smoothing + noise "
+              f"bandwidth + integration (the first {CHECK_REPLICAS} replicas of the stationary "
+              "run re-run 100x tighter on the same noise)"
+              + (f" + the family's circuit-element terms: {', '.join(elements)}" if elements
+                 else "")
+              + f"). This chapter took {wall:.1f} s ({sizes}).")
+    survive = []
+    gauss_1d = [k for k in ("cubic", "stribeck") if k in present]
+    if gauss_1d:
+        survive.append("the stationary law is still exp(-gamma U) for every Gaussian "
+                       f"one-dimensional member ({', '.join(gauss_1d)}) with U gaining "
+                       + " or ".join({"cubic": "cubic v^4/4", "stribeck": "the Stribeck term"}[k]
+                                     for k in gauss_1d)
+                       + ", so the paper's weak-noise method carries over through U")
+    if "shot" in present:
+        survive.append("shot noise breaks it (no potential: a master equation"
+                       + (", an atom at rest when the object sticks between kicks" if any(
+                           k == "shot" and not math.isfinite(a.exp.model.gamma)
+                           for a, k in zip(analyses, kinds)) else "") + ")")
+    if "spring" in present:
+        survive.append("the spring makes the state two-dimensional (no closed stationary law; "
+                       "the Monte Carlo is the reference)")
+    out = [first, second]
+    if survive:
+        out.append("What survives of the paper: " + "; ".join(survive) + ".")
+    return out

@@ -36,8 +36,12 @@ def fig_member_stationary(a, out: Path):
     moving = s[np.abs(s) >= thr] if has_atom else s
     # the exact grid reaches far into the tail: bin and show where the law has its mass
     cum = np.cumsum(d["density"]) / max(float(np.sum(d["density"])), 1e-300)
-    lo = float(d["v"][np.searchsorted(cum, 1e-4)]) - 0.1
-    hi = float(d["v"][min(np.searchsorted(cum, 1 - 1e-4), cum.size - 1)]) + 0.1
+    lo = float(d["v"][np.searchsorted(cum, 1e-4)])
+    hi = float(d["v"][min(np.searchsorted(cum, 1 - 1e-4), cum.size - 1)])
+    # a margin of the law's own width (was 0.1 velocity units: a quarter of the shot
+    # member's range, invisible for a wide law, wider than a narrow law itself)
+    pad = 0.05 * (hi - lo) if hi > lo else 0.1 * max(abs(lo), 1e-3)
+    lo, hi = lo - pad, hi + pad
     bins = np.linspace(lo, hi, 61)
     counts, edges = np.histogram(moving, bins=bins)
     width = edges[1] - edges[0]
@@ -211,7 +215,8 @@ def fig_spring_series(a, out: Path):
     axes[0, 0].legend(fontsize=7, loc="upper right")
     path = save(fig, out / f"beyond_spring_series_{name}.png")
     f = a.facts
-    return path, (f"{name}: released from x0 at rest, four circuit replicas (colours) and the "
+    return path, (f"{name}: released from x0 = {a.exp.model.x0:g} at rest, {len(d['x'])} "
+                  "circuit replicas (colours) and the "
                   "means of circuit and Monte Carlo: stick-slip oscillations. First swing: "
                   f"half period {f['circuit_half_period']:.2f} (circuit) vs "
                   f"{f['mc_half_period']:.2f} (Monte Carlo; pi/sqrt(spring) = "

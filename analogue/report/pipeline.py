@@ -29,10 +29,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..circuit.experiments import (FIG1_EXPERIMENTS, OPEN_QUESTION_EXPERIMENTS,
+from ..circuit.experiments import (FIG1_EXPERIMENTS,
                                    PAPER_EXPERIMENTS, PAPER_FIGURE_TAGS, Experiment,
                                    load_experiment, standard_circuit)
-from . import figures
+from . import figures, prose
 from .comparisons import BandwidthTerms, ExperimentAnalysis, analyse, bandwidth_terms
 from .theory_curves import ExperimentTheory, experiment_theory, figure_curves
 from .html import Figure, Section, Table, write_page
@@ -151,16 +151,10 @@ def build_experiment_report(name, out, opts: RunOptions) -> Path:
     return build_report([exp], Path(out), opts, title=f"analogue report: experiment {exp.name}")
 
 
-def _board_link(out: Path):
-    """The intro's pointer to the buildable board of the stick experiment (issue 13): a link
-    when ``<out>/board/index.html`` exists, else the command that writes it."""
-    from markupsafe import Markup
-    if (Path(out) / "board" / "index.html").exists():
-        return Markup('A board you can build for the stick experiment (op-amp realisation with '
-                      'E-series parts, noise chain, tolerance Monte Carlo, calibration, schematic '
-                      'and BOM): <a href="board/index.html">board/index.html</a>.')
-    return (f"A board you can build for the stick experiment: run `analogue board stick --out "
-            f"{Path(out) / 'board'}` and it is linked here.")
+def _board_link(out: Path, experiments=()):
+    """The intro's pointer to the buildable board of the stick experiment (issue 13), in the
+    paper's report: :func:`analogue.report.prose.board_link`."""
+    return prose.board_link(out, experiments)
 
 
 def build_paper_report(out, opts: RunOptions) -> Path:
@@ -174,16 +168,17 @@ def build_paper_report(out, opts: RunOptions) -> Path:
 
 def experiment_section_text(exp: Experiment) -> list[str]:
     """Paragraphs of an experiment's section: its description (the user's text, escaped by
-    the page template like every other text)."""
-    text = " ".join(exp.description.split())
-    return [text] if text else []
+    the page template like every other text), a note where the description's numbers are not
+    the model's, and the model's parameters (:func:`analogue.report.prose.experiment_paragraphs`)."""
+    return prose.experiment_paragraphs(exp)
 
 
 # ------------------------------------------------------------------------------ sections
 def _mapping_table(runs) -> Table:
     from ..circuit.mapping import map_model
     m = map_model(runs.exp.model, runs.exp.spec)  # runs: ExperimentRuns or MemberAnalysis
-    rows = [[name, float(value), unit, meaning] for name, value, unit, meaning in m.table()]
+    rows = [[name, float(value), unit, meaning]
+            for name, value, unit, meaning in prose.component_rows(m)]
     element = (f"{runs.exp.spec.coulomb}, diode {runs.exp.spec.diode}"
                if m.coulomb_element is not None else "no Coulomb element (Delta = 0)")
     return Table(f"{runs.exp.name}: component values ({element})",
@@ -291,7 +286,7 @@ def _open_question_section(out: Path, opts: RunOptions, data=None) -> Section:
     gs = ", ".join(f"{g:g}" for g in gammas)
     caps = [f"Exact I_gamma(w) for gamma = {gs} against the paper's I(w) (eq. (64)) and the "
             "gamma -> infinity limit (convex envelope).",
-            "The fluctuation relation I(-w) - I(w): exact at three gammas, the paper's eq. (67) "
+            f"The fluctuation relation I(-w) - I(w): exact at gamma = {gs}, the paper's eq. (67) "
             "with its jump 2 a Delta, and the limit."]
     return Section("The paper's open question: is the jump of I(w) at w = 0 real?", text,
                    figures=[Figure(p, caps[i] if i < len(caps) else "") for i, p in enumerate(paths)])
@@ -427,7 +422,9 @@ MEMBER_THREADS = 2
 
 
 def _wants_open_question(experiments) -> bool:
-    return any(e.name in OPEN_QUESTION_EXPERIMENTS for e in experiments) or len(experiments) > 1
+    """The paper's open question (its own parameters) belongs to reports of the paper's
+    experiments, not to a report of the user's own files (issue 20 item 3)."""
+    return any(prose.is_paper_experiment(e) for e in experiments)
 
 
 def build_report(names, out: Path, opts: RunOptions, title: str, chapter=()) -> Path:
@@ -639,7 +636,7 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
         fig1_section = Section("Paper Fig. 1: deterministic motion",
                                figures=[fig] if fig is not None else [], error=err)
     paper_wall = time.perf_counter() - t0
-    _log(f"the paper's chapters are complete ({paper_wall:.0f} s)")
+    _log(f"{prose.main_part(experiments)} are complete ({paper_wall:.0f} s)")
     paper_done.set_result(None)
 
     member_analyses = []
@@ -682,15 +679,7 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
         tables=[Table("Per experiment", ["experiment", "comparisons", "|z| < 3", "within budget",
                                          "exact: |z| < 3", "exact: total"], summary_rows)]))
 
-    circuit_par = [
-        "Each replica is one node v (voltage = velocity, 1 V per unit velocity for the ideal "
-        "bridge): capacitor C to ground (mass), resistor R (viscous friction alpha), a DC current "
-        "I_F into the node (the force), four diodes around a DC current source I_Delta (Coulomb "
-        "friction: the bridge passes I_Delta tanh(V/(2 N V_T))), a held Gaussian noise current "
-        "(ngspice trrandom, reproducible with .options seed; the vibrating plate), and an "
-        "integrator node x (a VCCS into a capacitor) so that ngspice itself integrates the "
-        "position for the work W = F (x(t+tau) - x(t)). Time is scaled by theta seconds per "
-        "model time unit. The decks are in netlists/ (regenerate with `analogue netlist`)."]
+    circuit_par = [prose.circuit_paragraph([*experiments, *members])]
     tables = []
     for r in all_runs + member_analyses:
         t, _ = fails.attempt("The circuit and its component values", "component table",
@@ -796,19 +785,21 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
     tmp.write_text(json.dumps(metrics, indent=2, default=str))
     tmp.replace(out / "metrics.json")
 
-    timing = (f"{wall:.0f} s in all; the paper's chapters were complete after "
+    timing = (f"{wall:.0f} s in all; {prose.main_part(experiments)} were complete after "
               f"{paper_wall:.0f} s, and the chapter '{beyond.CHAPTER_TITLE}' took "
               f"{member_wall:.0f} s of its own threads' time" if members else f"{wall:.0f} s")
     intro = [f"Generated {provenance['created']} by analogue {software['analogue']} "
              f"with ngspice {provenance['ngspice_version']} ({'quick' if opts.quick else 'full'} run, "
              f"{timing}). Model units throughout: velocity, time and work rate of the "
-             "reduced equation dv/dt = -v/tau_m - Delta sgn(v) + a + xi/m (Baule, Touchette & "
-             "Cohen).",
+             f"reduced equation {prose.equation_text([*experiments, *members])} (Baule, "
+             "Touchette & Cohen).",
              "Every figure is also a PNG file in this directory; every number is in metrics.json."]
     if fails.items:
         intro.append(f"{len(fails.items)} section(s) failed; they are marked below with their "
                      "errors, and listed in metrics.json under 'failures'.")
-    intro.append(_board_link(out))
+    board = _board_link(out, experiments)
+    if board is not None:
+        intro.append(board)
     index = write_page(out / "index.html", title, intro, sections)
     _log(f"report written: {index}")
     if fails.items:

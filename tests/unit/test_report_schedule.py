@@ -163,7 +163,10 @@ def test_schedule_longest_first_completion_order_members_last(schedule):
     metrics = json.loads((schedule["out"] / "metrics.json").read_text())
     prov = metrics["provenance"]
     assert 0 < prov["paper_wall_time_s"] <= prov["wall_time_s"]
-    assert "the paper&#39;s chapters were complete after" in html
+    # two experiments of the user's (not the paper's): their sections, not "the paper's
+    # chapters" (issue 20 item 3)
+    assert "the experiments&#39; sections were complete after" in html
+    assert "the paper&#39;s chapters" not in html
 
 
 def test_schedule_changes_no_number(schedule):

@@ -1,0 +1,228 @@
+"""The page's words that depend on the experiments it describes (issue 20 item 3).
+
+Every number a page prints comes from the experiment it describes: the model sentence of a
+section, the circuit paragraph (which sources and elements the decks have), the reduced
+equation of the intro, the pointer to the stick board (the paper's report only).  A
+description copied with its file keeps the original's numbers (a copy of ``shot.toml`` with
+rate 2.5 and mean 0.35 read "rate 1 ... mean 0.5"): :func:`description_mismatches` finds the
+``name = value`` statements of a description that disagree with the model, and the section
+says so next to it.
+
+Pure functions of the experiments (no files, no runs), so that a test can build the text of
+any experiment and compare its numbers with the model.
+"""
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+
+__all__ = ["is_paper_experiment", "is_paper_report", "main_part", "model_sentence", "description_mismatches",
+           "experiment_paragraphs", "circuit_paragraph", "equation_text", "board_link",
+           "component_rows"]
+
+
+def _num(x: float) -> str:
+    return f"{x:.4g}"
+
+
+def is_paper_experiment(exp) -> bool:
+    """One of the paper's experiments, from the standard circuits (a user's
+    ``./circuits/stick.toml`` is the user's, whatever its name)."""
+    from ..circuit.experiments import PAPER_EXPERIMENTS, standard_circuit
+    if exp.name not in PAPER_EXPERIMENTS or exp.source is None:
+        return False
+    try:
+        return Path(exp.source).resolve() == standard_circuit(exp.name).resolve()
+    except (OSError, ValueError):
+        return False
+
+
+def is_paper_report(experiments) -> bool:
+    """The paper's own report: exactly the paper's experiments, from the standard circuits."""
+    from ..circuit.experiments import PAPER_EXPERIMENTS
+    return (sorted(e.name for e in experiments) == sorted(PAPER_EXPERIMENTS)
+            and all(is_paper_experiment(e) for e in experiments))
+
+
+def main_part(experiments) -> str:
+    """What the report's first part is called in its log and timing lines."""
+    return "the paper's chapters" if is_paper_report(experiments) else "the experiments' sections"
+
+
+# ------------------------------------------------------------------------- the model
+def _noise_words(m) -> str:
+    parts = []
+    if math.isfinite(m.gamma):
+        parts.append(f"gamma = {_num(m.gamma)} (Gaussian velocity noise of intensity "
+                     f"1/gamma = {_num(1 / m.gamma)})")
+    else:
+        parts.append("gamma = inf (no Gaussian noise)")
+    if m.shot is not None:
+        side = ("two-sided (each kick's sign +/- with probability 1/2)" if m.shot.two_sided
+                else "one-sided (every kick pushes up)")
+        parts.append(f"shot noise: kicks at rate {_num(m.shot.rate)} per unit time, "
+                     f"exponentially distributed jumps of mean {_num(m.shot.mean)}, {side}")
+    return "; ".join(parts)
+
+
+def model_sentence(exp) -> str:
+    """The experiment's parameters and what they imply, every number from ``exp``."""
+    m = exp.model
+    items = [f"tau_m = {_num(m.tau_m)}", f"Delta = {_num(m.delta)}", f"a = {_num(m.a)}"]
+    if m.mass != 1:
+        items.append(f"mass = {_num(m.mass)}")
+    if m.cubic:
+        items.append(f"cubic = {_num(m.cubic)}")
+    if m.stribeck is not None:
+        items.append(f"Stribeck delta_s = {_num(m.stribeck[0])}, v_s = {_num(m.stribeck[1])}")
+    if m.spring:
+        items.append(f"spring = {_num(m.spring)}, released from x0 = {_num(m.x0)}")
+    text = f"Model (reduced units): {', '.join(items)}; {_noise_words(m)}."
+    if m.is_paper:
+        if m.regime == "stick":
+            t_a = ", ".join(f"t_a = {_num(m.stick_time(v0))} from v0 = {_num(v0)}"
+                            for v0 in exp.v0)
+            text += (f" Stick regime (|a| < Delta): without noise the motion stops at v = 0 "
+                     f"({t_a}, eq. (31)).")
+        else:
+            text += (f" Slip regime (|a| > Delta): without noise the velocity relaxes to "
+                     f"v_ss = (a - Delta sgn a) tau_m = {_num(m.attractor)} (eq. (14)).")
+    v0s = ", ".join(_num(v) for v in exp.v0)
+    diode = ("ideal diodes" if exp.spec.diode == "ideal" else f"{exp.spec.diode} diodes")
+    element = (f"{exp.spec.coulomb} Coulomb element ({diode})" if m.delta > 0
+               else "no Coulomb element (Delta = 0)")
+    text += (f" Circuit: {element}. Runs: {exp.replicas} replicas from each v0 = {v0s}, to "
+             f"t = {_num(exp.t_end)}, sampled every {_num(exp.sample_dt)}.")
+    return text
+
+
+# a parameter named in a description, written "name = value": not after an operator or a
+# closing bracket ("(a - Delta) tau_m = 0.5" is a product, "2 Delta/spring = 1" a quotient)
+_ASSIGNED = re.compile(r"(?<![\w)*/+^.-])(?<![)*/+^-] )\b(tau_m|Delta|delta|gamma|mass|cubic|spring|"
+                       r"x0|delta_s|v_s|a)\s*=\s*(-?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?)(?![\w(])")
+# shot-noise wording of the standard files: "at rate 1 per unit time", "with mean 0.5"
+_SHOT_WORDS = re.compile(r"\b(rate|mean)\s+(\d+(?:\.\d*)?(?:[eE][-+]?\d+)?)\b(?!\s*[*/^])")
+
+
+def _model_values(m) -> dict:
+    out = {"tau_m": m.tau_m, "delta": m.delta, "gamma": m.gamma, "mass": m.mass,
+           "cubic": m.cubic, "spring": m.spring, "x0": m.x0, "a": m.a}
+    if m.stribeck is not None:
+        out["delta_s"], out["v_s"] = m.stribeck
+    if m.shot is not None:
+        out["rate"], out["mean"] = m.shot.rate, m.shot.mean
+    return out
+
+
+def description_mismatches(exp) -> list[str]:
+    """``"a = 0.2 (the model has 0.3)"`` for every ``name = value`` of the description (and
+    "rate R", "mean M" of a shot member) that disagrees with the experiment's model."""
+    text = " ".join(exp.description.split())
+    values = _model_values(exp.model)
+    found = []
+    for name, value in _ASSIGNED.findall(text):
+        key = "delta" if name == "Delta" else name
+        found.append((name, key, value))
+    if exp.model.shot is not None:
+        found += [(name, name, value) for name, value in _SHOT_WORDS.findall(text)]
+    out = []
+    for name, key, value in found:
+        if key not in values:
+            continue
+        have = values[key]
+        if not math.isclose(float(value), have, rel_tol=1e-3, abs_tol=1e-9):
+            item = f"{name} = {value} (the model has {_num(have)})"
+            if item not in out:
+                out.append(item)
+    return out
+
+
+def experiment_paragraphs(exp) -> list[str]:
+    """An experiment's section text: its description (the user's text, escaped by the page
+    template), a note where its numbers disagree with the model, and the model sentence."""
+    text = " ".join(exp.description.split())
+    out = [text] if text else []
+    bad = description_mismatches(exp)
+    if bad:
+        out.append("The description above was not written for these parameters: it says "
+                   + "; ".join(bad) + ". The numbers of this section are the model's.")
+    out.append(model_sentence(exp))
+    return out
+
+
+# --------------------------------------------------------------------- the circuit
+def circuit_paragraph(experiments) -> str:
+    """How the decks realise the model, naming only the sources and elements the report's
+    experiments have (a shot member's deck has no trrandom source when gamma = inf)."""
+    models = [e.model for e in experiments]
+    specs = [e.spec for e in experiments]
+    parts = ["Each replica is one node v (voltage = velocity, kappa volts per unit velocity: "
+             "the component table gives kappa for each experiment): capacitor C to ground "
+             "(mass), resistor R (viscous friction alpha), a DC current I_F into the node "
+             "(the force)"]
+    if any(m.delta > 0 and s.coulomb == "diode-bridge" for m, s in zip(models, specs)):
+        parts.append("four diodes around a DC current source I_Delta (Coulomb friction: the "
+                     "bridge passes I_Delta tanh(V/(2 N V_T)))")
+    if any(m.delta > 0 and s.coulomb != "diode-bridge" for m, s in zip(models, specs)):
+        parts.append("a behavioural source for the Coulomb friction (B-source)")
+    if any(m.stribeck is not None for m in models):
+        parts.append("a Stribeck excess current that decays with |V| (velocity weakening)")
+    if any(m.cubic for m in models):
+        parts.append("a cubic conductance g3 V^3 (cubic viscous friction)")
+    if any(m.spring for m in models):
+        parts.append("an inductor from v to ground (the spring; its current is the position)")
+    if any(math.isfinite(m.gamma) for m in models):
+        parts.append("a held Gaussian noise current (ngspice trrandom, reproducible with "
+                     ".options seed; the vibrating plate)")
+    if any(m.shot is not None for m in models):
+        parts.append("shot-noise kicks drawn in numpy from the deck seed and delivered as "
+                     "narrow flat-topped current pulses (PWL source)")
+    parts.append("and an integrator node x (a VCCS into a capacitor) so that ngspice itself "
+                 "integrates the position for the work W = F (x(t+tau) - x(t))")
+    return (", ".join(parts) + ". Time is scaled by theta seconds per model time unit. "
+            "`analogue netlist` writes each experiment's representative deck (netlists/ for "
+            "the standard experiments, beside the TOML file for the others).")
+
+
+def component_rows(mapping) -> list:
+    """The component table of a circuit without the Gaussian source's rows when the deck has
+    no Gaussian source (gamma = inf: no trrandom in the deck)."""
+    rows = list(mapping.table())
+    if not math.isfinite(mapping.model.gamma):
+        rows = [r for r in rows if r[0] not in ("noise_stddev", "noise_TS", "noise_gain", "D_I")]
+    return rows
+
+
+def equation_text(experiments) -> str:
+    """The reduced equation of the intro, with the terms the report's models have."""
+    models = [e.model for e in experiments]
+    friction = ("Delta(v) sgn(v)" if any(m.stribeck is not None for m in models)
+                else "Delta sgn(v)")
+    terms = ["-v/tau_m"]
+    if any(m.cubic for m in models):
+        terms.append("- cubic v^3")
+    terms.append(f"- {friction}")
+    if any(m.spring for m in models):
+        terms.append("- spring x")
+    terms.append("+ a")
+    if any(math.isfinite(m.gamma) for m in models):
+        terms.append("+ xi/m")
+    if any(m.shot is not None for m in models):
+        terms.append("+ shot kicks")
+    return "dv/dt = " + " ".join(terms)
+
+
+def board_link(out: Path, experiments):
+    """The intro's pointer to the buildable board of the stick experiment (issue 13), in the
+    paper's report (or wherever a board was written next to the page); None otherwise: the
+    board realises the paper's stick parameters, not a user's."""
+    from markupsafe import Markup
+    if (Path(out) / "board" / "index.html").exists():
+        return Markup('A board you can build for the stick experiment (op-amp realisation with '
+                      'E-series parts, noise chain, tolerance Monte Carlo, calibration, schematic '
+                      'and BOM): <a href="board/index.html">board/index.html</a>.')
+    if not is_paper_report(experiments):
+        return None
+    return (f"A board you can build for the stick experiment: run `analogue board stick --out "
+            f"{Path(out) / 'board'}` and it is linked here.")
