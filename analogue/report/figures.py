@@ -9,6 +9,7 @@ I(w) is drawn with one convention at w = 0 everywhere: the Filippov value
 """
 from __future__ import annotations
 
+import itertools
 import logging
 import math
 from pathlib import Path
@@ -308,7 +309,10 @@ def fig_rate_function(analysis: ExperimentAnalysis, out: Path):
             label="$\\gamma\\to\\infty$ limit (convex hull)")
     ax.plot(w, rc.exact, color=EXACT, lw=1.8,
             label=f"exact $I_\\gamma$ ($\\tau\\to\\infty$, $\\gamma$={m.gamma:g})")
-    colours = ["tab:red", "tab:orange", "tab:green", "tab:brown", "tab:pink"]
+    # one colour per work window, cycled: zip() with five colours dropped a sixth
+    # experiment.work_taus entry from the figure without a word
+    colours = list(itertools.islice(itertools.cycle(
+        ["tab:red", "tab:orange", "tab:green", "tab:brown", "tab:pink"]), len(dists)))
     for (tau, d), c in zip(dists.items(), colours):
         r = empirical_rate_function(d, tau, m.gamma)
         ax.errorbar(r.w, r.rate, yerr=r.stderr, fmt="o", ms=3, color=c, capsize=2,

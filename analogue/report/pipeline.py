@@ -670,9 +670,7 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
     summary_text = [
         f"{len(comps)} comparisons of circuit estimates with theory: {n_z} have |z| < 3 and "
         f"{n_ok} lie within their error budget (3 standard errors plus the independently "
-        "estimated systematic errors). Theory 'exact' is the finite-noise Fokker-Planck solution "
-        "of the ideal model (sgn friction, white noise); 'weak-noise' is the paper's saddle-point "
-        "result, whose budget includes the finite-noise correction exact(gamma) - weak-noise."]
+        "estimated systematic errors). " + prose.theory_kinds_text(experiments, members)]
     if failed_names:
         summary_text.append("Failed (see their sections): " + ", ".join(failed_names) + ".")
     sections.append(Section("Summary", summary_text + _explain(comps),
@@ -717,14 +715,8 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
         sections.extend(chapter_sections)
 
     sections.append(Section("All comparisons and their error budgets", [
-        "Rows in red are deviations the budget does not explain. Budget terms (absolute, in "
-        "the observable's units): smoothing = exact(epsilon) - exact(0) (the diode bridge's "
-        "tanh law); bandwidth = held-noise minus white-noise Monte Carlo driven by the same "
-        "Wiener increments (|difference| + 2 SE); integration = the circuit re-run with 100x "
-        "tighter tolerances on the same noise (|difference| + 2 SE; indicator observables "
-        "through their smoothed indicator, plus the kernel's Richardson bias estimate: "
-        "docs/error-budget.md); finite noise (weak-noise "
-        "rows) = exact(gamma) - weak-noise."], tables=[_comparison_table(comps, "Comparisons")]))
+        prose.budget_text([*experiments, *members])],
+        tables=[_comparison_table(comps, "Comparisons")]))
 
     phases.items.append({"phase": "figures and page", "experiment": None, "thread": "main",
                          "start_s": round(draw0 - t0, 3),
@@ -787,7 +779,8 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
 
     timing = (f"{wall:.0f} s in all; {prose.main_part(experiments)} were complete after "
               f"{paper_wall:.0f} s, and the chapter '{beyond.CHAPTER_TITLE}' took "
-              f"{member_wall:.0f} s of its own threads' time" if members else f"{wall:.0f} s")
+              f"{member_wall:.0f} s of its own threads' time" if members and experiments
+              else f"{wall:.0f} s")
     intro = [f"Generated {provenance['created']} by analogue {software['analogue']} "
              f"with ngspice {provenance['ngspice_version']} ({'quick' if opts.quick else 'full'} run, "
              f"{timing}). Model units throughout: velocity, time and work rate of the "

@@ -19,7 +19,7 @@ from pathlib import Path
 
 __all__ = ["is_paper_experiment", "is_paper_report", "main_part", "model_sentence", "description_mismatches",
            "experiment_paragraphs", "circuit_paragraph", "equation_text", "board_link",
-           "component_rows"]
+           "component_rows", "theory_kinds_text", "budget_text"]
 
 
 def _num(x: float) -> str:
@@ -92,8 +92,13 @@ def model_sentence(exp) -> str:
     diode = ("ideal diodes" if exp.spec.diode == "ideal" else f"{exp.spec.diode} diodes")
     element = (f"{exp.spec.coulomb} Coulomb element ({diode})" if m.delta > 0
                else "no Coulomb element (Delta = 0)")
-    text += (f" Circuit: {element}. Runs: {exp.replicas} replicas from each v0 = {v0s}, to "
-             f"t = {_num(exp.t_end)}, sampled every {_num(exp.sample_dt)}.")
+    text += f" Circuit: {element}."
+    if m.is_paper:
+        # (no replica count: --quick runs fewer than the file's; the figures and the
+        # provenance table give the counts each run had.  A member's runs have their own
+        # lengths, given in its section.)
+        text += (f" Transition runs from v0 = {v0s} to t = {_num(exp.t_end)}, sampled every "
+                 f"{_num(exp.sample_dt)}.")
     return text
 
 
@@ -123,16 +128,16 @@ def description_mismatches(exp) -> list[str]:
     found = []
     for name, value in _ASSIGNED.findall(text):
         key = "delta" if name == "Delta" else name
-        found.append((name, key, value))
+        found.append((f"{name} = ", key, value))
     if exp.model.shot is not None:
-        found += [(name, name, value) for name, value in _SHOT_WORDS.findall(text)]
+        found += [(f"{name} ", name, value) for name, value in _SHOT_WORDS.findall(text)]
     out = []
-    for name, key, value in found:
+    for said, key, value in found:
         if key not in values:
             continue
         have = values[key]
         if not math.isclose(float(value), have, rel_tol=1e-3, abs_tol=1e-9):
-            item = f"{name} = {value} (the model has {_num(have)})"
+            item = f"{said}{value} (the model has {_num(have)})"
             if item not in out:
                 out.append(item)
     return out
@@ -192,6 +197,47 @@ def component_rows(mapping) -> list:
     if not math.isfinite(mapping.model.gamma):
         rows = [r for r in rows if r[0] not in ("noise_stddev", "noise_TS", "noise_gain", "D_I")]
     return rows
+
+
+def theory_kinds_text(experiments, members) -> str:
+    """What 'exact' and 'weak-noise' mean in the summary, for the experiments it has:
+    ``experiments`` on the paper's model, ``members`` of the family."""
+    out = []
+    if experiments:
+        out.append("Theory 'exact' is the finite-noise Fokker-Planck solution of the ideal model "
+                   "(sgn friction, white noise); 'weak-noise' is the paper's saddle-point result, "
+                   "whose budget includes the finite-noise correction exact(gamma) - weak-noise.")
+    if members:
+        models = [e.model for e in members]
+        refs = []
+        if any(m.spring == 0 and m.shot is None for m in models):
+            refs.append("the Fokker-Planck numerics of the member's own law")
+        if any(m.spring == 0 and m.shot is not None for m in models):
+            refs.append("the Kolmogorov-Feller numerics for shot noise")
+        if any(m.spring > 0 for m in models):
+            refs.append("the Monte Carlo for a spring")
+        out.append("For the family's members the reference is " + ", ".join(refs) + ".")
+    return " ".join(out)
+
+
+def budget_text(experiments) -> str:
+    """The budget terms the report's comparisons can have (the bandwidth term needs held
+    Gaussian noise; finite noise needs weak-noise rows, which only the paper's model has)."""
+    models = [e.model for e in experiments]
+    terms = ["smoothing = exact(epsilon) - exact(0) (the Coulomb element's tanh law)"]
+    if any(math.isfinite(m.gamma) for m in models):
+        terms.append("bandwidth = held-noise minus white-noise Monte Carlo driven by the same "
+                     "Wiener increments (|difference| + 2 SE)")
+    terms.append("integration = the circuit re-run with 100x tighter tolerances on the same "
+                 "noise (|difference| + 2 SE; indicator observables through their smoothed "
+                 "indicator, plus the kernel's Richardson bias estimate: docs/error-budget.md)")
+    if any(not m.is_paper for m in models):
+        terms.append("circuit element = the family's element terms (cubic network, inductor "
+                     "resistance, shot pulses), where the member has that element")
+    if any(m.is_paper and m.delta > 0 for m in models):
+        terms.append("finite noise (weak-noise rows) = exact(gamma) - weak-noise")
+    return ("Rows in red are deviations the budget does not explain. Budget terms (absolute, in "
+            "the observable's units): " + "; ".join(terms) + ".")
 
 
 def equation_text(experiments) -> str:

@@ -97,9 +97,8 @@ def test_copied_description_with_stale_numbers_is_flagged(user):
     assert prose.description_mismatches(mine) == [
         "tau_m = 1 (the model has 2)", "Delta = 0.7 (the model has 0.5)",
         "a = 0.2 (the model has 0.3)", "gamma = 10 (the model has 15)"]
-    bad = prose.description_mismatches(myshot)
-    assert "rate 1 (the model has 2.5)" in " ".join(bad).replace("rate = ", "rate ")
-    assert any(b.startswith("mean") and "0.35" in b for b in bad)
+    assert prose.description_mismatches(myshot) == ["rate 1 (the model has 2.5)",
+                                                    "mean 0.5 (the model has 0.35)"]
     note = P.experiment_section_text(myshot)[1]
     assert note.startswith("The description above was not written for these parameters")
     # the shipped descriptions agree with their models: no false alarm
@@ -137,6 +136,13 @@ def test_user_report_prose_has_no_paper_only_sentences(user, tmp_path):
     assert "trrandom" in prose.circuit_paragraph(exps)          # mine has Gaussian noise
     assert "noise_stddev" not in [r[0] for r in prose.component_rows(myshot.mapping())]
     assert "+ xi/m" not in prose.equation_text([myshot])
+    # a member-only report: no weak-noise rows, no held Gaussian noise to budget
+    kinds = prose.theory_kinds_text([], [myshot])
+    assert "weak-noise" not in kinds and "Kolmogorov-Feller" in kinds
+    budget = prose.budget_text([myshot])
+    assert "bandwidth" not in budget and "finite noise" not in budget
+    assert "bandwidth" in prose.budget_text([mine]) and "finite noise" in prose.budget_text([mine])
+    assert "Transition runs" not in prose.model_sentence(myshot)   # a member's own lengths
     assert "+ shot kicks" in prose.equation_text([myshot])
     a = beyond.MemberAnalysis(myshot, beyond.member_sizes(myshot, True))
     intro = " ".join(beyond.chapter_intro([a], 1.0, quick=True))
