@@ -60,12 +60,13 @@ from scipy.sparse.linalg import splu
 from .. import checks
 from ..model import Model
 from . import family
+from .bias_transport import pure_dry_friction
 from .fokker_planck import Grid
 from .kolmogorov_feller import _grid_range, default_spacing, shot_generator
 from .stationary import _grid_pieces, _poisson_solution, _refined_grids
 
-__all__ = ["velocity_spectrum", "spectrum_grid_pieces", "noise_hold_factor", "METHODS",
-           "HOLD_KINDS"]
+__all__ = ["velocity_spectrum", "spectrum_grid_pieces", "noise_hold_factor",
+           "crossover_frequencies", "METHODS", "HOLD_KINDS"]
 
 METHODS = ("auto", "eigen", "resolvent")
 HOLD_KINDS = ("hold", "linear")
@@ -251,3 +252,20 @@ def velocity_spectrum(model: Model, omega: ArrayLike, *, h: float | None = None,
                              "are not symmetrisable); use 'auto' or 'resolvent'")
         out = _shot_spectrum(model, flat, h)
     return out.reshape(w.shape)
+
+
+def crossover_frequencies(model: Model) -> tuple[float, float]:
+    """``(1/tau_m, sticking_rate)``: the two angular frequencies where S(omega) bends over to
+    its ``omega^-2`` tail, the viscous one and the dry-friction one.  ``sticking_rate`` is the
+    inverse correlation time ``Var v / D_x`` of pure dry friction
+    (:func:`analogue.theory.bias_transport.pure_dry_friction`; ``2 gamma Delta^2/5`` at
+    a = 0), NaN in the slip regime (|a| >= Delta), where the velocity rarely visits 0.  In the
+    stick regime the spectrum has one visible corner, at the sticking rate when it exceeds
+    1/tau_m: half-power points measured at 37.2 (tau_m = 10, Delta = 1, a = 0, gamma = 100;
+    sticking rate 40) and 6.6 (tau_m = 100, Delta = 1, a = 0.3, gamma = 30; 7.7)."""
+    checks.instance("model", model, Model, description="an analogue.Model")
+    if not abs(model.a) < model.delta or not math.isfinite(model.gamma):
+        return 1.0 / model.tau_m, math.nan
+    dry = pure_dry_friction(model.delta, model.a, model.gamma)
+    return 1.0 / model.tau_m, 1.0 / dry.correlation_time
+

@@ -101,3 +101,17 @@ def test_bad_input():
         spectrum.velocity_spectrum(m.replace(spring=1.0), [1.0])
     with pytest.raises(ValueError, match="eigen"):
         spectrum.velocity_spectrum(m.replace(shot=ShotNoise(1.0, 0.2)), [1.0], method="eigen")
+
+
+@pytest.mark.parametrize("model", [Model(10.0, 1.0, 0.0, 100.0), Model(100.0, 1.0, 0.3, 30.0)])
+def test_half_power_point_near_the_sticking_rate(model):
+    """Deep stick regime (sticking rate >> 1/tau_m): S falls to S(0)/2 within 25 % of the
+    dry-friction sticking rate (measured 0.93 and 0.86 of it)."""
+    from scipy.optimize import brentq
+    inv_tau, rate = spectrum.crossover_frequencies(model)
+    assert inv_tau == 1.0 / model.tau_m and rate > 30 * inv_tau
+    s0 = spectrum.velocity_spectrum(model, [0.0])[0]
+    half = brentq(lambda w: spectrum.velocity_spectrum(model, [w])[0] - 0.5 * s0,
+                  0.1 * rate, 10 * rate, rtol=1e-4)
+    assert half / rate == pytest.approx(0.9, abs=0.15)
+    assert math.isnan(spectrum.crossover_frequencies(model.replace(a=1.5))[1])
