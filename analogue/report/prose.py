@@ -13,6 +13,7 @@ any experiment and compare its numbers with the model.
 """
 from __future__ import annotations
 
+import logging
 import math
 import re
 from pathlib import Path
@@ -20,6 +21,8 @@ from pathlib import Path
 __all__ = ["is_paper_experiment", "is_paper_report", "main_part", "model_sentence", "description_mismatches",
            "experiment_paragraphs", "circuit_paragraph", "equation_text", "board_link",
            "component_rows", "theory_kinds_text", "budget_text"]
+
+_log = logging.getLogger("analogue.report.prose")
 
 
 def _num(x: float) -> str:
@@ -150,6 +153,10 @@ def experiment_paragraphs(exp) -> list[str]:
     out = [text] if text else []
     bad = description_mismatches(exp)
     if bad:
+        # also on the command line's progress log: a copied file's description misleads
+        # whoever reads the page
+        _log.info("%s: the description's numbers are not the model's: %s", exp.name,
+                  "; ".join(bad))
         out.append("The description above was not written for these parameters: it says "
                    + "; ".join(bad) + ". The numbers of this section are the model's.")
     out.append(model_sentence(exp))

@@ -8,6 +8,7 @@ sentences that only the paper's report may say are absent.
 """
 from __future__ import annotations
 
+import logging
 import math
 import re
 import tomllib
@@ -92,14 +93,17 @@ def test_model_sentence_numbers_are_the_models(user):
     assert [float(x) for x in re.findall(rf"mean {NUM}", text)] == [0.35]
 
 
-def test_copied_description_with_stale_numbers_is_flagged(user):
+def test_copied_description_with_stale_numbers_is_flagged(user, caplog):
     mine, myshot = user
     assert prose.description_mismatches(mine) == [
         "tau_m = 1 (the model has 2)", "Delta = 0.7 (the model has 0.5)",
         "a = 0.2 (the model has 0.3)", "gamma = 10 (the model has 15)"]
     assert prose.description_mismatches(myshot) == ["rate 1 (the model has 2.5)",
                                                     "mean 0.5 (the model has 0.35)"]
-    note = P.experiment_section_text(myshot)[1]
+    with caplog.at_level(logging.INFO, logger="analogue.report"):
+        note = P.experiment_section_text(myshot)[1]
+    assert any("myshot" in r.getMessage() and "mean 0.5 (the model has 0.35)" in r.getMessage()
+               for r in caplog.records)
     assert note.startswith("The description above was not written for these parameters")
     # the shipped descriptions agree with their models: no false alarm
     for name in ("stick", "slip", "work", "cubic", "stribeck", "spring", "shot"):

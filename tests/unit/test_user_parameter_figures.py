@@ -126,3 +126,21 @@ def test_fig_prehistory_reports_every_target_with_its_count(tmp_path, caplog):
     i = int(np.argmin(np.abs(ens[2.0].t - 1.3)))
     assert np.sum(np.abs(ens[2.0].v[:, i] + 0.1) < w) == 0
     assert "No circuit path reached v=-0.1, t=1.3" in caption
+
+
+def test_fig5_layout_for_stick_models_across_orders_of_magnitude():
+    """Seeded sweep: Delta over 1.5 decades, tau_m over 2, a of either sign inside the stick
+    regime, v0 of either sign and from rest: every panel has its layout and every example
+    path (v0 != 0) has the kind it is drawn as."""
+    rng = np.random.default_rng(20)
+    for _ in range(60):
+        delta = 10 ** rng.uniform(-1.5, 1.0)
+        m = Model(tau_m=10 ** rng.uniform(-1.0, 1.0), delta=delta,
+                  a=rng.uniform(-0.95, 0.95) * delta, gamma=10.0)
+        for v0 in (float(rng.normal(0.0, 3.0)), 0.0):
+            lay = fig5_layout(m, v0)
+            assert lay["t_a"] < lay["t_example"] < lay["t_max"]
+            if v0 != 0:
+                for kind, v_end in lay["examples"].items():
+                    assert weak_noise.optimal_path(m, v_end, lay["t_example"], v0, n=64).kind \
+                        == kind, (m, v0, kind)
