@@ -49,7 +49,6 @@ from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy import integrate, optimize, special
 
 from . import checks
 
@@ -320,6 +319,7 @@ class Model:
         idx = int(np.flatnonzero(vals <= 0)[0]) + 1
         if vals[idx - 1] == 0:
             return sgn * float(grid[idx])
+        from scipy import optimize  # scipy on first use: `import analogue` starts fast
         return sgn * optimize.brentq(g, grid[idx - 1], grid[idx], xtol=1e-15, rtol=1e-15)
 
     # ---------------------------------------------------------- friction law
@@ -396,6 +396,7 @@ class Model:
         if self.is_paper or (self.cubic == 0 and self.stribeck is None):
             if self.epsilon == 0:
                 return self.attractor
+            from scipy import optimize
             lo = (self.a - self.delta) * self.tau_m - 1.0
             hi = (self.a + self.delta) * self.tau_m + 1.0
             return optimize.brentq(lambda v: -float(self.drift(v)), lo, hi, xtol=1e-15, rtol=1e-15)
@@ -405,6 +406,7 @@ class Model:
             return 0.0
         # Candidates: the kink v = 0 and every zero of the drift -U' (bracketed on a grid
         # that has 0 as a node, so no bracket straddles the jump of the sgn law).
+        from scipy import optimize
         grid = np.linspace(-r, r, 8001)
         f = self.drift(grid)
         cands = [0.0]
@@ -445,6 +447,7 @@ class Model:
         g, tau = self.gamma, self.tau_m
         if self.epsilon == 0 and self.cubic == 0 and self.stribeck is None:
             # integral_0^inf exp(-v^2/(2 s^2) - b v) dv = s sqrt(2 pi) exp(b^2 s^2/2) Phi(-b s)
+            from scipy import special
             s = math.sqrt(tau / g)
             def half(b: float) -> float:
                 return (math.log(s * math.sqrt(2 * math.pi)) + 0.5 * (b * s) ** 2
@@ -462,6 +465,7 @@ class Model:
             lo, hi = -r, r
         pts = sorted({v_star, 0.0, -self.epsilon, self.epsilon})
         pts = [p for p in pts if lo < p < hi]
+        from scipy import integrate
         val, _ = integrate.quad(lambda v: math.exp(-g * (float(self.potential(v)) - u_star)),
                                 lo, hi, points=pts or None, limit=400, epsabs=0, epsrel=1e-12)
         return math.log(val) - g * u_star
@@ -538,6 +542,7 @@ class Model:
         def jac(s: float, v: np.ndarray) -> list[list[float]]:
             sech2 = 1.0 - np.tanh(v[0] / self.epsilon) ** 2  # no overflow, unlike 1/cosh^2
             return [[-1.0 / self.tau_m - self.delta / self.epsilon * sech2]]
+        from scipy import integrate
         sol = integrate.solve_ivp(lambda s, v: self.drift(v), (0.0, t_end), [v0], method="Radau",
                                   jac=jac, dense_output=True, rtol=1e-10, atol=1e-12 * max(1.0, abs(v0)))
         return sol.sol(t.ravel())[0].reshape(t.shape)
