@@ -232,7 +232,10 @@ def _figures_for(runs: ExperimentRuns, analysis: ExperimentAnalysis, out: Path,
     Returns (figures, errors)."""
     items, errors = [], []
     a = analysis
-    tag = PAPER_FIGURE_TAGS.get(runs.exp.name, "paths")
+    # the paper's figure number only for the paper's own experiment (a user's file named
+    # "stick" is not paper Fig. 2)
+    tag = (PAPER_FIGURE_TAGS.get(runs.exp.name, "paths") if prose.is_paper_experiment(runs.exp)
+           else "paths")
     for what, fn in (
             ("prehistory", lambda: figures.fig_prehistory(a, out, tag)),
             ("boundaries", lambda: figures.fig_boundaries(runs, out)),
@@ -629,7 +632,8 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
     draw_ready(block=True)
     fig1_section = None
     if all_runs:
-        fig1_runs = [r for r in all_runs if r.exp.name in FIG1_EXPERIMENTS] or all_runs
+        fig1_runs = [r for r in all_runs if r.exp.name in FIG1_EXPERIMENTS
+                     and prose.is_paper_experiment(r.exp)] or all_runs
         with phases("figures: Fig. 1"):
             fig, err = fails.attempt("Paper Fig. 1: deterministic motion", "figure",
                                      lambda: Figure(*figures.fig_deterministic(fig1_runs, out)))

@@ -33,10 +33,11 @@ def is_paper_experiment(exp) -> bool:
     """One of the paper's experiments, from the standard circuits (a user's
     ``./circuits/stick.toml`` is the user's, whatever its name)."""
     from ..circuit.experiments import PAPER_EXPERIMENTS, standard_circuit
-    if exp.name not in PAPER_EXPERIMENTS or exp.source is None:
+    source = getattr(exp, "source", None)   # an experiment built in memory has none
+    if exp.name not in PAPER_EXPERIMENTS or source is None:
         return False
     try:
-        return Path(exp.source).resolve() == standard_circuit(exp.name).resolve()
+        return Path(source).resolve() == standard_circuit(exp.name).resolve()
     except (OSError, ValueError):
         return False
 

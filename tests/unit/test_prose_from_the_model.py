@@ -154,6 +154,12 @@ def test_user_report_prose_has_no_paper_only_sentences(user, tmp_path):
     assert "spring" not in intro and "Stribeck" not in intro and "cubic" not in intro
     full = " ".join(beyond.chapter_intro([a], 1.0, quick=False))
     assert "small replica counts" not in full
+    # a user's file named like a paper experiment is still the user's
+    own = tmp_path / "own"
+    own.mkdir()
+    named_stick = _copy("stick", "stick", own, a=0.3)
+    assert not prose.is_paper_experiment(named_stick)
+    assert not P._wants_open_question([named_stick])
     # the paper's own report keeps its sentences
     paper = [load_experiment(standard_circuit(n)) for n in ("stick", "slip", "work")]
     assert prose.is_paper_report(paper) and P._wants_open_question(paper)
