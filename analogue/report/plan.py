@@ -8,7 +8,8 @@ The ``[report]`` table of ``circuits/<name>.toml`` (all keys optional)::
     stationary_burn_in = 2.0       # discarded at the start of each
     stick_threshold = 0.1          # |v| below this many sqrt(tau_m/gamma) counts as stuck
     prehistory = [[2.0, 0.5, 3.0]] # (v0, v, t): paths from v0 (one of experiment.v0) reaching
-                                   # (v, t); a pair (v, t) means v0 = experiment.v0[0]
+                                   # (v, t); a pair (v, t) means v0 = experiment.v0[0] (refused
+                                   # when v is itself one of experiment.v0: ambiguous)
     prehistory_window = 0.15       # half-width of the target window (velocity units)
     work_paths = [[1.0, 5.0]]      # (w, tau): circuit windows of work rate ~ w vs eq. (60)
     check_replicas = 64            # replicas re-run with tight tolerances (integration check)
@@ -108,17 +109,15 @@ class ReportSettings:
         object.__setattr__(self, "stationary_burn_in", b)
         for name, sizes in (("prehistory", (2, 3)), ("work_paths", (2,))):
             items = getattr(self, name)
-            ok = isinstance(items, (list, tuple)) and all(
-                isinstance(p, (list, tuple)) and len(p) in sizes
-                and all(isinstance(x, (int, float)) and not isinstance(x, bool)
-                        and math.isfinite(x) for x in p) for p in items)
-            if not ok:
+
+            def well_formed(p, sizes=sizes) -> bool:
+                return isinstance(p, (list, tuple)) and len(p) in sizes and all(
+                    isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+                    for x in p)
+            listed = isinstance(items, (list, tuple))
+            if not (listed and all(well_formed(p) for p in items)):
+                bad = next(p for p in items if not well_formed(p)) if listed else items
                 shape = " or ".join(f"[{', '.join(['number'] * k)}]" for k in sizes)
-                bad = next((p for p in items if not (
-                    isinstance(p, (list, tuple)) and len(p) in sizes
-                    and all(isinstance(x, (int, float)) and not isinstance(x, bool)
-                            and math.isfinite(x) for x in p))), items) \
-                    if isinstance(items, (list, tuple)) else items
                 raise ValueError(f"report.{name} must be a list of {shape} entries "
                                  f"({_MEANING[name]}), got {bad!r}")
             object.__setattr__(self, name, tuple(tuple(float(x) for x in p) for p in items))
