@@ -24,6 +24,8 @@ from datetime import UTC
 EXIT_USAGE = 2
 EXIT_FAILURE = 1
 EXIT_INTERRUPTED = 130
+# Seconds a command may spend cleaning up after SIGINT/SIGTERM/SIGHUP before it exits anyway.
+EXIT_GRACE_S = 5.0
 # Exceptions that mean the input was wrong (the API raises TypeError for wrong types and
 # ValueError for wrong values; a bad TOML file or encoding is a ValueError too).
 _BAD_INPUT = (ValueError, TypeError)
@@ -125,6 +127,13 @@ class _Group(click.Group):
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
         _show_progress()
+        if args is None:
+            # The command line itself (not click's test runner, which passes args): the
+            # process ends within EXIT_GRACE_S of a signal whatever its threads wait for, and
+            # at once on a second signal (issue 19: a deck-pool wait that was never woken hung
+            # `analogue run` until SIGKILL).  Not in-process: it would end the caller.
+            from .circuit.ngspice import exit_after_signal
+            exit_after_signal(EXIT_GRACE_S)
         if not standalone_mode:
             return super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
         try:
@@ -275,7 +284,7 @@ def _store_dir_option(ctx, param, value):
         raise click.BadParameter("must be a directory path, got an empty string (leave the "
                                  "option out for $ANALOGUE_STORE or ~/.cache/analogue/runs)",
                                  param_hint="--store")
-    path = Path(value).expanduser()
+    path = _usable(Path(value).expanduser(), "--store")
     from .circuit.store import root_problem
     problem = root_problem(path)  # a dangling or looping link: nothing could ever be stored
     if problem is not None:
@@ -286,6 +295,17 @@ def _store_dir_option(ctx, param, value):
     # deck, 29 lines for a quick run, and stored nothing)
     _refuse_below_file(path, "--store")
     return path
+
+
+def _usable(path: Path, option: str) -> Path:
+    """A path whose name can be written into the UTF-8 files that name it (the page, the
+    metrics, the store's index), refused at once otherwise (issue 19: under LC_ALL=C a path
+    with accents failed after the whole run, leaving a 0-byte index.tmp)."""
+    from .files import check_path
+    try:
+        return check_path(path, option)
+    except ValueError as exc:
+        raise click.BadParameter(str(exc).removeprefix(f"{option}: "), param_hint=option) from None
 
 
 def _refuse_below_file(path: Path, option: str) -> None:
@@ -303,7 +323,7 @@ def _out_dir_option(ctx, param, value):
     ("[Errno 20] Not a directory", exit 1) after the runs."""
     if value is None:
         return None
-    _refuse_below_file(Path(value), "--out")
+    _refuse_below_file(_usable(Path(value), "--out"), "--out")
     return value
 
 

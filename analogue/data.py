@@ -26,7 +26,6 @@ import json
 import math
 import os
 import re
-import uuid
 from pathlib import Path
 
 import numpy as np
@@ -202,13 +201,11 @@ def write_netcdf(ens: Ensemble, path) -> Path:
     path = Path(path)
     ds = ensemble_to_xarray(ens)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex[:8]}.tmp")
-    try:
+    from .files import atomic_path
+    # a failure names the file and its cause (netCDF says only "NetCDF: HDF error" on a full
+    # disk) and leaves no temporary file (issue 19)
+    with atomic_path(path) as tmp:
         ds.to_netcdf(tmp, engine=ENGINE, encoding=_encoding(ds))
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
     return path
 
 

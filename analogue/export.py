@@ -19,7 +19,6 @@ from __future__ import annotations
 import csv
 import io
 import json
-import os
 from pathlib import Path
 
 from . import checks
@@ -125,9 +124,8 @@ def _csv_text(rows: list[dict]) -> str:
 
 
 def _write_text(path: Path, text: str) -> None:
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
+    from .files import write_text
+    write_text(path, text)
 
 
 # --------------------------------------------------------------------------------- export

@@ -14,7 +14,8 @@ wall time of one deck of ``r`` replicas over ``H`` holds is
 each size in ``CAL_SIZES`` = 4, 16, 32 for ``CAL_HOLDS`` holds, same seed; the counts come from the raw
 files and do not depend on the machine's load, so the choice is reproducible), interpolated
 linearly in log r.  A job of N replicas on W workers takes about ``ceil(ceil(N/r)/W) T(r)``;
-the chosen size minimises that over the allowed sizes ``SIZES`` within ``bounds``.
+the chosen size minimises that over the allowed sizes ``SIZES`` within ``bounds``, for
+``W = NOTIONAL_WORKERS`` whatever the machine (the split sets the seeds: below).
 
 The constants are fitted to CPU seconds (ngspice children, user + sys) of 32 replicas x 2000
 holds in decks of 4, 8, 16 and 32, stick and work models, trap reltol 1e-4, two repeats
@@ -45,6 +46,7 @@ __all__ = [
     "DEFAULT_BOUNDS",
     "DEFAULT_REPLICAS_PER_DECK",
     "MIN_CALIBRATED_REPLICA_HOLDS",
+    "NOTIONAL_WORKERS",
     "SIZES",
     "DeckSizeChoice",
     "choose_deck_size",
@@ -69,6 +71,13 @@ CAL_SEED = 20261123
 # replica-holds).
 DEFAULT_REPLICAS_PER_DECK = 16
 MIN_CALIBRATED_REPLICA_HOLDS = 250_000
+# The worker count of the cost model.  The deck size sets the deck seeds, so it must not
+# depend on the machine (issue 19: --workers 1 chose stationary decks of 32, --workers 2 of 4,
+# and the arrays differed by up to 0.975): every run is split as if for 2 processes, the core
+# count of the machine the published numbers were made on and of CI, so those numbers stay
+# as they were.  More cores still help: a split for 2 has at least 2 decks per round, and
+# the sizes it picks (4-16 on the shipped experiments) give many decks to share out.
+NOTIONAL_WORKERS = 2
 
 
 @dataclass(frozen=True)
@@ -116,7 +125,8 @@ def _check_bounds(bounds) -> tuple[int, int]:
     return lo, hi
 
 
-def _calibrate(model: Model, spec, *, store, scheduler, workers, executor=None) -> dict:
+def _calibrate(model: Model, spec, *, store, scheduler, workers, executor=None,
+               timeout=None) -> dict:
     from .mapping import map_model
     from .simulate import simulate
     mapping = map_model(model, spec)
@@ -132,6 +142,8 @@ def _calibrate(model: Model, spec, *, store, scheduler, workers, executor=None) 
             kw["scheduler"] = scheduler
         if executor is not None:
             kw["executor"] = executor
+        if timeout is not None:
+            kw["timeout"] = timeout  # the run's per-deck limit holds for its calibration too
         ens = simulate(model, circuit=spec, **kw)
         pts = ens.meta.get("deck_raw_points") or [None]
         if pts[0] is None:
@@ -145,10 +157,13 @@ _MEMO: dict = {}
 
 def choose_deck_size(model: Model, spec, *, replicas: int, t_end: float, workers: int,
                      bounds=DEFAULT_BOUNDS, store=None, scheduler=None, executor=None,
-                     measured: dict | None = None,
+                     timeout=None, measured: dict | None = None,
                      min_replica_holds: int = 0) -> DeckSizeChoice:
-    """Replicas per deck for a run of ``replicas`` paths of length ``t_end`` on ``workers``
-    processes; ``spec`` must have its tolerances set (:mod:`analogue.circuit.tolerances`).
+    """Replicas per deck for a run of ``replicas`` paths of length ``t_end``; ``spec`` must
+    have its tolerances set (:mod:`analogue.circuit.tolerances`).  The cost model assumes
+    :data:`NOTIONAL_WORKERS` processes whatever ``workers`` is (the processes that run the
+    calibration), so the split, and with it every deck's seed, is a function of the run
+    alone, the same on every machine.
     ``measured``: points per hold by deck size, skipping the calibration (tests).  Runs of
     fewer than ``min_replica_holds`` replica-holds get ``DEFAULT_REPLICAS_PER_DECK`` (within
     the bounds) without a calibration (source "default")."""
@@ -166,8 +181,8 @@ def choose_deck_size(model: Model, spec, *, replicas: int, t_end: float, workers
         key = (repr(model.as_dict()), repr(spec))
         if key not in _MEMO:
             _MEMO[key] = _calibrate(model, spec, store=store, scheduler=scheduler,
-                                    workers=workers, executor=executor)
+                                    workers=workers, executor=executor, timeout=timeout)
         measured = _MEMO[key]
-    pred = {r: job_time(r, replicas, holds, workers, measured) for r in allowed}
+    pred = {r: job_time(r, replicas, holds, NOTIONAL_WORKERS, measured) for r in allowed}
     best = min(allowed, key=lambda r: (round(pred[r], 6), -r))
     return DeckSizeChoice(best, "measured", dict(measured), pred)

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import atexit
 import collections
+import fcntl
 from typing import Any
 import functools
 import os
@@ -36,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import checks
+from ..files import utf8 as _utf8
 from .rawfile import RawPlot, read_raw
 
 __all__ = [
@@ -169,7 +171,10 @@ _ACTIVE: dict = {}          # group -> set of Popen
 # have been cancelled (on a Dask worker nobody else would ever prune this).
 _CANCELLED: collections.OrderedDict = collections.OrderedDict()
 _CANCELLED_MAX = 256
-_ACTIVE_LOCK = threading.Lock()
+# Re-entrant: the signal handler (terminate_all) runs in the main thread between any two
+# bytecodes, also inside a `with _ACTIVE_LOCK` of that thread (a deck run from the main thread
+# tracking its process); a plain Lock would deadlock it there, and the exit timer with it.
+_ACTIVE_LOCK = threading.RLock()
 
 
 def _kill_tree(proc) -> None:
@@ -184,10 +189,10 @@ def _kill_tree(proc) -> None:
 
 
 def _spawn(argv, cwd, stdout, stderr):
-    # ngspice 39 dereferences $HOME while looking for ~/.spiceinit: unset, it dies of SIGSEGV
-    # (measured, exit 139; an empty HOME is fine).  Without one it gets its own working
-    # directory, where no .spiceinit lies.
-    env = None if "HOME" in os.environ else {**os.environ, "HOME": str(cwd)}
+    # HOME is the run's own directory: ngspice 39 segfaults without one (issue 19: HOME unset
+    # gave a bare SIGSEGV) and reads ~/.spiceinit from it, which could change any deck's
+    # numbers on one machine only; the deck is the whole circuit.
+    env = {**os.environ, "HOME": str(cwd)}
     return subprocess.Popen(argv, cwd=cwd, stdin=subprocess.DEVNULL, stdout=stdout,
                             stderr=stderr, start_new_session=True, env=env)
 
@@ -206,7 +211,7 @@ def _wait(proc, timeout: float) -> int:
 
 @functools.lru_cache(maxsize=8)
 def _version_of(executable: str) -> str:
-    with tempfile.TemporaryDirectory(prefix=_tmp_prefix()) as tmp:
+    with _owned_tmpdir() as tmp:
         out_p, err_p = Path(tmp) / "stdout.txt", Path(tmp) / "stderr.txt"
         try:
             _run_guarded([executable, "-v"], tmp, out_p, err_p, None, VERSION_TIMEOUT)
@@ -244,7 +249,7 @@ class RunResult:
 def _track(proc, group) -> None:
     with _ACTIVE_LOCK:
         _ACTIVE.setdefault(group, set()).add(proc)
-        cancelled = group is not None and group in _CANCELLED
+        cancelled = (group is not None and group in _CANCELLED) or _STOPPING.is_set()
     if cancelled:
         _kill_tree(proc)  # its run was given up while this deck was being prepared
 
@@ -303,6 +308,40 @@ _GUARD_LOCK = threading.RLock()
 _GUARD: dict[str, Any] = {"depth": 0, "previous": {}, "raised": False, "deferred": None}
 _GUARDED_SIGNALS = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP")
                          if hasattr(signal, n))
+# Set by a guarded signal, cleared when the outermost guard ends: while it is set no
+# ngspice starts (run_deck refuses, _track kills), so a pool thread that takes the next
+# queued deck after the signal's terminate_all cannot run it to the end (the noise-free run
+# of `analogue run stick --quick` is one deck of about 10 s).
+_STOPPING = threading.Event()
+# Seconds a command-line process may spend unwinding after a signal before it exits anyway
+# (None: never, the library default; the CLI sets it with exit_after_signal).
+_EXIT_GRACE: dict[str, float | None] = {"s": None}
+
+
+def exit_after_signal(grace_s: float | None) -> None:
+    """For a command-line process: after a guarded signal, exit with 128 + signal once
+    ``grace_s`` seconds have passed if unwinding has not ended the process by then, and at
+    once on a second signal (killing every ngspice first).  A library caller (a notebook)
+    keeps the default None: its process is never ended here."""
+    _EXIT_GRACE["s"] = grace_s
+
+
+def _hard_exit(signum: int, why: str) -> None:
+    """End the process now with 128 + signum: ngspice killed, our temporary directories
+    removed (the store's writes are atomic: a half-written entry is a .tmp file that the
+    next run removes).  Never blocks on a lock (it is the last resort)."""
+    if _ACTIVE_LOCK.acquire(timeout=0.5):  # a holder gets half a second to finish, no more
+        _ACTIVE_LOCK.release()
+    procs = [p for group in list(_ACTIVE.values()) for p in list(group)]
+    for proc in procs:
+        _kill_tree(proc)
+    for d in Path(tempfile.gettempdir()).glob(f"{_tmp_prefix()}*"):
+        shutil.rmtree(d, ignore_errors=True)
+    try:
+        os.write(2, f"analogue: error: {RunInterrupted(signum)} ({why})\n".encode(
+            "utf-8", "replace"))
+    finally:
+        os._exit(128 + signum)
 
 
 def _on_signal(signum, frame):
@@ -311,14 +350,24 @@ def _on_signal(signum, frame):
         # would leave the new process out of terminate_all and orphan it in its own session
         _GUARD["deferred"].append(signum)
         return
+    _STOPPING.set()
     terminate_all()  # first of all: no ngspice keeps running while we unwind
     prev = _GUARD["previous"].get(signum)
     if callable(prev) and prev is not signal.default_int_handler:
         prev(signum, frame)  # the caller's own handler (chained)
         return
+    grace = _EXIT_GRACE["s"]
     if _GUARD["raised"]:
-        return  # already unwinding: the processes are dead, let the clean-up finish
+        # already unwinding: the processes are dead; a user who signals again wants out
+        if grace is not None:
+            _hard_exit(signum, "second signal while cleaning up")
+        return
     _GUARD["raised"] = True
+    if grace is not None:
+        timer = threading.Timer(grace, _hard_exit,
+                                args=(signum, f"clean-up did not end within {grace:g} s"))
+        timer.daemon = True
+        timer.start()
     raise RunInterrupted(signum)
 
 
@@ -335,6 +384,7 @@ def interrupt_guard():
     with _GUARD_LOCK:
         if _GUARD["depth"] == 0:
             _GUARD["raised"] = False
+            _STOPPING.clear()
             _GUARD["previous"] = {}
             for sig in _GUARDED_SIGNALS:
                 prev = signal.getsignal(sig)
@@ -349,6 +399,7 @@ def interrupt_guard():
         with _GUARD_LOCK:
             _GUARD["depth"] -= 1
             if _GUARD["depth"] == 0:
+                _STOPPING.clear()  # the interrupted call has unwound: later calls may run
                 for sig, prev in _GUARD["previous"].items():
                     signal.signal(sig, prev if prev is not None else signal.SIG_DFL)
                 _GUARD["previous"] = {}
@@ -403,13 +454,65 @@ def _tmp_prefix() -> str:
     return f"{TMP_PREFIX}{host}.{os.getpid()}-"
 
 
-_SWEPT: set[bool] = set()  # {True} once the stale temporary directories were swept
+# A directory is in use while its owner holds an exclusive flock on this file; the kernel
+# drops the lock when the owner dies however it dies (SIGKILL, the OOM killer), so a lock
+# that can be taken marks an abandoned directory, whatever its age or its pid's fate.
+OWNER_LOCK = ".owner.lock"
+#: seconds between two sweeps of abandoned directories in one process
+SWEEP_EVERY_S = 60.0
+_LAST_SWEEP: list[float | None] = [None]
+
+
+@contextmanager
+def _owned_tmpdir():
+    """A fresh ``analogue-ngspice-*`` temporary directory (its path, a str), locked for the
+    block (:data:`OWNER_LOCK`) and removed after it.  The lock file is locked before it gets
+    its name, so a sweep never sees it unlocked while its owner lives."""
+    with tempfile.TemporaryDirectory(prefix=_tmp_prefix()) as tmp:
+        fd = os.open(os.path.join(tmp, OWNER_LOCK + ".new"), os.O_WRONLY | os.O_CREAT, 0o600)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX)
+            os.rename(os.path.join(tmp, OWNER_LOCK + ".new"), os.path.join(tmp, OWNER_LOCK))
+            yield tmp
+        finally:
+            os.close(fd)
+
+
+def _abandoned(d: Path, pid: int, now: float, min_age: float) -> bool:
+    """Whether ``d`` (an ``analogue-ngspice-*`` directory of process ``pid`` of this host) is
+    no longer in use: its owner lock can be taken, or (no lock: a directory of an older
+    version, or one being created) its process is gone and it is older than ``min_age``."""
+    try:
+        fd = os.open(d / OWNER_LOCK, os.O_RDONLY)
+    except FileNotFoundError:
+        try:
+            os.kill(pid, 0)
+            return False  # its process is alive (maybe creating it)
+        except ProcessLookupError:
+            pass
+        except (PermissionError, OverflowError):
+            return False
+        try:
+            return now - d.lstat().st_mtime >= min_age and d.is_dir() and not d.is_symlink()
+        except OSError:
+            return False
+    except OSError:
+        return False
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        return True
+    except OSError:
+        return False  # held: in use
+    finally:
+        os.close(fd)
 
 
 def sweep_stale_tmp(min_age: float = 60.0) -> int:
     """Remove ``analogue-ngspice-*`` directories in the temporary directory that belong to a
-    process of this host that no longer exists (killed by SIGKILL or the OOM killer) and are
-    older than ``min_age`` seconds; returns how many were removed."""
+    process of this host that is no longer using them (killed by SIGKILL or the OOM killer):
+    their owner lock (:data:`OWNER_LOCK`) can be taken; directories without one (left by an
+    older version) once their process is gone and they are older than ``min_age`` seconds.
+    Returns how many were removed."""
     root = Path(tempfile.gettempdir())
     host = re.sub(r"[^A-Za-z0-9_-]", "_", socket.gethostname())[:40] or "host"
     removed = 0
@@ -420,23 +523,24 @@ def sweep_stale_tmp(min_age: float = 60.0) -> int:
     now = _time.time()
     for d in candidates:
         m = re.fullmatch(re.escape(f"{TMP_PREFIX}{host}.") + r"(\d+)-.*", d.name)
-        if not m or int(m.group(1)) == os.getpid():
+        if not m or int(m.group(1)) == os.getpid() or d.is_symlink() or not d.is_dir():
             continue
-        try:
-            os.kill(int(m.group(1)), 0)
-            continue  # its process is alive
-        except ProcessLookupError:
-            pass
-        except (PermissionError, OverflowError):
-            continue
-        try:
-            if now - d.lstat().st_mtime < min_age or not d.is_dir() or d.is_symlink():
-                continue
-        except OSError:
-            continue
-        shutil.rmtree(d, ignore_errors=True)
-        removed += 1
+        if _abandoned(d, int(m.group(1)), now, min_age):
+            shutil.rmtree(d, ignore_errors=True)
+            removed += 1
     return removed
+
+
+def _sweep_now_and_then() -> None:
+    """:func:`sweep_stale_tmp` at the first deck of a process and then at most every
+    :data:`SWEEP_EVERY_S` (issue 19: once per process left a killed run's directories for
+    ever when the next run came within the minute)."""
+    now = _time.monotonic()
+    last = _LAST_SWEEP[0]
+    if last is not None and now - last < SWEEP_EVERY_S:
+        return
+    _LAST_SWEEP[0] = now
+    sweep_stale_tmp()
 
 
 # ---------------------------------------------------------------------------- deck screen
@@ -638,15 +742,16 @@ def run_deck(text: str, *, timeout: float = 3600.0, t_stop: float | None = None,
     """
     check_deck(text)
     timeout = checks.positive("timeout (seconds)", timeout)
+    if _STOPPING.is_set():
+        raise NgspiceError("not started: the run was interrupted by a signal")
     exe = find_ngspice()
     version = _version_of(exe)
-    if not _SWEPT:
-        _SWEPT.add(True)
-        sweep_stale_tmp()
-    with tempfile.TemporaryDirectory(prefix=_tmp_prefix()) as tmp:
+    _sweep_now_and_then()
+    with _owned_tmpdir() as tmp:
         work = Path(keep_dir) if keep_dir is not None else Path(tmp)
         work.mkdir(parents=True, exist_ok=True)
-        (work / "deck.cir").write_text(_stage_files(text, files, work))
+        # UTF-8 whatever the locale (a file path in the deck keeps its bytes: files.utf8)
+        (work / "deck.cir").write_bytes(_utf8(_stage_files(text, files, work)))
         raw = work / "out.raw"
         out_p, err_p = work / "stdout.txt", work / "stderr.txt"
         t0 = _time.perf_counter()

@@ -488,6 +488,25 @@ def _stop_remote(client, group) -> None:
                     " ".join(str(exc).split())[:200])
 
 
+# How often a wait for decks looks for futures cancelled behind its back (below).
+POLL_S = 0.2
+
+
+def _completed(futures):
+    """The futures as they finish, like ``concurrent.futures.as_completed``, but a future
+    cancelled by its executor's owner (``shutdown(cancel_futures=True)``, the report's deck
+    pool after an interrupt or a failed run) raises CancelledError within ``POLL_S``:
+    ``as_completed`` is never woken for those and waited for ever (issue 19: Ctrl-C in
+    ``analogue run`` hung the run threads whose decks were all still queued)."""
+    pending = set(futures)
+    while pending:
+        done, pending = cf.wait(pending, timeout=POLL_S, return_when=cf.FIRST_COMPLETED)
+        if not done and any(f.cancelled() for f in pending):
+            raise cf.CancelledError("the executor cancelled decks of this run (it was shut "
+                                    "down or the run was interrupted)")
+        yield from done
+
+
 def run_decks(decks: Sequence[Deck], times: ArrayLike, v0: ArrayLike, *,
               store: str | PathLike[str] | bool | None = None, workers: int | None = None,
               scheduler: str | None = None, progress: bool | None = None,
@@ -588,7 +607,7 @@ def run_decks(decks: Sequence[Deck], times: ArrayLike, v0: ArrayLike, *,
             store_ok = True
             try:
                 futures = {ex.submit(run_batch, t): t for t in todo}
-                for fut in cf.as_completed(futures):
+                for fut in _completed(futures):
                     task = futures[fut]
                     out = fut.result()
                     problem = _result_problem(task, out)
@@ -885,7 +904,7 @@ def simulate(model: Model, *, v0: float | ArrayLike | Literal["stationary"], t_e
         from .tolerances import MIN_CALIBRATED_REPLICA_HOLDS, resolve_spec
         spec, tol_choice = resolve_spec(model, spec, replicas=replicas, t_end=t_end,
                                         store=store, workers=workers,
-                                        scheduler=scheduler, executor=executor,
+                                        scheduler=scheduler, executor=executor, timeout=timeout,
                                         min_replica_holds=MIN_CALIBRATED_REPLICA_HOLDS)
     deck_choice = None
     if per_deck is None:
@@ -893,7 +912,7 @@ def simulate(model: Model, *, v0: float | ArrayLike | Literal["stationary"], t_e
         from .deck_size import choose_deck_size
         deck_choice = choose_deck_size(model, spec, replicas=replicas, t_end=t_end,
                                        workers=workers or os.cpu_count() or 1,
-                                       store=store,
+                                       store=store, timeout=timeout,
                                        scheduler=scheduler, executor=executor,
                                        min_replica_holds=min_holds)
         per_deck = deck_choice.replicas_per_deck

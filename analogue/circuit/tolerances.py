@@ -336,7 +336,7 @@ _MEMO: dict = {}
 
 
 def _calibrate(model: Model, spec: CircuitSpec, candidates, *, store, workers, scheduler,
-               executor=None):
+               executor=None, timeout=None):
     """Run (or load) the calibration; returns (results, t_cal)."""
     from .simulate import simulate
     mapping = map_model(model, spec.replace(**FIXED.as_dict()))
@@ -356,6 +356,8 @@ def _calibrate(model: Model, spec: CircuitSpec, candidates, *, store, workers, s
         kw.pop("scheduler")
     if executor is not None:
         kw["executor"] = executor
+    if timeout is not None:
+        kw["timeout"] = timeout  # the run's per-deck limit holds for its calibration too
     ref = simulate(model, circuit=reference_spec(spec, mapping, tightest), **kw)
     threshold = 0.1 * model.velocity_scale if math.isfinite(model.gamma) else 0.0
     # the indicators as the report's integration check measures them (smoothed)
@@ -381,7 +383,7 @@ def _has_noise(model: Model) -> bool:
 def choose_tolerances(model: Model, spec: CircuitSpec | None = None, *, replicas: int,
                       t_end: float, fraction: float = DEFAULT_FRACTION, candidates=CANDIDATES,
                       store=None, workers=None, scheduler=None, executor=None,
-                      min_replica_holds: int = 0,
+                      timeout=None, min_replica_holds: int = 0,
                       check_replicas: int | None = None,
                       observables=None) -> ToleranceChoice:
     """The tolerances for a run of ``replicas`` paths of length ``t_end`` (model units) of
@@ -426,7 +428,7 @@ def choose_tolerances(model: Model, spec: CircuitSpec | None = None, *, replicas
         pool = list(dict.fromkeys(Tolerances(**{**c.as_dict(), **given}) for c in candidates))
     results, t_cal = _calibrate(model, spec.replace(**{k: None for k in unset}), tuple(pool),
                                 store=store, workers=workers, scheduler=scheduler,
-                                executor=executor)
+                                executor=executor, timeout=timeout)
     best, met, name, ratio = select(results, replicas=replicas, t_end=float(t_end), t_cal=t_cal,
                                     fraction=fraction, check_replicas=check_replicas,
                                     observables=observables)

@@ -142,5 +142,7 @@ def save(fig: Figure, path: Path) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     freeze_layout(fig)
-    fig.savefig(path, dpi=DPI)
+    from ..files import atomic_path
+    with atomic_path(path) as tmp:   # never a half-written PNG (a full disk names the file)
+        fig.savefig(tmp, dpi=DPI, format="png")
     return path

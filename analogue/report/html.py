@@ -127,9 +127,6 @@ def render_page(title: str, intro: list, sections: list) -> str:
 def write_page(path: Path, title: str, intro: list, sections: list) -> Path:
     """Write ``path`` (index.html) with every figure inlined (atomically: a reader never sees
     half a page)."""
-    text = render_page(title, intro, sections)
-    path = Path(path)
-    tmp = path.with_suffix(".tmp")
-    tmp.write_text(text, encoding="utf-8")
-    tmp.replace(path)
-    return path
+    from ..files import write_text
+    # UTF-8 whatever the locale, the path named as it is on disk; a full disk names the page
+    return write_text(Path(path), render_page(title, intro, sections))

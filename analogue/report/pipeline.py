@@ -29,6 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..files import write_text
 from ..circuit.experiments import (FIG1_EXPERIMENTS,
                                    PAPER_EXPERIMENTS, PAPER_FIGURE_TAGS, Experiment,
                                    load_experiment, standard_circuit)
@@ -39,6 +40,7 @@ from .html import Figure, Section, Table, write_page
 from .metrics import validate_metrics
 from .plan import RunOptions
 from .runs import ExperimentRuns, run_experiment_runs
+from ..circuit.simulate import POLL_S
 
 __all__ = ["RunOptions", "run_experiment", "build_experiment_report", "build_paper_report",
            "build_report", "RunSummary", "ReportIncomplete", "experiment_section_text"]
@@ -82,6 +84,19 @@ class _Failures:
 
 
 log = logging.getLogger(__name__)
+
+
+def _result(f: Future):
+    """``f.result()``, waited for in polls of ``POLL_S``: a wait without a timeout is not
+    woken by a signal the kernel delivered to another thread, so the main thread's handler
+    (RunInterrupted) would wait for the task (issue 19: under load a SIGTERM to ``analogue
+    run`` once went unanswered for more than 10 s)."""
+    while True:
+        try:
+            return f.result(timeout=POLL_S)
+        except TimeoutError:
+            if f.done():
+                raise  # the task's own TimeoutError
 
 
 def _log(msg: str) -> None:
@@ -272,7 +287,7 @@ def _open_question_section(out: Path, opts: RunOptions, data=None) -> Section:
     from ..plots.open_question import draw_open_question
     gammas = _open_question_gammas(opts)
     if isinstance(data, Future):
-        data = data.result()
+        data = _result(data)
     paths = draw_open_question(out, gammas=gammas, data=data)
     text = [
         "The paper finds a jump of the rate function I(w) at w = 0 (eq. (64)) and cannot tell "
@@ -478,7 +493,7 @@ def _experiment_title(exp) -> str:
 def _curves_of(f: Future):
     """An experiment's theory curves from the theory thread."""
     try:
-        return f.result()
+        return _result(f)
     except Exception as exc:  # figure_curves keeps its failures; this is a safety net
         from .theory_curves import CURVE_GROUPS, FigureCurves
         curves = FigureCurves()
@@ -589,7 +604,8 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
             if oq_f is not None and not oq_section:
                 waits.append(oq_f)
             with phases("waiting for circuit runs"):
-                wait(waits, return_when=FIRST_COMPLETED)
+                while not wait(waits, timeout=POLL_S, return_when=FIRST_COMPLETED).done:
+                    pass  # (polled: see _result)
 
     # the experiments are compared in the order their runs complete (the page keeps the
     # paper's order)
@@ -597,7 +613,7 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
         i = next_done()
         exp, run_f, th_f, bw_f = experiments[i], runs_f.pop(i), theory_f[i], band_f[i]
         section = f"Experiment '{exp.name}'"
-        runs, err = fails.attempt(section, "circuit runs", run_f.result, exp.name)
+        runs, err = fails.attempt(section, "circuit runs", lambda f=run_f: _result(f), exp.name)
         if runs is None:
             th_f.cancel()
             bw_f.cancel()
@@ -612,8 +628,8 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
 
         def compare_(runs=runs, th_f=th_f, bw_f=bw_f):
             with phases("waiting for theory", runs.exp.name):
-                theory: ExperimentTheory = th_f.result()
-                bandwidth: BandwidthTerms = bw_f.result()
+                theory: ExperimentTheory = _result(th_f)
+                bandwidth: BandwidthTerms = _result(bw_f)
             with phases("comparisons", runs.exp.name):
                 return analyse(runs, theory=theory, bandwidth=bandwidth, progress=_log)
         analysis, err = fails.attempt(section, "comparison with theory", compare_, exp.name)
@@ -777,9 +793,10 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
                            "failed_sections": len(fails.items)},
                "failures": fails.items}
     validate_metrics(json.loads(json.dumps(metrics, default=str)))
-    tmp = out / "metrics.json.tmp"
-    tmp.write_text(json.dumps(metrics, indent=2, default=str))
-    tmp.replace(out / "metrics.json")
+    # (ensure_ascii=False: a path under a non-UTF-8 locale is written as its own UTF-8 bytes,
+    # not as escaped lone surrogates; files.write_text)
+    write_text(out / "metrics.json", json.dumps(metrics, indent=2, default=str,
+                                                ensure_ascii=False))
 
     timing = (f"{wall:.0f} s in all; {prose.main_part(experiments)} were complete after "
               f"{paper_wall:.0f} s, and the chapter '{beyond.CHAPTER_TITLE}' took "

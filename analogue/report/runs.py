@@ -40,7 +40,8 @@ from collections.abc import Callable
 import numpy as np
 
 from ..circuit.experiments import Experiment
-from ..circuit.simulate import DEFAULT_REPLICAS_PER_DECK
+from ..circuit.deck_size import NOTIONAL_WORKERS
+from ..circuit.simulate import DEFAULT_REPLICAS_PER_DECK, POLL_S
 from ..circuit.tolerances import STATIONARY_OBSERVABLES
 from ..circuit.store_index import indexing_runs
 from ..ensemble import Ensemble
@@ -90,7 +91,9 @@ def stationary_check_plan(replicas: int, want: int, per_deck: int, t_end: float,
     same 16 check replicas cover half the run), spread over at least ``workers`` decks (a whole
     number of rounds) where the nominal run has that many equal leading decks, so that the
     check, the longest job of the report at 5x the nominal cost per unit time, runs on every
-    core.  The window is a whole number of ``sample_dt``, at most ``t_end``."""
+    core.  The report passes :data:`~analogue.circuit.deck_size.NOTIONAL_WORKERS`, not the
+    machine's count: the decks are the nominal run's, seeds included, and the numbers must
+    not depend on the machine (issue 19).  The window is a whole number of ``sample_dt``, at most ``t_end``."""
     n_decks = -(-replicas // per_deck)
     q, r = divmod(replicas, n_decks)
     size = q + (1 if r else 0)
@@ -204,7 +207,9 @@ def _choose(model, spec, replicas: int, t_end: float, kw: dict, check: int, obse
     ``observables`` (circuit.tolerances.STATIONARY_OBSERVABLES, or None: all)."""
     from ..circuit.deck_size import choose_deck_size
     from ..circuit.tolerances import resolve_spec
-    common = {k: kw[k] for k in ("store", "scheduler") if k in kw}
+    # (the run's --timeout holds for the calibrations too: issue 19, a hung ngspice kept a
+    # --timeout 3 run going for the calibrations' default hour per deck)
+    common = {k: kw[k] for k in ("store", "scheduler", "timeout") if k in kw}
     workers = kw.get("workers") or os.cpu_count() or 1
     spec, tol = resolve_spec(model, spec, replicas=replicas, t_end=t_end, workers=workers,
                              check_replicas=min(check, replicas), observables=observables,
@@ -277,8 +282,14 @@ def _run_jobs(jobs: list[tuple[str, Callable[..., Any]]], kw: dict) -> dict:
                 # the next job's decks queue behind this one's (all from the store: none)
                 while not (view.started.wait(0.05) or fut.done()):
                     pass
-            # the first failure stops the rest at once (not when the jobs before it are done)
-            cf.wait(list(futures.values()), return_when=cf.FIRST_EXCEPTION)
+            # the first failure stops the rest at once (not when the jobs before it are done);
+            # polled, so that a signal the kernel gave another thread is handled here within
+            # a poll (a wait without timeout is not woken by it)
+            pending = set(futures.values())
+            while pending:
+                done, pending = cf.wait(pending, timeout=POLL_S, return_when=cf.FIRST_EXCEPTION)
+                if any(not f.cancelled() and f.exception() is not None for f in done):
+                    break
             for fut in futures.values():
                 if fut.done() and fut.exception() is not None:
                     fut.result()
@@ -305,7 +316,6 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
     model, spec = exp.model, exp.spec
     model_eff = exp.mapping().model_effective
     replicas = opts.scaled(exp.replicas)
-    workers = kw.get("workers") or os.cpu_count() or 1
     # Each run gets its own seed, derived from the experiment's: distinct experiments (whose
     # seeds differ) never share a noise realisation, so their comparisons are independent.
     plan = SeedPlan(exp.seed)       # every seed of the report (analogue.study.seeds)
@@ -343,7 +353,7 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
     s_decks, s_size, s_window = stationary_check_plan(
         n_stat, check, stat_deck, settings.stationary_t_end,
         burn_in=settings.stationary_burn_in, longest_window=max(taus, default=0.0),
-        sample_dt=exp.sample_dt, workers=workers)
+        sample_dt=exp.sample_dt, workers=NOTIONAL_WORKERS)
     n1 = s_decks * s_size
 
     def run(**args):
@@ -379,7 +389,7 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
     check_stationary.meta["check_window"] = {
         "t_end": s_window, "decks": s_decks, "replicas": n1,
         "rule": "replica-time after burn-in and the longest work window >= check_replicas "
-                "whole paths', over >= workers decks (analogue.report.runs."
+                "whole paths', over >= NOTIONAL_WORKERS decks (analogue.report.runs."
                 "stationary_check_plan)"}
     _check_coupled(transition[v00], check_transition, "transition check")
     _check_coupled(stationary, check_stationary, "stationary check")

@@ -46,3 +46,13 @@ def test_bad_bounds(bounds):
     with pytest.raises(ValueError, match="bounds"):
         ds.choose_deck_size(STICK, SPEC, replicas=40, t_end=1.0, workers=2, bounds=bounds,
                             measured=FLAT)
+
+
+@pytest.mark.parametrize("measured", [FLAT, STEEP])
+@pytest.mark.parametrize("replicas", [32, 64, 500])
+def test_choice_does_not_depend_on_the_machines_workers(measured, replicas):
+    """The split sets the deck seeds: the same on every machine (issue 19, item 4).  Before,
+    FLAT with 64 replicas chose 64 on one worker and 32 on two."""
+    chosen = {ds.choose_deck_size(STICK, SPEC, replicas=replicas, t_end=10.0, workers=w,
+                                  measured=measured).replicas_per_deck for w in (1, 2, 3, 16)}
+    assert len(chosen) == 1
