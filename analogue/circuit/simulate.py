@@ -21,7 +21,6 @@ import concurrent.futures as cf
 import json
 import logging
 import math
-import os
 import re
 import sys
 import time as _time
@@ -33,6 +32,7 @@ from typing import TYPE_CHECKING, Any, Literal, Protocol, overload, runtime_chec
 
 import numpy as np
 
+from ..cores import usable_cpus
 from .. import checks
 from ..checks import ArgumentTypeError
 from ..ensemble import Ensemble
@@ -533,7 +533,7 @@ def run_decks(decks: Sequence[Deck], times: ArrayLike, v0: ArrayLike, *,
     times = np.asarray(times, dtype=float)
     v0 = np.asarray(v0, dtype=float)
     if workers is None:
-        workers = os.cpu_count() or 1
+        workers = usable_cpus()
     workers = checks.integer("workers", workers, minimum=1)
     timeout = checks.positive("timeout", timeout)
     _check_scheduler(scheduler)
@@ -713,7 +713,7 @@ def _check_sizes(*, mapping, replicas, per_deck, workers, t_end, sample_dt, dt_l
     raw_points = t_end / min(max_step, t_end) if max_step and math.isfinite(max_step) else 0.0
     n_decks = -(-replicas // per_deck)
     est = limits.estimate(replicas=replicas, n_times=n_times, n_hold=n_hold, per_deck=per_deck,
-                          workers=workers or os.cpu_count() or 1, raw_points=raw_points,
+                          workers=workers or usable_cpus(), raw_points=raw_points,
                           n_decks=n_decks)
     what = (f"replicas={replicas} with t_end={t_end:g} and sample_dt={sample_dt:g}{dt_label} "
             f"({limits.format_count(n_times)} time points each)")
@@ -798,7 +798,8 @@ def simulate(model: Model, *, v0: float | ArrayLike | Literal["stationary"], t_e
         (:mod:`analogue.circuit.tolerances`, recorded in ``meta["tolerances"]``); set ones are
         used as given.
     workers : int, optional
-        ngspice processes run at once locally; default ``os.cpu_count()``.
+        ngspice processes run at once locally; default: the CPUs this process may use
+        (:func:`analogue.cores.usable_cpus`: affinity mask and cgroup quota).
     replicas_per_deck : int, optional
         Replicas per ngspice deck; default: chosen per model by
         :mod:`analogue.circuit.deck_size` from measured step counts (``meta["deck_size"]``).
@@ -911,7 +912,7 @@ def simulate(model: Model, *, v0: float | ArrayLike | Literal["stationary"], t_e
         from .deck_size import MIN_CALIBRATED_REPLICA_HOLDS as min_holds
         from .deck_size import choose_deck_size
         deck_choice = choose_deck_size(model, spec, replicas=replicas, t_end=t_end,
-                                       workers=workers or os.cpu_count() or 1,
+                                       workers=workers or usable_cpus(),
                                        store=store, timeout=timeout,
                                        scheduler=scheduler, executor=executor,
                                        min_replica_holds=min_holds)

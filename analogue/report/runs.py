@@ -40,6 +40,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..circuit.experiments import Experiment
+from ..cores import usable_cpus
 from ..circuit.deck_size import NOTIONAL_WORKERS
 from ..circuit.simulate import DEFAULT_REPLICAS_PER_DECK, POLL_S
 from ..circuit.tolerances import STATIONARY_OBSERVABLES
@@ -52,6 +53,13 @@ from .plan import ReportSettings, RunOptions
 __all__ = ["ExperimentRuns", "run_experiment_runs", "first_deck_size", "check_plan",
            "stationary_check_plan", "head"]
 
+
+
+def default_workers(kw: dict | None = None) -> int:
+    """Local ngspice processes at once: ``kw["workers"]`` when given, else the CPUs this
+    process may use (:func:`analogue.cores.usable_cpus`: affinity mask and cgroup quota, not
+    the machine's count; issue 22)."""
+    return (kw or {}).get("workers") or usable_cpus()
 
 def first_deck_size(replicas: int, per_deck: int = DEFAULT_REPLICAS_PER_DECK) -> int:
     """Replicas in deck 0 when :func:`analogue.simulate` splits ``replicas`` evenly."""
@@ -210,7 +218,7 @@ def _choose(model, spec, replicas: int, t_end: float, kw: dict, check: int, obse
     # (the run's --timeout holds for the calibrations too: issue 19, a hung ngspice kept a
     # --timeout 3 run going for the calibrations' default hour per deck)
     common = {k: kw[k] for k in ("store", "scheduler", "timeout") if k in kw}
-    workers = kw.get("workers") or os.cpu_count() or 1
+    workers = default_workers(kw)
     spec, tol = resolve_spec(model, spec, replicas=replicas, t_end=t_end, workers=workers,
                              check_replicas=min(check, replicas), observables=observables,
                              fraction=REPORT_FRACTION, **common)
@@ -267,7 +275,7 @@ def _run_jobs(jobs: list[tuple[str, Callable[..., Any]]], kw: dict) -> dict:
     from ..circuit import ngspice as _ng
     if kw.get("scheduler"):
         return {name: fn({}) for name, fn in jobs}
-    workers = kw.get("workers") or os.cpu_count() or 1
+    workers = default_workers(kw)
     out = {}
     with _ng.interrupt_guard(), \
             cf.ThreadPoolExecutor(max_workers=workers, thread_name_prefix="analogue-deck") as pool, \
