@@ -99,7 +99,7 @@ def find_metrics(experiment_name: str, report=None) -> Path | None:
 def metrics_rows(metrics_path, experiment_name: str) -> list[dict]:
     """The comparisons of one experiment in ``metrics.json`` as flat rows (budget terms become
     ``budget_<term>`` columns)."""
-    data = json.loads(Path(metrics_path).read_text())
+    data = json.loads(Path(metrics_path).read_bytes())  # UTF-8 whatever the locale
     rows = []
     for c in data.get("comparisons", []):
         if c.get("experiment") != experiment_name:

@@ -51,6 +51,8 @@ SCRIPT = textwrap.dedent("""
                                                 ensure_ascii=False))
     write_page(out / "index.html", "title", [f"store {e.meta['store']}"],
                [Section("s", ["made in " + str(out)])])
+    from analogue.export import metrics_rows
+    assert metrics_rows(out / "metrics.json", "none") == []   # read back as UTF-8
     print("ok")
 """)
 
