@@ -21,7 +21,7 @@ from ..estimators.smoothed_indicator import kernel_width
 from ..study.seeds import SeedPlan
 from ..study.catalogue import (Kind, StationaryValues, stationary_null_se, stationary_observables,
                                transition_observables, transition_theory_se, transition_values)
-from .plan import ReportSettings
+from .plan import ReportSettings, stationary_noise_dt
 from .runs import ExperimentRuns
 from .theory_curves import ExperimentTheory, FigureCurves, experiment_theory, stationary_taus
 
@@ -29,8 +29,12 @@ __all__ = ["ExperimentAnalysis", "analyse", "MC_REPLICAS", "MC_STATIONARY_REPLIC
            "BandwidthTerms", "bandwidth_terms"]
 
 # Held/white Monte Carlo pairs are cheap (numpy); enough replicas that the bandwidth estimate
-# is not dominated by its own noise (threshold observables change by whole paths).
-MC_REPLICAS = 1024
+# is not dominated by its own noise (threshold observables change by whole paths).  At 1024
+# transition replicas the paper's P(v<0) terms were up to 1.27 statistical errors of the
+# full-size circuit, of which 2 SE(d) = 0.76 was the pair's own noise; at 4096 every
+# transition term is at most 0.81 (slip, v0 = -1, t = 1; the others <= 0.43), for 10 s of
+# CPU for the three experiments' pairs and 1.7 GB peak (benchmarks/README.md).
+MC_REPLICAS = 4096
 MC_STATIONARY_REPLICAS = 256
 
 
@@ -125,8 +129,10 @@ def bandwidth_terms(exp: Experiment, settings: ReportSettings, *,
                                      force=model.force, taus=tuple(taus))
     v0_mc = sample_stationary(model_eff, MC_STATIONARY_REPLICAS, seeds.mc_stationary_v0)
     tick(f"{exp.name}: held-noise Monte Carlo pair (stationary)")
+    # the stationary runs' own (finer) hold: plan.stationary_noise_dt
     held, white = held_noise_pair(model_eff, v0=v0_mc, t_end=settings.stationary_t_end,
-                                  replicas=v0_mc.size, seed=seeds.mc_stationary, noise_dt=noise_dt,
+                                  replicas=v0_mc.size, seed=seeds.mc_stationary,
+                                  noise_dt=stationary_noise_dt(noise_dt, settings),
                                   sample_dt=exp.sample_dt)
     stationary = jackknife_difference(stationary_fn, held, white)
     return BandwidthTerms(threshold=thr, taus=tuple(taus), transition=transition,

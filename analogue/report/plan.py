@@ -13,6 +13,16 @@ The ``[report]`` table of ``circuits/<name>.toml`` (all keys optional)::
     prehistory_window = 0.15       # half-width of the target window (velocity units)
     work_paths = [[1.0, 5.0]]      # (w, tau): circuit windows of work rate ~ w vs eq. (60)
     check_replicas = 64            # replicas re-run with tight tolerances (integration check)
+    stationary_hold_divisor = 1    # the stationary runs hold the noise for noise_dt / this
+
+``stationary_hold_divisor`` (an integer 1..64, default 1) refines the noise hold of the
+stationary runs (and of their integration check) only: the held noise biases the stationary
+indicator observables (the stick fraction) most, about linearly in the hold, while a finer
+hold costs ngspice less than in proportion (measured on the paper's stationary decks: half
+the hold costs 1.43-1.71x their ngspice CPU and cuts the stick fraction's bandwidth term
+1.9-2.6x; the full work report 1.54x, 159 -> 244 s; see :func:`stationary_noise_dt` and
+``benchmarks/bench_bandwidth_frontier.py``).  An integer keeps every run length and the
+sampling step whole numbers of holds.
 
 ``--quick`` divides replica counts by four (at least 32; the integration check: at least 8;
 never more than the file's count) and halves the stationary length.
@@ -36,7 +46,8 @@ if TYPE_CHECKING:  # the experiment module imports this one (Experiment.report)
     from ..circuit.experiments import Experiment
 
 __all__ = ["RunOptions", "ReportSettings", "report_settings", "report_settings_from_dict",
-           "QUICK_DIVISOR", "MIN_STATIONARY_REPLICAS", "MIN_CHECK_REPLICAS"]
+           "QUICK_DIVISOR", "MIN_STATIONARY_REPLICAS", "MIN_CHECK_REPLICAS",
+           "MAX_HOLD_DIVISOR", "stationary_noise_dt"]
 
 QUICK_DIVISOR = 4
 MIN_QUICK_REPLICAS = 32
@@ -46,6 +57,9 @@ MIN_QUICK_CHECK_REPLICAS = 8
 MIN_STATIONARY_REPLICAS = 8
 # The integration check's paired jackknife needs at least 2 groups of 2.
 MIN_CHECK_REPLICAS = 4
+# A finer stationary hold costs ngspice about divisor^0.6 (measured 1.43-1.71x at 2, 2.2-3.2x
+# at 4 on the paper's stationary decks); 64 bounds a typo, not a design choice.
+MAX_HOLD_DIVISOR = 64
 
 
 @dataclass(frozen=True)
@@ -92,12 +106,16 @@ class ReportSettings:
     prehistory_window: float = 0.15
     work_paths: tuple = ()
     check_replicas: int = 64
+    stationary_hold_divisor: int = 1
 
     def __post_init__(self):
         for name, lo in (("stationary_replicas", MIN_STATIONARY_REPLICAS),
                          ("check_replicas", MIN_CHECK_REPLICAS)):
             object.__setattr__(self, name, checks.integer(f"report.{name}", getattr(self, name),
                                                           minimum=lo, maximum=100_000))
+        object.__setattr__(self, "stationary_hold_divisor", checks.integer(
+            "report.stationary_hold_divisor", self.stationary_hold_divisor, minimum=1,
+            maximum=MAX_HOLD_DIVISOR))
         for name in ("stationary_t_end", "stick_threshold", "prehistory_window"):
             object.__setattr__(self, name, checks.positive(f"report.{name}", getattr(self, name)))
         b = checks.finite("report.stationary_burn_in", self.stationary_burn_in)
@@ -160,6 +178,13 @@ def report_settings_from_dict(data, where: str = "experiment") -> ReportSettings
         return ReportSettings(**data)
     except (TypeError, ValueError) as exc:
         raise ValueError(f"{where}: {exc}") from None
+
+
+def stationary_noise_dt(noise_dt: float, settings: ReportSettings) -> float:
+    """The noise hold (model units) of the report's stationary runs and of their integration
+    check and bandwidth pair: the circuit's hold ``noise_dt`` divided by
+    ``settings.stationary_hold_divisor``."""
+    return noise_dt / settings.stationary_hold_divisor
 
 
 def report_settings(exp: "Experiment") -> ReportSettings:

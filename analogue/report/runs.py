@@ -48,7 +48,7 @@ from ..circuit.store_index import indexing_runs
 from ..ensemble import Ensemble
 from ..model import Model
 from ..study.seeds import SeedPlan
-from .plan import ReportSettings, RunOptions
+from .plan import ReportSettings, RunOptions, stationary_noise_dt
 
 __all__ = ["ExperimentRuns", "run_experiment_runs", "first_deck_size", "check_plan",
            "stationary_check_plan", "head"]
@@ -166,6 +166,8 @@ class ExperimentRuns:
             "parameters": self.exp.model.as_dict(),
             "model_effective": self.model_effective.as_dict(),
             "circuit_spec": self.exp.spec.as_dict(),
+            # the stationary runs' finer hold (plan.stationary_noise_dt), model units
+            "stationary_noise_dt": self.stationary.meta.get("noise_dt"),
             "quick": self.quick,
             "seeds": self.seeds,
             "ngspice_version": self.stationary.meta.get("ngspice_version"),
@@ -349,8 +351,12 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
     # trtol 20, and their P(v<0) rows' integration terms reached 0.14 and 0.12 SE)
     trans_spec, trans_deck, trans_why = _choose(model, spec, replicas, exp.t_end, kw, check,
                                                 None)
-    stat_spec, stat_deck, stat_why = _choose(model, spec, n_stat, settings.stationary_t_end, kw,
-                                             check, STATIONARY_OBSERVABLES)
+    # the stationary runs (and their check) hold the noise for a fraction of the circuit's
+    # hold (plan.stationary_noise_dt): their indicator observables carry the largest
+    # bandwidth bias; tolerances and deck size are chosen for that finer deck
+    stat_base = spec.replace(noise_dt=stationary_noise_dt(exp.mapping().noise_dt, settings))
+    stat_spec, stat_deck, stat_why = _choose(model, stat_base, n_stat, settings.stationary_t_end,
+                                             kw, check, STATIONARY_OBSERVABLES)
     v0_stat = np.asarray(sample_stationary(model_eff, n_stat, seeds["stationary"]), dtype=float)
     for i, v0 in enumerate(exp.v0):
         seeds[f"transition v0={v0:g}"] = plan.transition(i)

@@ -46,7 +46,8 @@ def _tiny(stationary_t_end=4.0):
         "circuit": {"reltol": 1e-4, "trtol": 7.0, "method": "trap"},
         "experiment": {"v0": [1.0], "replicas": 4, "t_end": 0.5, "sample_dt": 0.01, "seed": 3},
         "report": {"stationary_replicas": 16, "stationary_t_end": stationary_t_end,
-                   "stationary_burn_in": 0.2, "check_replicas": 4},
+                   "stationary_burn_in": 0.2, "check_replicas": 4,
+                   "stationary_hold_divisor": 2},
     }, "tiny")
 
 
@@ -63,6 +64,12 @@ def test_report_check_covers_a_prefix_on_matched_paths(tmp_path):
     # the check is shorter than the run; the nominal counterpart is the run's prefix
     assert Tc < T
     assert nom.v.shape == chk.v.shape
+    # the stationary run and its check hold the noise for half the circuit's hold
+    # ([report] stationary_hold_divisor = 2), the transition runs for all of it
+    hold = exp.mapping().noise_dt
+    assert stat.meta["noise_dt"] == chk.meta["noise_dt"] == hold / 2
+    assert runs.transition[1.0].meta["noise_dt"] == hold
+    assert runs.provenance()["stationary_noise_dt"] == hold / 2
     np.testing.assert_array_equal(nom.v, stat.v[:chk.replicas, :chk.t.size])
     np.testing.assert_allclose(nom.t, chk.t, rtol=0, atol=1e-9)
     # the check retraces them (100x tighter on the same noise): small, nonzero differences

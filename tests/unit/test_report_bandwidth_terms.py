@@ -32,7 +32,7 @@ def _tiny(seed: int = 11):
     d = tomllib.loads((ROOT / "circuits" / "stick.toml").read_text())
     d["experiment"].update(t_end=2.0, histogram_times=[0.5, 2.0], seed=seed)
     d["report"].update(stationary_t_end=8.0, stationary_burn_in=1.0,
-                       prehistory=[[2.0, 0.9, 1.0]])
+                       prehistory=[[2.0, 0.9, 1.0]], stationary_hold_divisor=2)
     exp = experiment_from_dict(d)
     return exp, exp.report.for_options(RunOptions(quick=True))
 
@@ -62,9 +62,11 @@ def test_bandwidth_terms_are_the_held_white_pairs_on_the_experiments_seeds(tiny)
     fn = StationaryValues(burn_in=settings.stationary_burn_in, threshold=thr,
                           force=exp.model.force, taus=bw.taus)
     v0_mc = sample_stationary(m_eff, MC_STATIONARY_REPLICAS, seeds.mc_stationary_v0)
+    # the stationary runs hold the noise for noise_dt / stationary_hold_divisor (2 here)
+    assert settings.stationary_hold_divisor == 2
     held, white = held_noise_pair(m_eff, v0=v0_mc, t_end=settings.stationary_t_end,
                                   replicas=v0_mc.size, seed=seeds.mc_stationary,
-                                  noise_dt=noise_dt, sample_dt=exp.sample_dt)
+                                  noise_dt=noise_dt / 2, sample_dt=exp.sample_dt)
     assert bw.stationary == jackknife_difference(fn, held, white)
     assert bw.threshold == thr
 
@@ -108,3 +110,17 @@ def test_terms_of_other_settings_are_refused(tiny):
     other = replace(settings, stick_threshold=0.2)
     with pytest.raises(ValueError, match="bandwidth terms computed for other settings"):
         analyse(runs, theory=theory, bandwidth=bandwidth_terms(exp, other))
+
+
+def test_stationary_term_follows_the_stationary_hold(tiny):
+    """The stationary runs' hold is the circuit's over ``stationary_hold_divisor``: their
+    bandwidth term is computed at that hold (divisor 1 gives the circuit's own hold, and a
+    larger term: the bias is about linear in the hold), the transition terms are unchanged
+    (``tiny`` has divisor 2)."""
+    exp, settings, bw = tiny
+    coarse = bandwidth_terms(exp, replace(settings, stationary_hold_divisor=1))
+    assert coarse.transition == bw.transition
+    d_fine = bw.stationary["stick fraction"]
+    d_coarse = coarse.stationary["stick fraction"]
+    # the halved hold's stick-fraction bias is smaller by more than both pairs' errors
+    assert abs(d_coarse[0]) - abs(d_fine[0]) > 2.0 * (d_coarse[1] + d_fine[1])
