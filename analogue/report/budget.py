@@ -30,7 +30,7 @@ from ..theory.friction_law import stationary_law_with_friction, transition_momen
 
 __all__ = ["held_noise_pair", "integration_term", "real_diode_element",
            "real_diode_transition_element", "SE_MULTIPLIER", "RICHARDSON",
-           "MIN_STEPS_PER_HOLD"]
+           "MIN_STEPS_PER_HOLD", "CIRCUIT_BIAS_TERMS", "terms_above_se", "terms_above_se_text"]
 
 # A measured bias enters the budget as |estimate| + SE_MULTIPLIER * its standard error.
 SE_MULTIPLIER = 2.0
@@ -63,6 +63,53 @@ def integration_term(values, check: Ensemble, nominal: Ensemble, h: float) -> di
         kernel = RICHARDSON * abs(d - (a[k] - b[k])) if h > 0 else 0.0
         out[k] = (abs(d) + SE_MULTIPLIER * se + kernel, d, se, kernel)
     return out
+
+
+# The budget's circuit bias terms (report.metrics.Budget), with what each is (finite_noise is
+# the paper's weak-noise formula against the exact theory, not a property of the circuit).
+CIRCUIT_BIAS_TERMS = {
+    "smoothing": "the diode bridge's tanh width (smoothing)",
+    "bandwidth": "the held noise (noise_dt; [report] stationary_hold_divisor for the "
+                 "stationary rows)",
+    "integration": "ngspice's tolerances",
+    "sampling": "the output grid and binning",
+    "element": "the circuit elements (real diodes, cubic network, inductor, shot pulses)",
+}
+
+
+def terms_above_se(comps, limit: float = 1.0) -> dict:
+    """``{experiment: [(observable, term, ratio), ...]}``: every circuit bias term
+    (:data:`CIRCUIT_BIAS_TERMS`) of the comparisons ``comps`` (report.metrics.Comparison) that
+    is at least ``limit`` statistical errors, once per experiment and observable (an
+    observable compared with the exact and the weak-noise theory has the same circuit terms),
+    largest first within an observable."""
+    out: dict = {}
+    seen = set()
+    for c in comps:
+        key = (c.experiment, c.observable)
+        if key in seen or not c.circuit_stderr > 0:
+            continue
+        seen.add(key)
+        big = sorted(((name, abs(getattr(c.budget, name)) / c.circuit_stderr)
+                      for name in CIRCUIT_BIAS_TERMS), key=lambda t: -t[1])
+        for name, ratio in big:
+            if ratio >= limit:
+                out.setdefault(c.experiment, []).append((c.observable, name, ratio))
+    return out
+
+
+def terms_above_se_text(comps, limit: float = 1.0) -> list[str]:
+    """The report summary's lines naming the bias terms of at least ``limit`` statistical
+    errors (issue 18: every bias term below one SE, or named with the reason)."""
+    found = terms_above_se(comps, limit)
+    if not found:
+        return []
+    lines = [f"{exp}: bias terms of at least {limit:g} standard error: "
+             + "; ".join(f"{obs} ({name} {r:.1f} SE)" for obs, name, r in rows) + "."
+             for exp, rows in found.items()]
+    used = sorted({name for rows in found.values() for _, name, _ in rows})
+    lines.append("Reasons: " + "; ".join(f"{n}: {CIRCUIT_BIAS_TERMS[n]}" for n in used) + ".")
+    return lines
 
 
 def held_noise_pair(model: Model, *, v0, t_end: float, replicas: int, seed: int,

@@ -34,6 +34,7 @@ from ..circuit.experiments import (FIG1_EXPERIMENTS,
                                    PAPER_EXPERIMENTS, PAPER_FIGURE_TAGS, Experiment,
                                    load_experiment, standard_circuit)
 from . import figures, prose
+from .budget import terms_above_se_text
 from .comparisons import BandwidthTerms, ExperimentAnalysis, analyse, bandwidth_terms
 from .theory_curves import ExperimentTheory, experiment_theory, figure_curves
 from .html import Figure, Section, Table, write_page
@@ -693,7 +694,8 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
         "estimated systematic errors). " + prose.theory_kinds_text(experiments, members)]
     if failed_names:
         summary_text.append("Failed (see their sections): " + ", ".join(failed_names) + ".")
-    sections.append(Section("Summary", summary_text + _explain(comps),
+    sections.append(Section("Summary", summary_text + _explain(comps)
+                            + terms_above_se_text(comps),
         tables=[Table("Per experiment", ["experiment", "comparisons", "|z| < 3", "within budget",
                                          "exact: |z| < 3", "exact: total"], summary_rows)]))
 

@@ -142,6 +142,13 @@ def test_quick_paper_comparisons_are_within_budget_or_flagged(paper_report):
     for c in exact:
         assert c["within_budget"] == (abs(c["circuit"] - c["theory"])
                                       <= 3 * c["circuit_stderr"] + c["budget"]["total"] + 1e-15)
+    # every circuit bias term of at least one SE is named in the summary with its reason
+    # (issue 18; report.budget.terms_above_se_text)
+    from analogue.report.budget import CIRCUIT_BIAS_TERMS
+    for c in exact:
+        for name in CIRCUIT_BIAS_TERMS:
+            if c["circuit_stderr"] and abs(c["budget"][name]) >= c["circuit_stderr"]:
+                assert str(escape(f"{c['observable']} ({name} ")) in html, (c["observable"], name)
 
 
 def _chromium():
