@@ -441,16 +441,20 @@ def figures(out):
 def export(experiment, out, report_dir, workers, scheduler, store, timeout, quick, progress):
     """Write every circuit run of EXPERIMENT as netCDF (<role>.nc) and metrics.csv.
 
-    Runs come from the store (running what is missing); read them back with
-    analogue.open_ensemble(path) or xarray.open_dataset(path).
+    The runs are the report's of the same size (--quick or not; the line before it starts
+    says which): from the store, running what is missing.  metrics.csv only from a report of
+    these runs.  Read them back with analogue.open_ensemble(path) or
+    xarray.open_dataset(path).
     """
     from .circuit.experiments import load_experiment
     from .export import export_experiment
-    name = load_experiment(experiment).name
-    out = out or Path("export") / name
-    for p in export_experiment(experiment, out, report=report_dir, quick=quick, store=store,
+    exp = load_experiment(experiment)
+    out = out or Path("export") / exp.name
+    # the size first (a full-size export after a --quick report runs other decks: issue 20)
+    for p in export_experiment(exp, out, report=report_dir, quick=quick, store=store,
                                workers=workers, scheduler=scheduler, progress=progress,
-                               timeout=timeout):
+                               timeout=timeout, say=lambda line: click.echo(f"export {line}",
+                                                                            err=True)):
         click.echo(f"wrote {p}")
 
 

@@ -4,7 +4,8 @@ Layout of the dataset (and of the file, which is the dataset written by xarray):
 
 - dims ``replica`` and ``time`` (and ``noise_time`` when the driving noise was recorded);
 - data variables ``v`` (replica, time) and ``x`` (replica, time), ``noise`` (replica,
-  noise_time): the standard normal numbers of each noise hold interval;
+  noise_time): the standard normal numbers of each noise hold interval; for a spring member's
+  circuit run also ``x_spring`` and ``x_integral`` (replica, time), its ``records``;
 - coordinates ``time`` (model time, i.e. units of tau_m when tau_m = 1 as in ``circuits/``),
   ``replica`` (0, 1, ...) and ``noise_time`` (start of each hold interval), each with ``units``
   and ``long_name`` attributes;
@@ -52,6 +53,15 @@ POSITION_UNITS = "model velocity x model time"
 _UNITS_NOTE = ("Reduced units of dv/dt = -v/tau_m - Delta sgn(v) + a + xi(t)/m (Baule, Touchette "
                "& Cohen, eq. (1)); the circuit runs theta = circuit.theta seconds per model time "
                "unit and kappa = circuit.kappa volts per unit velocity.")
+# Per-replica records of a circuit run kept as data variables (replica, time) when present
+# (spring members, :attr:`analogue.Ensemble.records`): the report's analysis reads the spring's
+# position from the inductor, so an export carries that very array (issue 20 item 4).
+_RECORDS = {
+    "x_spring": ("spring position read back from the inductor current (absolute: model.x0 "
+                 "at t = 0; x = x_spring - x_spring[:, 0])", POSITION_UNITS),
+    "x_integral": ("integral of v over time (what a lossless inductor would hold)",
+                   POSITION_UNITS),
+}
 _NAME_BAD = re.compile(r"[^A-Za-z0-9_.]")
 
 
@@ -135,6 +145,11 @@ def ensemble_to_xarray(ens: Ensemble):
         "x": (("replica", "time"), ens.x,
               {"long_name": "position x(t) = integral_0^t v ds", "units": POSITION_UNITS}),
     }
+    for name, (long_name, units) in _RECORDS.items():
+        rec = (ens.records or {}).get(name)
+        if rec is not None and np.shape(rec) == ens.v.shape:
+            data_vars[name] = (("replica", "time"), np.asarray(rec, dtype=float),
+                               {"long_name": long_name, "units": units})
     if ens.noise is not None:
         h = ens.meta.get("noise_dt")
         n_hold = ens.noise.shape[1]
@@ -174,11 +189,13 @@ def ensemble_from_xarray(ds) -> Ensemble:
     if not isinstance(meta, dict):
         raise ValueError(f"attribute {META_ATTR!r} is JSON {type(meta).__name__}, not the "
                          f"object (dict) an ensemble's meta is")
+    records = {name: np.asarray(ds[name].values) for name in _RECORDS
+               if name in ds and ds[name].dims == ("replica", "time")}
     noise = None
     if "noise" in ds:
         noise = np.asarray(ds["noise"].transpose("replica", "noise_time").values)
     return Ensemble(np.asarray(ds["time"].values), np.asarray(ds["v"].values),
-                    np.asarray(ds["x"].values), meta, noise)
+                    np.asarray(ds["x"].values), meta, noise, records or None)
 
 
 def _encoding(ds) -> dict:

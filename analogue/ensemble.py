@@ -54,8 +54,9 @@ class Ensemble:
         Per-replica extras of a circuit run, when it has any: ``"x_spring"`` (replicas, n_t) the
         spring position read back from the inductor, ``"x_integral"`` the integral of v (spring
         members), ``"kicks"`` the shot-noise kicks per
-        replica (see :func:`analogue.simulate`).  Not compared, not written to files, and not
-        carried over by :meth:`window` / :meth:`concatenate`.
+        replica (see :func:`analogue.simulate`).  Not compared, and not carried over by
+        :meth:`window` / :meth:`concatenate`; netCDF files (:meth:`to_netcdf`) hold
+        ``x_spring`` and ``x_integral``, not the kicks.
 
     ``to_xarray()`` / ``to_netcdf(path)`` give labelled data (dims ``replica``, ``time``);
     :func:`analogue.open_ensemble` reads such a file back, exactly.

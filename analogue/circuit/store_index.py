@@ -2,8 +2,9 @@
 
 The run store (:mod:`analogue.circuit.store`) is content-addressed: an entry's key says
 nothing about the experiment it came from.  Whenever an experiment's runs complete
-(``analogue run/report/paper/export``, :func:`analogue.load_runs`) the keys of their decks are
-recorded in an index file per experiment::
+(``analogue run/report/paper/export``, :func:`analogue.load_runs`; a family member's as well
+as the paper's model's: both runners are decorated with :func:`indexing_runs`) the keys of
+their decks are recorded in an index file per experiment::
 
     <store>/index/<experiment>.json   {"experiment", "updated", "runs": {"<size>/<role>":
                                        {"keys": [...], "replicas": n, "updated": time}}}
@@ -73,16 +74,17 @@ def note_keys(keys) -> None:
 
 
 def indexing_runs(fn):
-    """Decorator for ``run_experiment_runs(exp, opts, ...)``: record the runs it returns, and
-    every other store entry it used, in the experiment's index.  A failure to write the index
+    """Decorator for ``run_experiment_runs(exp, opts, ...)`` and ``member_runs(exp, opts,
+    ...)`` (whose results name their runs by role, ``.by_role()``, and say their size,
+    ``.quick``): record the runs it returns, and every other store entry it used, in the
+    experiment's index.  A failure to write the index
     (read-only store) is a warning: the runs are still returned."""
     @functools.wraps(fn)
     def wrapper(exp, opts, *args, **kwargs):
         with collecting_keys() as used:
             runs = fn(exp, opts, *args, **kwargs)
-        from ..export import runs_by_role
         try:
-            record_runs(exp.name, runs_by_role(runs), quick=bool(runs.quick), extra_keys=used,
+            record_runs(exp.name, runs.by_role(), quick=bool(runs.quick), extra_keys=used,
                         store=getattr(opts, "store", None))
         except OSError as exc:
             log.warning("run store index not written: %s", exc)

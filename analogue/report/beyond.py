@@ -40,6 +40,7 @@ from pathlib import Path
 import numpy as np
 
 from ..circuit.experiments import Experiment, load_experiment, standard_circuit
+from ..circuit.store_index import indexing_runs
 from ..ensemble import Ensemble
 from .. import checks
 from ..model import Model
@@ -54,9 +55,11 @@ __all__ = [
     "MEMBERS",
     "STICK_THRESHOLD",
     "MemberAnalysis",
+    "MemberRuns",
     "MemberSizes",
     "analyse_member",
     "is_member_experiment",
+    "member_runs",
     "member_sizes",
     "rate_function_data",
     "weak_noise_law",
@@ -262,8 +265,13 @@ def _circuit(exp: Experiment, *, v0, t_end: float, replicas: int, seed: int, siz
     kw = opts.simulate_kwargs() if opts is not None else {"progress": False}
     if per_deck is not None:
         kw["replicas_per_deck"] = per_deck
-    ens = simulate(exp.model, v0=v0, t_end=t_end, replicas=replicas, seed=seed,
-                   sample_dt=sizes.sample_dt, circuit=exp.spec if spec is None else spec, **kw)
+    return simulate(exp.model, v0=v0, t_end=t_end, replicas=replicas, seed=seed,
+                    sample_dt=sizes.sample_dt, circuit=exp.spec if spec is None else spec, **kw)
+
+
+def _analysed(exp: Experiment, ens: Ensemble) -> Ensemble:
+    """A run as the analysis reads it: the effective model, the spring's inductor read-back
+    and the kick count in (private) ``meta`` keys."""
     rec = ens.records or {}
     meta = dict(ens.meta)
     meta["_model_eff"] = exp.mapping().model_effective
@@ -272,6 +280,81 @@ def _circuit(exp: Experiment, *, v0, t_end: float, replicas: int, seed: int, siz
     if "kicks" in rec:
         meta["_kicks"] = sum(len(k[0]) for k in rec["kicks"])
     return Ensemble(ens.t, ens.v, ens.x, meta)
+
+
+@dataclass
+class MemberRuns:
+    """The circuit runs behind a member's report section, as :func:`analogue.simulate`
+    returned them (``records`` kept).  1-D members: ``stationary`` (from p_s, seed
+    ``member_circuit``), ``transition`` (from ``exp.v0[0]``), ``check`` (the stationary
+    run's first deck, 100x tighter); the spring: ``transition`` is the release from ``x0``
+    at rest (over the stationary length), ``check`` its first deck, no ``stationary``."""
+
+    exp: Experiment
+    sizes: MemberSizes
+    quick: bool
+    transition: Ensemble
+    check: Ensemble
+    stationary: Ensemble | None = None
+    seeds: dict = field(default_factory=dict)
+
+    @property
+    def v0(self) -> float:
+        """Where the transition run starts (the spring: at rest)."""
+        return 0.0 if self.stationary is None else float(self.exp.v0[0])
+
+    def by_role(self) -> dict[str, Ensemble]:
+        """The runs named as :func:`analogue.load_runs` names them: ``transition_v0=<v0>``,
+        then ``stationary`` and ``check_stationary`` (1-D) or ``check_transition`` (spring)."""
+        out = {f"transition_v0={self.v0:g}": self.transition}
+        if self.stationary is None:
+            out["check_transition"] = self.check
+        else:
+            out.update(stationary=self.stationary, check_stationary=self.check)
+        return out
+
+
+@indexing_runs  # the store's index by experiment (analogue store ls): every entry used
+def member_runs(exp: Experiment, opts=None, *, quick: bool | None = None,
+                progress=None) -> MemberRuns:
+    """Run (or read from the store) the circuit runs of a member's report section at the
+    ``--quick`` (default) or full sizes (:func:`member_sizes`): the one source of these runs
+    for :func:`analyse_member`, ``analogue export`` and :func:`analogue.load_runs`."""
+    quick = bool(getattr(opts, "quick", True)) if quick is None else quick
+    sizes = member_sizes(exp, quick)
+    tick = progress or (lambda *_: None)
+    plan = SeedPlan(exp.seed)             # every seed below (analogue.study.seeds)
+    seed, name, m = plan.member_circuit, exp.name, exp.model
+    if m.spring > 0:
+        tick(f"{name}: circuit run from x0 = {m.x0:g} ({sizes.transition_replicas} replicas)")
+        circ = _circuit(exp, v0=0.0, t_end=sizes.stationary_t_end,
+                        replicas=sizes.transition_replicas, seed=seed, sizes=sizes, opts=opts,
+                        per_deck=CHECK_REPLICAS)
+        tick(f"{name}: integration check (first {CHECK_REPLICAS} replicas, 100x tighter)")
+        chk = _circuit(exp, v0=0.0, t_end=sizes.stationary_t_end, replicas=CHECK_REPLICAS,
+                       seed=seed, sizes=sizes, opts=opts, spec=exp.check_spec(),
+                       per_deck=CHECK_REPLICAS)
+        return MemberRuns(exp, sizes, quick, transition=circ, check=chk,
+                          seeds={"transition": seed, "check_transition": seed})
+    from ..theory import family
+    v0_stat = family.sample_stationary(m, sizes.stationary_replicas, plan.member_stationary_v0)
+    tick(f"{name}: stationary circuit run ({sizes.stationary_replicas} x "
+         f"{sizes.stationary_t_end:g})")
+    stat = _circuit(exp, v0=v0_stat, t_end=sizes.stationary_t_end,
+                    replicas=sizes.stationary_replicas, seed=seed, sizes=sizes, opts=opts,
+                    per_deck=CHECK_REPLICAS)
+    v00 = float(exp.v0[0])
+    times = [float(t) for t in exp.histogram_times]
+    tick(f"{name}: transition circuit run from v0 = {v00:g} ({sizes.transition_replicas} replicas)")
+    trans = _circuit(exp, v0=v00, t_end=max(times), replicas=sizes.transition_replicas,
+                     seed=plan.member_transition, sizes=sizes, opts=opts)
+    tick(f"{name}: integration check (first {CHECK_REPLICAS} stationary replicas, 100x tighter)")
+    chk = _circuit(exp, v0=v0_stat[:CHECK_REPLICAS], t_end=sizes.stationary_t_end,
+                   replicas=CHECK_REPLICAS, seed=seed, sizes=sizes, opts=opts,
+                   spec=exp.check_spec(), per_deck=CHECK_REPLICAS)
+    return MemberRuns(exp, sizes, quick, transition=trans, check=chk, stationary=stat,
+                      seeds={"stationary": seed, "transition": plan.member_transition,
+                             "check_stationary": seed})
 
 
 def _measured(pairs: dict, label: str) -> float:
@@ -336,14 +419,10 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
     seed = plan.member_circuit
     name = exp.name
 
+    runs = member_runs(exp, opts, quick=quick, progress=progress)
+
     if m.spring > 0:
-        tick(f"{name}: circuit run from x0 = {m.x0:g} ({sizes.transition_replicas} replicas)")
-        circ = _circuit(exp, v0=0.0, t_end=sizes.stationary_t_end, replicas=sizes.transition_replicas,
-                        seed=seed, sizes=sizes, opts=opts, per_deck=CHECK_REPLICAS)
-        tick(f"{name}: integration check (first {CHECK_REPLICAS} replicas, 100x tighter)")
-        chk = _circuit(exp, v0=0.0, t_end=sizes.stationary_t_end, replicas=CHECK_REPLICAS,
-                       seed=seed, sizes=sizes, opts=opts, spec=exp.check_spec(),
-                       per_deck=CHECK_REPLICAS)
+        circ, chk = _analysed(exp, runs.transition), _analysed(exp, runs.check)
         first = _xs_subset(circ, np.arange(CHECK_REPLICAS))
         tick(f"{name}: Monte Carlo reference ({sizes.mc_replicas} replicas)")
         from ..montecarlo import simulate_sde
@@ -403,21 +482,10 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
         return res
 
     # ---------------------------------------------------------------- 1-D members
-    v0_stat = family.sample_stationary(m, sizes.stationary_replicas, plan.member_stationary_v0)
-    tick(f"{name}: stationary circuit run ({sizes.stationary_replicas} x "
-         f"{sizes.stationary_t_end:g})")
-    stat = _circuit(exp, v0=v0_stat, t_end=sizes.stationary_t_end,
-                    replicas=sizes.stationary_replicas, seed=seed, sizes=sizes, opts=opts,
-                    per_deck=CHECK_REPLICAS)
+    assert runs.stationary is not None   # 1-D members have one
+    stat, trans, chk = (_analysed(exp, e) for e in (runs.stationary, runs.transition, runs.check))
     v00 = float(exp.v0[0])
     times = [float(t) for t in exp.histogram_times]
-    tick(f"{name}: transition circuit run from v0 = {v00:g} ({sizes.transition_replicas} replicas)")
-    trans = _circuit(exp, v0=v00, t_end=max(times), replicas=sizes.transition_replicas,
-                     seed=plan.member_transition, sizes=sizes, opts=opts)
-    tick(f"{name}: integration check (first {CHECK_REPLICAS} stationary replicas, 100x tighter)")
-    chk = _circuit(exp, v0=v0_stat[:CHECK_REPLICAS], t_end=sizes.stationary_t_end,
-                   replicas=CHECK_REPLICAS, seed=seed, sizes=sizes, opts=opts,
-                   spec=exp.check_spec(), per_deck=CHECK_REPLICAS)
     tick(f"{name}: exact theory")
     obs = C.member_observables(m, v0=v00, times=times)
     stat_obs = [o for o in obs if o.run == C.STATIONARY]

@@ -30,7 +30,6 @@ from __future__ import annotations
 import concurrent.futures as cf
 import contextvars
 import math
-import os
 import threading
 import time
 from dataclasses import dataclass, field
@@ -148,6 +147,16 @@ class ExperimentRuns:
         else:
             raise ValueError(f"kind must be 'transition' or 'stationary', got {kind!r}")
         return chk, head(nom, float(chk.t[-1] - chk.t[0]), chk.replicas)
+
+    def by_role(self) -> dict[str, Ensemble]:
+        """The runs named as :func:`analogue.load_runs` names them (:data:`analogue.export.
+        ROLES`): ``transition_v0=<v0>`` per v0, ``stationary``, ``noise_free``,
+        ``check_transition``, ``check_stationary``."""
+        named = {f"transition_v0={v0:g}": ens for v0, ens in self.transition.items()}
+        named.update(stationary=self.stationary, noise_free=self.noise_free,
+                     check_transition=self.check_transition,
+                     check_stationary=self.check_stationary)
+        return named
 
     @property
     def model(self) -> Model:
