@@ -31,7 +31,7 @@ from ..ensemble import Ensemble
 from ..estimators.smoothed_indicator import window
 from ..estimators.variance_error import sample_variance_se
 from ..model import Model
-from ..theory.stationary import integrated_autocorrelation
+from ..theory.stationary import integrated_autocorrelation, stationary_moments
 
 __all__ = ["KINDS", "Kind", "Observable", "TRANSITION", "STATIONARY", "density_moments",
            "PAPER", "GAUSSIAN_MEMBER", "SHOT_MEMBER", "SPRING_MEMBER", "MEMBER_STICK_WINDOW",
@@ -41,7 +41,7 @@ __all__ = ["KINDS", "Kind", "Observable", "TRANSITION", "STATIONARY", "density_m
            "stationary_values", "StationaryValues", "transition_theory", "stationary_theory", "transition_label", "stationary_label",
            "kind_of", "find", "planned_comparisons", "estimate", "element_error", "no_exact",
            "transition_theory_se", "theory_se", "stationary_null_se", "stationary_mean_se",
-           "record_span"]
+           "stationary_exact_se", "record_span"]
 
 TRANSITION = "transition"
 STATIONARY = "stationary"
@@ -792,16 +792,34 @@ def record_span(ens: Ensemble, burn_in: float) -> float:
     return float(ens.t[-1] - ens.t[min(i0, ens.t.size - 1)])
 
 
-def stationary_mean_se(model: Model, span: float, n: int) -> float:
-    """The exact standard error of the stationary mean velocity estimated from ``n``
-    independent replicas started in p_s and each averaged over a record of length ``span``:
+# the stationary kinds whose null spread has an exact route: f(v) of the time average
+# (threshold: the stick window; mean: the law's exact mean)
+def _averaged(name: str, threshold: float, mean: float):
+    if name == "mean v":
+        return lambda v: v
+    if name == "var v":
+        return lambda v: (v - mean) ** 2
+    if name == "P(v>0)":
+        return lambda v: (v > 0.0) + 0.5 * (v == 0.0)
+    if name == "stick fraction":
+        return lambda v: (np.abs(v) < threshold).astype(float)
+    return None
 
-        se = sqrt(Var(int_0^T v ds) / n) / T,   Var(int_0^T v ds) = 2 int_0^T (T - s) C(s) ds
+
+def stationary_exact_se(model: Model, name: str, span: float, n: int, *,
+                        threshold: float = 0.0) -> float:
+    """The exact standard error, under the null that the replicas follow ``model``, of the
+    stationary kind ``name`` estimated from ``n`` independent replicas started in p_s and
+    each averaged over a record of length ``span``: with f the averaged function of v (v for
+    the mean, (v - <v>)^2 for the variance to first order, the indicators of v > 0 and of
+    |v| < ``threshold`` for P(v>0) and the stick fraction),
+
+        se = sqrt(Var(int_0^T f(v(s)) ds) / n) / T,   Var = 2 int_0^T (T - s) C_f(s) ds
 
     (:func:`analogue.theory.stationary.integrated_autocorrelation`, exact at finite T; for T
-    long against the correlation time it is sqrt(2 D_x / (n T))).  The sample average of the
-    report differs from the continuous one by O(sample_dt / T).  0 where no such closed
-    route exists (family members): the caller keeps its jackknife.
+    long against the correlation time, sqrt(2 D_f / (n T)), D_x for the mean).  The sample
+    average of the report differs from the continuous one by O(sample_dt / T).  0 where no
+    such route exists (other kinds, family members): the caller keeps its jackknife.
 
     Why (issue 18): the replica jackknife of the quick report's stationary run (32 replicas,
     16 groups of 2) has a relative spread of about 1/sqrt(2 x 15) = 18 %, and a sample with
@@ -811,8 +829,17 @@ def stationary_mean_se(model: Model, span: float, n: int) -> float:
     +1.3 on this SE)."""
     if not model.is_paper or span <= 0.0 or n < 1:
         return 0.0
-    var = float(integrated_autocorrelation(model, [float(span)])[0])
+    mean = stationary_moments(model).mean if name == "var v" else 0.0
+    f = _averaged(name, threshold, mean)
+    if f is None:
+        return 0.0
+    var = float(integrated_autocorrelation(model, [float(span)], observable=f)[0])
     return math.sqrt(max(var, 0.0) / n) / span
+
+
+def stationary_mean_se(model: Model, span: float, n: int) -> float:
+    """:func:`stationary_exact_se` of the stationary mean v."""
+    return stationary_exact_se(model, "mean v", span, n)
 
 
 def stationary_theory(model, moments, *, threshold: float, work_variance: dict,

@@ -14,6 +14,7 @@ import math
 import tomllib
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from analogue.circuit.experiments import experiment_from_dict
@@ -23,7 +24,9 @@ from analogue.report.comparisons import analyse
 from analogue.report.plan import RunOptions
 from analogue.report.runs import ExperimentRuns
 from analogue.report.theory_curves import experiment_theory
-from analogue.study.catalogue import StationaryValues, record_span, stationary_mean_se
+from analogue.study.catalogue import (StationaryValues, record_span, stationary_exact_se,
+                                      stationary_mean_se)
+from analogue.theory.stationary import stationary_moments
 from analogue.estimators.resampling import jackknife
 from analogue.theory.exact import sample_stationary
 
@@ -41,18 +44,35 @@ def test_ornstein_uhlenbeck_closed_form():
         assert stationary_mean_se(m, span, n) == pytest.approx(math.sqrt(var / n) / span, rel=1e-6)
 
 
-def test_dry_friction_against_monte_carlo_time_averages():
-    """The spread of per-replica time averages of Euler-Maruyama paths started in p_s: their
-    sample variance has a relative standard error sqrt(2/(R-1)) = 0.07 at R = 400; the
-    bound is 3 of those (plus the time step's bias, below 1 %)."""
+@pytest.mark.parametrize("name", ["mean v", "var v", "P(v>0)", "stick fraction"])
+def test_dry_friction_against_monte_carlo_time_averages(name, mc):
+    """The spread of per-replica time averages of f(v) over Euler-Maruyama paths started in
+    p_s: their sample variance has a relative standard error sqrt(2/(R-1)) = 0.07 at R =
+    400; the bound is 3 of those (the time step's bias is below 1 %)."""
+    m, ens, span, thr = mc
+    v = ens.v
+    f = {"mean v": v, "var v": (v - stationary_moments(m).mean) ** 2, "P(v>0)": v > 0,
+         "stick fraction": np.abs(v) < thr}[name]
+    means = f.mean(axis=1)
+    R = v.shape[0]
+    exact = stationary_exact_se(m, name, span, 1, threshold=thr)
+    assert abs(means.var(ddof=1) / exact ** 2 - 1.0) < 3.0 * math.sqrt(2.0 / (R - 1))
+    assert stationary_exact_se(m, name, span, 4, threshold=thr) == pytest.approx(0.5 * exact)
+
+
+@pytest.fixture(scope="module")
+def mc():
     m = Model(**AUDIT)
     R, span = 400, 12.0
     ens = simulate_sde(m, v0=sample_stationary(m, R, 3), t_end=span, replicas=R, seed=5,
                        sample_dt=0.01)
-    means = ens.v.mean(axis=1)
-    ratio = means.var(ddof=1) / (stationary_mean_se(m, span, 1) ** 2)
-    assert abs(ratio - 1.0) < 3.0 * math.sqrt(2.0 / (R - 1))
-    assert stationary_mean_se(m, span, 4) == pytest.approx(0.5 * stationary_mean_se(m, span, 1))
+    return m, ens, span, 0.1 * m.velocity_scale
+
+
+def test_mean_se_is_the_exact_se_of_the_mean(mc):
+    m, _, span, _ = mc
+    assert stationary_mean_se(m, span, 3) == stationary_exact_se(m, "mean v", span, 3)
+    assert stationary_exact_se(m, "diffusion D_x", span, 3) == 0.0
 
 
 def test_family_members_have_no_closed_route():
@@ -92,8 +112,13 @@ def test_report_mean_v_se_is_never_below_the_exact_spread():
     assert jk < 0.8 * exact          # the seed's jackknife is low: the case audited
     row = next(c for c in res.comparisons if c.observable == "mean v")
     assert row.circuit_stderr == pytest.approx(exact, rel=1e-12)
-    assert "stationary_mean_se" in row.note
+    assert "stationary_exact_se" in row.note
     assert res.circuit["mean v"][1] == row.circuit_stderr
+    # every kind with an exact route: never below it
+    span = record_span(st, settings.stationary_burn_in)
+    for name in ("var v", "P(v>0)", "stick fraction"):
+        se = stationary_exact_se(m, name, span, 16, threshold=res.theory.threshold)
+        assert se > 0.0 and res.circuit[name][1] >= se
 
 
 STAT_SEED = 7
