@@ -184,6 +184,15 @@ def _size_name(quick: bool) -> str:
     return "--quick" if quick else "full-size"
 
 
+def _leave_out(why: str, given: bool, say) -> list:
+    """A report whose runs are not the exported ones: refused when named (``--report``), else
+    left out of the export with a line saying why."""
+    if given:
+        raise ValueError(f"report: {why}")
+    say(f"metrics.csv not written: {why}")
+    return []
+
+
 # --------------------------------------------------------------------------------- export
 def export_experiment(experiment, out, *, report=None, quick: bool = False, store=None,
                       workers: int | None = None, scheduler: str | None = None,
@@ -215,10 +224,7 @@ def export_experiment(experiment, out, *, report=None, quick: bool = False, stor
     if rq is not None and rq != opts.quick:
         why = (f"{metrics} is a {_size_name(rq)} report, this export is {_size_name(opts.quick)}"
                f" (export {name}{' --quick' if rq else ' without --quick'} exports its runs)")
-        if report is not None:
-            raise ValueError(f"report: {why}")
-        say(f"metrics.csv not written: {why}")
-        rows = []
+        rows = _leave_out(why, report is not None, say)
     runs = _named(exp, experiment_runs(exp, opts), opts.quick)
     if rows:
         ours = {h for e in runs.values() for h in e.meta.get("deck_sha256") or ()}
@@ -226,10 +232,7 @@ def export_experiment(experiment, out, *, report=None, quick: bool = False, stor
         if missing:
             why = (f"{len(missing)} of the decks behind {metrics} are not among these runs' "
                    f"(was {name} changed since that report?)")
-            if report is not None:
-                raise ValueError(f"report: {why}")
-            say(f"metrics.csv not written: {why}")
-            rows = []
+            rows = _leave_out(why, report is not None, say)
     out.mkdir(parents=True, exist_ok=True)
     paths = [write_netcdf(ens, out / f"{role}.nc") for role, ens in runs.items()]
     if rows:
