@@ -30,10 +30,10 @@ from scipy.special import logsumexp
 
 from .. import checks
 from ..model import Model
-from .exact_grid import resolved_grid
+from .exact_grid import propagator_grid
 from .fokker_planck import Grid
 from .propagation import initial_delta, propagate
-from .stationary import (StationaryMoments, autocorrelation, half_line_moments, sample_stationary)
+from .stationary import StationaryMoments, autocorrelation, sample_stationary
 from .stationary import stationary_moments as _stationary_moments
 
 from . import family as _family
@@ -111,34 +111,49 @@ def propagator(model: Model, v: ArrayLike, t: ArrayLike, v0: float, t0: float = 
     ----------
     v : array_like
         Velocities at which the density is returned (any shape).  The density is computed on an
-        internal grid covering the stationary law and ``v0`` (where ``gamma (U - U_min) < 40``,
-        and ``v0 +- sqrt(80 tau_m/gamma)``) and linearly interpolated; outside that range it is
-        returned as 0 (the true density there is below ``e^{-40}`` of its peak).  Between
-        nodes, ``f/p_s`` is interpolated linearly (see :func:`_interpolate`).
+        internal grid (:func:`analogue.theory.exact_grid.propagator_grid`) covering the
+        stationary law (where ``gamma (U - U_min) < 40``) and the reach of ``v0`` (within
+        ``sqrt(80 tau_m/gamma)`` of it and where ``gamma (U - U(v0)) < 40``) and interpolated;
+        outside that range it is returned as 0 (the true density there is below ``e^{-40}`` of
+        a transition density's peak).  Between nodes, ``f/p_s`` is interpolated log-linearly
+        (see :func:`_interpolate`).
     t : float or 1-D array
-        Final time(s), each > t0.  An array is computed in one go (one eigen-decomposition, or
-        one sweep of ``expm_multiply``) and gives shape ``(len(t),) + v.shape``.
+        Final time(s), each > t0.  An array is computed in one go on the grid of its earliest
+        time and gives shape ``(len(t),) + v.shape``.
     v0, t0 : float
-        Initial velocity (may lie between nodes: the unit mass is split linearly between the
-        two neighbouring nodes) and initial time.
+        Initial velocity and initial time.  The default grid puts ``v0`` on a node; on a grid
+        that does not, the unit mass is split linearly between the two neighbouring nodes.
     grid : Grid, optional
         Use this grid instead of the automatic one (must contain v0).
     h : float, optional
-        Spacing of the automatic grid (default: resolves sqrt(tau_m/gamma)/40, epsilon/8, the
-        kink length 1/(gamma (Delta + |a|)) / 5 and sqrt(2 (t - t0)/gamma)/10).
+        Spacing of the automatic grid (default: from the local scales, see
+        :func:`~analogue.theory.exact_grid.propagator_grid`: drift per cell ``gamma |U'| h <=
+        0.08`` wherever the mass travels, which resolves the kink length
+        ``1/(gamma (Delta + |a|))``; ``h <= sqrt(2 (t - t0)/gamma)/16``; ``h <= epsilon/8``).
     method : "auto" | "eigen" | "expm" | "hybrid" | "contour"
         Propagation route (:mod:`analogue.theory.propagation`; "auto": the Talbot contour,
         O(n) per time, absolute error ~1e-11 of the peak, the hybrid route for starts too deep
         in the tail for it).
 
-    Accuracy: exact in time; O(h^2) in space.  At the default spacing the maximum error
-    relative to the peak is below 2e-3 for t - t0 >= 0.1 tau_m and below 1e-3 for
-    t - t0 >= 0.5 tau_m (measured against the Delta = 0 closed form: 1.3e-3 and 5e-4; the
-    tests check the stated bounds); halving h changes the density by less than 3e-3 of its
-    peak (measured <= 2.3e-3, at t - t0 = 0.1 tau_m); ``integral f dv = 1`` within 1e-3
-    (measured 2e-4); the t -> inf limit is the exact ``p_s`` (eq. (6)) to ~1e-11 of its
-    peak (the contour route's round-off floor; measured 4e-12 - 5e-11 at t - t0 = 40 tau_m,
-    gamma = 10; the eigen route gave ~1e-12).
+    Accuracy: exact in time; O(h^2) in space.  At the default grid the maximum error is below
+    1e-3 of the peak at every ``t - t0`` (the grid adapts to the earliest time), measured in
+    every regime tried (stick, slip, a = Delta, gamma = 1 - 1000, tau_m = 1 - 1e5,
+    t - t0 = 0.01 - 2 tau_m, and 0.01 - 30 dry relaxation times 1/(gamma Delta^2) at
+    tau_m = 1e5): against the Delta = 0 closed form <= 8.2e-4, against the pure dry-friction
+    closed form (Caughey-Dienes; Touchette, Van der Straeten & Just 2010) <= 8.2e-4, elsewhere
+    against h/8 <= 8.1e-4; the largest errors are at the earliest times, where the lattice
+    kernel's excess kurtosis ``h^2/(2 (t - t0)/gamma)`` dominates, and fall to ~1e-4 by
+    0.5 tau_m.  Not for starts deeper than ``gamma (U(v0) - U_min) = 180`` in the tail
+    (:data:`~analogue.theory.exact_grid.DEEP_START`): the contour route cannot take them and
+    the expm route would cost minutes on that grid, so they keep the previous spacing, with
+    errors up to 1e-2 - 6e-2 of the peak at gamma = 1000 (pass ``h`` for more).  Error estimate: halving h changes the density by less than 7.5e-4 of its
+    peak, and the changes fall by ~4 per halving, so the error of the default is ~4/3 of that
+    change (the tests check both).  Every time slice integrates to 1 within 1e-4 (measured
+    <= 2e-10): it is normalised by the integral of its own interpolant.  The t -> inf limit
+    is the exact ``p_s`` (eq. (6)) to ~1e-11 of its peak (the contour route's round-off
+    floor; measured 4e-12 - 5e-11 at t - t0 = 40 tau_m, gamma = 10; the eigen route gave
+    ~1e-12).  Cost: O(n) per time; the grid has 900 - 14000 nodes in the cases above (see
+    ``benchmarks/bench_propagator_grid.py`` for the cost against the previous grid).
     """
     _check_model(model)
     if not model.is_paper:
@@ -165,7 +180,7 @@ def propagator(model: Model, v: ArrayLike, t: ArrayLike, v0: float, t0: float = 
     if not np.all(np.isfinite(elapsed)) or np.any(elapsed <= 0):
         raise ValueError("t must be finite and > t0 (at t = t0 the density is a delta)")
     if grid is None:
-        grid = resolved_grid(model, extra=(v0,), h=h, t_min=float(elapsed.min()))
+        grid = propagator_grid(model, v0, float(elapsed.min()), h=h)
     elif h is not None:
         raise ValueError("pass either grid or h, not both")
     if not grid.v[0] <= v0 <= grid.v[-1]:
@@ -174,32 +189,53 @@ def propagator(model: Model, v: ArrayLike, t: ArrayLike, v0: float, t0: float = 
     return _interpolate(model, grid, probs / grid.h, v, t_arr.ndim == 0)
 
 
+#: Gauss-Legendre points per cell for the mass of the interpolant (its log is a quadratic in
+#: the cell for the sgn law, smooth on the scale epsilon >= 8 h for tanh: error < 1e-12).
+_GAUSS_POINTS = 4
+
+
+def _log_interpolant(model: Model, grid: Grid, log_ratio: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``ln f(x)`` for ``x`` inside the grid: ``ln(f e^{gamma U})`` (``log_ratio`` at the nodes,
+    shape (times, n)) interpolated linearly, minus ``gamma U(x)``."""
+    pos = (x - grid.v[0]) / grid.h
+    i = np.clip(np.floor(pos).astype(int), 0, grid.n - 2)
+    theta = pos - i
+    out: np.ndarray = ((1.0 - theta) * log_ratio[:, i] + theta * log_ratio[:, i + 1]
+                       - model.gamma * model.potential(x))
+    return out
+
+
 def _interpolate(model: Model, grid: Grid, dens: np.ndarray, v: np.ndarray, scalar: bool
                 ) -> np.ndarray:
     """Interpolate node densities to ``v``: ``ln(f/p_s)`` linearly, times the exact
-    ``p_s(v) ~ exp(-gamma U(v))``.  For the sgn law ``f`` and ``p_s`` have the same jump of the
-    log-derivative at the node v = 0 (it comes from the jump of the drift), so ``f/p_s`` is
-    smooth there; the interpolant is exact for the stationary law and for the exponential
-    (Laplace-like) profiles either side of the kink, and elsewhere its *relative* error is
-    O(h^2) uniformly, also far in the tails (what log-density comparisons need)."""
+    ``p_s(v) ~ exp(-gamma U(v))``, normalised so that every time slice integrates to 1.
+
+    For the sgn law ``f`` and ``p_s`` have the same jump of the log-derivative at the node
+    v = 0 (it comes from the jump of the drift), so ``f/p_s`` is smooth there; the interpolant
+    is exact for the stationary law and for the exponential (Laplace-like) profiles either
+    side of the kink, and elsewhere its *relative* error is O(h^2) uniformly, also far in the
+    tails (what log-density comparisons need).
+
+    Normalisation: the node probabilities sum to 1, but ``sum_i f(v_i) h`` is only a quadrature
+    of ``integral f``; at the kink it is ``(x/2) coth(x/2) = 1 + x^2/12`` of it (``x`` the drift
+    per cell), so scaling every slice by the stationary factor ``h sum_i p_s(v_i)`` (exact only
+    as t -> inf) over-normalised transients away from the kink by up to 0.8 %.  Each slice is
+    instead divided by the integral of its own interpolant (Gauss-Legendre per cell), which is
+    1 for the stationary law: the t -> inf limit stays the exact ``p_s``."""
     nodes = grid.v
     flat = v.ravel()
     inside = (flat >= nodes[0]) & (flat <= nodes[-1])
-    pos = (flat[inside] - nodes[0]) / grid.h
-    i = np.minimum(np.floor(pos).astype(int), grid.n - 2)
-    theta = pos - i
-    gu_v = model.gamma * model.potential(flat[inside])
     gu_nodes = model.gamma * model.potential(nodes)
     with np.errstate(divide="ignore"):
         # log 0 -> -1e300 (not -inf, so that 0 * log 0 = 0 at theta = 0 or 1)
-        log_dens = np.maximum(np.log(dens), -1e300)
-    # The grid's node weights sum to 1 while sum_i p_s(v_i) h = 1 + O(h^2) (kink at 0): scale
-    # by that sum so that the t -> inf limit is the exact p_s, not only up to O(h^2).
-    log_z = half_line_moments(model).log_z
-    log_dens = log_dens + float(logsumexp(-gu_nodes)) + math.log(grid.h) - log_z
-    # ln f(v) = interpolated ln(f e^{gamma U}) - gamma U(v); the U terms stay O(gamma |U'| h).
-    shift = (1.0 - theta) * gu_nodes[i] + theta * gu_nodes[i + 1] - gu_v
-    log_out = (1.0 - theta) * log_dens[:, i] + theta * log_dens[:, i + 1] + shift
+        log_ratio = np.maximum(np.log(dens), -1e300) + gu_nodes
+    # shift by the largest value so that neither the tails nor the mass overflow
+    log_ratio -= np.max(log_ratio - gu_nodes, axis=1, keepdims=True)
+    xq, wq = np.polynomial.legendre.leggauss(_GAUSS_POINTS)
+    cells = nodes[:-1, None] + 0.5 * grid.h * (1.0 + xq[None, :])
+    log_cells = _log_interpolant(model, grid, log_ratio, cells.ravel())
+    log_mass = logsumexp(log_cells, b=np.tile(0.5 * grid.h * wq, grid.n - 1), axis=1)
+    log_out = _log_interpolant(model, grid, log_ratio, flat[inside]) - log_mass[:, None]
     out: np.ndarray = np.zeros((dens.shape[0], flat.size))
     out[:, inside] = np.exp(log_out)
     out = out.reshape((dens.shape[0],) + v.shape)

@@ -110,11 +110,11 @@ def propagate_expm(model: Model, grid: Grid, p0: np.ndarray, times: np.ndarray) 
 def propagate_hybrid(model: Model, grid: Grid, p0: np.ndarray, times: np.ndarray) -> np.ndarray:
     """``expm_multiply`` while the mass sits deep in the tail of the stationary law, in steps
     of at most tau_m/4, then the eigen route from the first checkpoint where that is accurate
-    (:func:`amplification` <= :data:`EIGEN_MAX_HALF_LOG_RANGE`) for all later times.  Same
-    accuracy as the expm route at a fraction of its cost for long times."""
+    (:func:`amplification` <= :data:`EIGEN_MAX_HALF_LOG_RANGE`) for all later times; on grids
+    too large for the eigen route, the contour route from the first checkpoint where
+    :func:`contour_nodes` allows it.  Same accuracy as the expm route at a fraction of its
+    cost for long times."""
     _, _, log_pi = symmetric_generator(model, grid)
-    if grid.n > EIGEN_MAX_NODES:
-        return propagate_expm(model, grid, p0, times)
     gen = generator(model, grid).tocsc()
     trace = float(gen.diagonal().sum())
     order = np.argsort(times, kind="stable")
@@ -124,7 +124,15 @@ def propagate_hybrid(model: Model, grid: Grid, p0: np.ndarray, times: np.ndarray
     for pos, k in enumerate(order):
         target = float(times[k])
         while t_now < target:
-            if amplification(log_pi, np.clip(p, 0.0, None)) <= EIGEN_MAX_HALF_LOG_RANGE:
+            amp = amplification(log_pi, np.clip(p, 0.0, None))
+            nodes = contour_nodes(amp)
+            if nodes is not None and grid.n > EIGEN_MAX_NODES:
+                # fine grids: the contour route as soon as the mass allows it (O(n) per time;
+                # the eigen route is out of reach and expm_multiply costs O(n / h^2) per unit time)
+                rest = order[pos:]
+                out[rest] = propagate_contour(model, grid, np.clip(p, 0.0, None), times[rest] - t_now, nodes)
+                return out
+            if amp <= EIGEN_MAX_HALF_LOG_RANGE and grid.n <= EIGEN_MAX_NODES:
                 rest = order[pos:]
                 out[rest] = propagate_eigen(model, grid, p, times[rest] - t_now)
                 return out
