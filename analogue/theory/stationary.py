@@ -433,9 +433,11 @@ def integrated_autocorrelation(model: Model, taus: ArrayLike, h: float | None = 
     ``observable``: a function f (vectorised) in place of v: ``Var(int_0^tau f(v(s)) ds)``,
     e.g. an indicator for the variance of a time-averaged probability (issue 18: the
     report's stationary SEs under the null, :func:`analogue.study.catalogue.stationary_exact_se`).
-    An indicator whose edge falls between nodes converges at first order only; against a
-    Monte Carlo of time averages it agrees within its 5 % statistical error
-    (tests/unit/test_stationary_mean_se.py)."""
+    An indicator whose edge falls between nodes converges at first order only: for the stick
+    window |v| < 0.1 sqrt(tau_m/gamma) at tau_m = 2, Delta = 0.5, a = 0.3, gamma = 15 the
+    single grid and the extrapolation differ by 0.3 %; against 400 Monte Carlo time averages
+    over 12 tau the variance ratio is 0.98 (v), 0.95 ((v - <v>)^2), 1.07 (1[v > 0]) and 1.11
+    (the stick window), each +- 0.07 (tests/unit/test_stationary_mean_se.py)."""
     _check_model(model)
     _check_h(h)
     if not model.is_paper:
