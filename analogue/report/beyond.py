@@ -53,7 +53,6 @@ from .observables import jackknife_difference, subset
 
 __all__ = [
     "MEMBERS",
-    "STICK_THRESHOLD",
     "MemberAnalysis",
     "MemberRuns",
     "MemberSizes",
@@ -62,16 +61,38 @@ __all__ = [
     "member_runs",
     "member_sizes",
     "rate_function_data",
+    "stick_window",
     "weak_noise_law",
+    "work_tau",
 ]
 
 MEMBERS = ("cubic", "stribeck", "spring", "shot")
 
-# |v| below this (model units) counts as stuck (analogue.study.catalogue.MEMBER_STICK_WINDOW)
-STICK_THRESHOLD = C.MEMBER_STICK_WINDOW
-# work window of the circuit's finite-tau rate-function estimate (figure only: at quick sizes
-# its windows overlap strongly and its error is not a clean jackknife)
+# work window of the circuit's finite-tau rate-function estimate, in units of tau_m (figure
+# only: at quick sizes its windows overlap strongly and its error is not a clean jackknife).
+# Was the absolute 4.0: 0.4 tau_m for a tau_m = 10 copy; the velocity correlation time
+# D_x/Var v is 0.44, 2.2, 0.76 for circuits/cubic, stribeck, shot.toml (tau_m 1, 2, 1)
 WORK_TAU = 4.0
+# quick run length and the least stationary length after the burn-in, in units of tau_m
+# (were the absolute 40 and 30)
+QUICK_T_END = 40.0
+MIN_STATIONARY = 30.0
+# member runs' sample interval: 0.02 tau_m, never coarser than 0.02 (the friction's
+# deceleration does not slow down with a slower tau_m)
+SAMPLE_DT = 0.02
+
+
+def work_tau(m: Model) -> float:
+    """The work window of the finite-tau rate-function estimate: ``WORK_TAU`` tau_m."""
+    return WORK_TAU * m.tau_m
+
+
+def stick_window(exp: Experiment) -> float:
+    """|v| below this counts as stuck in ``exp``'s analysis (estimators and theory alike):
+    :func:`analogue.study.catalogue.member_stick_window` with the experiment's
+    ``[report] stick_threshold`` and its circuit's smoothing."""
+    return C.member_stick_window(exp.model, stick_threshold=exp.report.stick_threshold,
+                                 epsilon=exp.mapping().model_effective.epsilon)
 # replicas of the integration check (the first deck of the nominal run, re-run with 100x
 # tighter tolerances on the same noise: Experiment.check_spec)
 CHECK_REPLICAS = 8
@@ -94,14 +115,18 @@ class MemberSizes:
 
 
 def member_sizes(exp: Experiment, quick: bool) -> MemberSizes:
-    """Quick: 32 stationary replicas of 40 time units, 32 transition replicas (measured: the
-    four members' ngspice runs take ~15 s together on 2 cores).  Full: the experiment's own
-    sizes (``[experiment] replicas``, ``[report] stationary_*``)."""
+    """Quick: 32 stationary replicas of 40 tau_m (at least the burn-in + 30 tau_m), 32
+    transition replicas.  Full: the experiment's own sizes (``[experiment] replicas``,
+    ``[report] stationary_*``), at least the burn-in + 30 tau_m.  Samples every 0.02 tau_m,
+    at most 0.02."""
+    tm = exp.model.tau_m
+    least = exp.burn_in + MIN_STATIONARY * tm
+    dt = SAMPLE_DT * min(tm, 1.0)
     if quick:
-        return MemberSizes(32, max(40.0, exp.burn_in + 30.0), 32, 256)
+        return MemberSizes(32, max(QUICK_T_END * tm, least), 32, 256, dt)
     return MemberSizes(max(16, exp.report.stationary_replicas // 2),
-                       max(exp.report.stationary_t_end, exp.burn_in + 30.0),
-                       max(32, exp.replicas), 1024)
+                       max(exp.report.stationary_t_end, least),
+                       max(32, exp.replicas), 1024, dt)
 
 
 def is_member_experiment(exp: Experiment) -> bool:
@@ -160,13 +185,14 @@ def _jk(fn, ens: Ensemble, groups: int = 16) -> tuple[float, float]:
     return full, float(np.sqrt((g - 1) / g * np.sum((reps - reps.mean()) ** 2)))
 
 
-def _estimators(exp: Experiment, observables) -> dict:
+def _estimators(exp: Experiment, observables, threshold: float) -> dict:
     """``{label: estimator(ensemble) -> float}`` of the catalogue's observables on this
-    member's ensembles (circuit, Monte Carlo, budget pairs)."""
+    member's ensembles (circuit, Monte Carlo, budget pairs); ``threshold``: the member's stick
+    window (:func:`stick_window`)."""
     m = exp.model
 
     def bind(o: C.Observable) -> Callable[[Ensemble], float]:
-        return lambda e: C.estimate(o, e, burn_in=exp.burn_in, threshold=STICK_THRESHOLD,
+        return lambda e: C.estimate(o, e, burn_in=exp.burn_in, threshold=threshold,
                                     force=m.force, position=_position(e) if m.spring > 0 else None,
                                     model=m, friction=e.meta.get("_model_eff", m))
     return {o.label: bind(o) for o in observables}
@@ -179,9 +205,9 @@ def _h(exp: Experiment) -> float:
     return default_spacing(exp.model)
 
 
-def _stationary_theory(exp: Experiment, model: Model, observables) -> dict:
+def _stationary_theory(exp: Experiment, model: Model, observables, threshold: float) -> dict:
     """Exact stationary values (family numerics at the ideal model's grid spacing).  The
-    window masses (stick fraction, P(v=0), P(v>0.05)) read the law of
+    window masses (stick fraction, P(v=0), P(v>window)) read the law of
     :func:`analogue.theory.family.stationary_law` (itself Richardson over its grids h, h/2
     for shot noise) by the trapezoid, second order in h, so they take the second-order
     Richardson pair h, h/2 (shot.toml's stick fraction: 0.434366 at h, 0.434449 at h/2,
@@ -190,23 +216,26 @@ def _stationary_theory(exp: Experiment, model: Model, observables) -> dict:
     from ..theory import family
     h = _h(exp)
     moments = family.stationary_moments(model, h=h)
-    coarse, fine = (C.stationary_theory(model, moments, threshold=STICK_THRESHOLD,
+    coarse, fine = (C.stationary_theory(model, moments, threshold=threshold,
                                         work_variance={}, law=family.stationary_law(model, h=hh),
                                         observables=observables) for hh in (h, h / 2))
     return {k: (4.0 * fine[k] - coarse[k]) / 3.0 for k in coarse}
 
 
-def _transition_theory(exp: Experiment, model: Model, v0: float, times, observables) -> dict:
+def _transition_theory(exp: Experiment, model: Model, v0: float, times, observables,
+                       threshold: float) -> dict:
     """Exact values at each time from the propagator (density + the atom at v = 0 + the
     unkicked mass on the noise-free path), see :func:`_transition_laws`."""
     v, f, atom, point = _transition_law(exp, model, v0, times)
-    return C.transition_theory(v, f, v0, times, atom=atom, observables=observables, point=point)
+    return C.transition_theory(v, f, v0, times, atom=atom, observables=observables, point=point,
+                               window=threshold)
 
 
-def _transition_laws(exp: Experiment, model: Model, v0: float, times) -> list[C.LawMoments]:
+def _transition_laws(exp: Experiment, model: Model, v0: float, times,
+                     threshold: float) -> list[C.LawMoments]:
     """The exact law's moments at each time (what the transition rows read)."""
     v, f, atom, point = _transition_law(exp, model, v0, times)
-    return C.transition_laws(v, f, atom=atom, point=point)
+    return C.transition_laws(v, f, atom=atom, point=point, window=threshold)
 
 
 def _transition_law(exp: Experiment, model: Model, v0: float, times):
@@ -286,14 +315,15 @@ def _analysed(exp: Experiment, ens: Ensemble) -> Ensemble:
 class MemberRuns:
     """The circuit runs behind a member's report section, as :func:`analogue.simulate`
     returned them (``records`` kept).  1-D members: ``stationary`` (from p_s, seed
-    ``member_circuit``), ``transition`` (from ``exp.v0[0]``), ``check`` (the stationary
-    run's first deck, 100x tighter); the spring: ``transition`` is the release from ``x0``
+    ``member_circuit``), ``transition`` (from ``exp.v0[0]``; None without
+    ``[experiment] histogram_times``: the member then has stationary rows only), ``check``
+    (the stationary run's first deck, 100x tighter); the spring: ``transition`` is the release from ``x0``
     at rest (over the stationary length), ``check`` its first deck, no ``stationary``."""
 
     exp: Experiment
     sizes: MemberSizes
     quick: bool
-    transition: Ensemble
+    transition: Ensemble | None
     check: Ensemble
     stationary: Ensemble | None = None
     seeds: dict = field(default_factory=dict)
@@ -306,7 +336,7 @@ class MemberRuns:
     def by_role(self) -> dict[str, Ensemble]:
         """The runs named as :func:`analogue.load_runs` names them: ``transition_v0=<v0>``,
         then ``stationary`` and ``check_stationary`` (1-D) or ``check_transition`` (spring)."""
-        out = {f"transition_v0={self.v0:g}": self.transition}
+        out = {} if self.transition is None else {f"transition_v0={self.v0:g}": self.transition}
         if self.stationary is None:
             out["check_transition"] = self.check
         else:
@@ -345,16 +375,21 @@ def member_runs(exp: Experiment, opts=None, *, quick: bool | None = None,
                     per_deck=CHECK_REPLICAS)
     v00 = float(exp.v0[0])
     times = [float(t) for t in exp.histogram_times]
-    tick(f"{name}: transition circuit run from v0 = {v00:g} ({sizes.transition_replicas} replicas)")
-    trans = _circuit(exp, v0=v00, t_end=max(times), replicas=sizes.transition_replicas,
-                     seed=plan.member_transition, sizes=sizes, opts=opts)
+    trans = None   # no histogram_times: no transition run (max(times) crashed)
+    if times:
+        tick(f"{name}: transition circuit run from v0 = {v00:g} "
+             f"({sizes.transition_replicas} replicas)")
+        trans = _circuit(exp, v0=v00, t_end=max(times), replicas=sizes.transition_replicas,
+                         seed=plan.member_transition, sizes=sizes, opts=opts)
     tick(f"{name}: integration check (first {CHECK_REPLICAS} stationary replicas, 100x tighter)")
     chk = _circuit(exp, v0=v0_stat[:CHECK_REPLICAS], t_end=sizes.stationary_t_end,
                    replicas=CHECK_REPLICAS, seed=seed, sizes=sizes, opts=opts,
                    spec=exp.check_spec(), per_deck=CHECK_REPLICAS)
+    seeds = {"stationary": seed, "check_stationary": seed}
+    if trans is not None:
+        seeds["transition"] = plan.member_transition
     return MemberRuns(exp, sizes, quick, transition=trans, check=chk, stationary=stat,
-                      seeds={"stationary": seed, "transition": plan.member_transition,
-                             "check_stationary": seed})
+                      seeds=seeds)
 
 
 def _measured(pairs: dict, label: str) -> float:
@@ -419,9 +454,11 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
     seed = plan.member_circuit
     name = exp.name
 
+    thr = stick_window(exp)
     runs = member_runs(exp, opts, quick=quick, progress=progress)
 
     if m.spring > 0:
+        assert runs.transition is not None   # the spring's release run
         circ, chk = _analysed(exp, runs.transition), _analysed(exp, runs.check)
         first = _xs_subset(circ, np.arange(CHECK_REPLICAS))
         tick(f"{name}: Monte Carlo reference ({sizes.mc_replicas} replicas)")
@@ -434,7 +471,7 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
                               sample_dt=sizes.sample_dt)
         mc_eff.meta["_x0"], mc_eff.meta["_model_eff"] = m.x0, m_eff
         obs = C.member_observables(m)
-        fns = _estimators(exp, obs)
+        fns = _estimators(exp, obs, thr)
         integ = _paired(fns, chk, first)
         bias = exp.mapping().bias
         for o in obs:
@@ -483,27 +520,33 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
 
     # ---------------------------------------------------------------- 1-D members
     assert runs.stationary is not None   # 1-D members have one
-    stat, trans, chk = (_analysed(exp, e) for e in (runs.stationary, runs.transition, runs.check))
+    stat, chk = _analysed(exp, runs.stationary), _analysed(exp, runs.check)
+    trans = None if runs.transition is None else _analysed(exp, runs.transition)
     v00 = float(exp.v0[0])
-    times = [float(t) for t in exp.histogram_times]
+    # no histogram_times: no transition run, stationary rows only
+    times = [float(t) for t in exp.histogram_times] if trans is not None else []
     tick(f"{name}: exact theory")
     obs = C.member_observables(m, v0=v00, times=times)
     stat_obs = [o for o in obs if o.run == C.STATIONARY]
     trans_obs = [o for o in obs if o.run == C.TRANSITION]
-    exact = {**_stationary_theory(exp, m, stat_obs),
-             **_transition_theory(exp, m, v00, times, trans_obs)}
-    laws = dict(zip(times, _transition_laws(exp, m, v00, times)))
-    exact_eff = _stationary_theory(exp, m_eff, stat_obs)
+    exact = _stationary_theory(exp, m, stat_obs, thr)
+    exact_eff = _stationary_theory(exp, m_eff, stat_obs, thr)
     pure_shot = C.model_class(m) == C.SHOT_MEMBER
-    if not pure_shot:
-        exact_eff.update(_transition_theory(exp, m_eff, v00, times, trans_obs))
-    integ = _paired(_estimators(exp, stat_obs), chk, _xs_subset(stat, np.arange(CHECK_REPLICAS)))
+    laws: dict = {}
+    if times:
+        exact.update(_transition_theory(exp, m, v00, times, trans_obs, thr))
+        laws = dict(zip(times, _transition_laws(exp, m, v00, times, thr)))
+        if not pure_shot:
+            exact_eff.update(_transition_theory(exp, m_eff, v00, times, trans_obs, thr))
+    integ = _paired(_estimators(exp, stat_obs, thr), chk,
+                    _xs_subset(stat, np.arange(CHECK_REPLICAS)))
     bias = exp.mapping().bias
-    for run_obs, ens, v0_band, T in (
-            (stat_obs, stat, family.sample_stationary(m, 128, plan.member_band_v0),
-             sizes.stationary_t_end),
-            (trans_obs, trans, v00, max(times))):
-        fns = _estimators(exp, run_obs)
+    groups: list[tuple] = [(stat_obs, stat, family.sample_stationary(m, 128, plan.member_band_v0),
+                            sizes.stationary_t_end)]
+    if trans is not None:
+        groups.append((trans_obs, trans, v00, max(times)))
+    for run_obs, ens, v0_band, T in groups:
+        fns = _estimators(exp, run_obs, thr)
         band = _band(exp, fns, v0_band, T, 128 if np.ndim(v0_band) else 256, plan.member_band)
         for o in run_obs:
             c, se = _jk(fns[o.label], ens)
@@ -543,8 +586,8 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
     # figure data: histograms and exact laws (computed here: the figures only draw)
     v, dens, atom = family.stationary_law(m, h=_h(exp) / 2)
     vs = _after(stat, burn).ravel()
-    fig = {"v": v, "density": dens, "atom": atom, "samples": vs, "threshold": STICK_THRESHOLD,
-           "atom_measured": float(np.mean(np.abs(vs) < STICK_THRESHOLD)), "label": name}
+    fig = {"v": v, "density": dens, "atom": atom, "samples": vs, "threshold": thr,
+           "atom_measured": float(np.mean(np.abs(vs) < thr)), "label": name}
     if m.stribeck is not None or m.cubic > 0:
         base = m.replace(stribeck=None, cubic=0.0)  # the paper's law at the same Delta
         fig["paper_density"], _ = _paper_law(m, v)
@@ -560,13 +603,14 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
                          u_at_minima=[float(x) for x in wnl["u_at_minima"]],
                          u_barrier_tops=[float(x) for x in wnl["u_barrier_tops"]])
     res.figures["stationary"] = fig
-    vt = np.linspace(min(v.min(), v00), max(v.max(), v00), 1201)
-    res.figures["propagator"] = {
-        "times": times, "v0": v00, "v": vt,
-        "density": family.propagator(m, vt, np.asarray(times), v00, h=_h(exp)),
-        "atom": (np.atleast_1d(family.propagator_atom(m, np.asarray(times), v00, h=_h(exp)))
-                 if m.shot is not None else np.zeros(len(times))),
-        "samples": [trans.at(t) for t in times], "threshold": STICK_THRESHOLD}
+    if trans is not None:
+        vt = np.linspace(min(v.min(), v00), max(v.max(), v00), 1201)
+        res.figures["propagator"] = {
+            "times": times, "v0": v00, "v": vt,
+            "density": family.propagator(m, vt, np.asarray(times), v00, h=_h(exp)),
+            "atom": (np.atleast_1d(family.propagator_atom(m, np.asarray(times), v00, h=_h(exp)))
+                     if m.shot is not None else np.zeros(len(times))),
+            "samples": [trans.at(t) for t in times], "threshold": thr}
     if m.a != 0:
         tick(f"{name}: work rate function")
         res.figures["rate_function"] = rate_function_data(m, stat, burn)
@@ -602,7 +646,7 @@ def weak_noise_law(m: Model, v: np.ndarray, exact: np.ndarray) -> dict:
             "u_minima": v[i], "u_at_minima": u[i], "u_barrier_tops": np.asarray(tops)}
 
 
-def rate_function_data(m: Model, stat: Ensemble, burn: float, tau: float = WORK_TAU) -> dict:
+def rate_function_data(m: Model, stat: Ensemble, burn: float, tau: float | None = None) -> dict:
     """Figure data of a 1-D member's work rate function (a != 0): the exact rate function on a
     grid of w, the paper's model where it is meaningful, the large-w asymptote with one-sided
     kicks, and the finite-tau estimate from the stationary ensemble ``stat``.
@@ -610,19 +654,40 @@ def rate_function_data(m: Model, stat: Ensemble, burn: float, tau: float = WORK_
     Scaling (:mod:`analogue.theory.family`): ``I(w) = (1/gamma) sup_k [k w - lambda(k)]`` when
     gamma is finite (the paper's), ``J(w) = sup_k [k w - lambda(k)]`` with
     ``P_tau(w) ~ exp(-tau J)`` when gamma = inf (pure shot noise); the circuit's estimate
-    ``-ln P_tau(w)/(tau scale)`` uses the same ``scale`` (gamma, or 1)."""
+    ``-ln P_tau(w)/(tau scale)`` uses the same ``scale`` (gamma, or 1).  ``tau``: the circuit's work window
+    (default :func:`work_tau`, 4 tau_m).
+
+    The w grid (13 points) is centred on <w> with half-width max(1.5 |<w>|, 3 sd_tau, the
+    circuit's farthest point), sd_tau = |F| sqrt(2 D_x / tau) the spread of the finite-tau
+    work rate (Green-Kubo D_x of the exact law): ``<w> (-0.5 .. 2.5)`` alone collapsed onto
+    a point when <w> ~ 0 (stick regime, small a) while the circuit's estimate spread over the
+    whole work distribution.  circuits/cubic.toml keeps its grid (1.5 <w> = 1.53 > 3 sd_tau
+    = 0.44)."""
     from ..theory import family
+    tau = work_tau(m) if tau is None else checks.positive("tau", tau)
     pure_shot = m.shot is not None and not math.isfinite(m.gamma)
     scale = m.gamma if math.isfinite(m.gamma) else 1.0
-    mu = m.force * family.stationary_moments(m).mean
+    sm = family.stationary_moments(m)
+    mu = m.force * sm.mean
     edge = family.work_edge(m)
+    # the circuit's finite-tau estimate -ln P_tau(w)/(tau scale), shifted to min 0
+    ws = work_rate_samples(stat, tau, m.force, burn_in=burn).ravel()
+    cnt, edges = np.histogram(ws, bins=25)
+    keep = cnt >= 10
+    dens = cnt / (ws.size * np.diff(edges))
+    est = -np.log(dens[keep]) / (tau * scale)
+    w_circ, rate_circ = 0.5 * (edges[1:] + edges[:-1])[keep], est - est.min()
     if edge is not None:
         # one-sided pure shot noise: w has a lower edge F v_edge (no kick: J = rate there,
         # +inf below); the grid starts on it and reaches 4 <w> - 3 edge (circuits/shot.toml:
         # edge 0, <w> = 0.0625, 13 points: 3.6 CPU-s on the shared machine)
         w = edge + (mu - edge) * np.linspace(0.0, 4.0, 13)
     else:
-        w = mu * np.linspace(-0.5, 2.5, 13)
+        sd_tau = abs(m.force) * math.sqrt(2.0 * max(sm.diffusion, 0.0) / tau)
+        half = max(1.5 * abs(mu), 3.0 * sd_tau)
+        if w_circ.size:   # and wide enough to hold the circuit's points
+            half = max(half, float(np.max(np.abs(w_circ - mu))))
+        w = mu + half * np.linspace(-1.0, 1.0, 13)
     rf: dict = {"w": w, "member": family.rate_function(m, w), "mean": mu, "scale": scale,
                 "pure_shot": pure_shot, "edge": edge,
                 "ylabel": "J(w)" if pure_shot else "I(w)"}
@@ -648,14 +713,7 @@ def rate_function_data(m: Model, stat: Ensemble, burn: float, tau: float = WORK_
             top = (k_pole * w[-1] - 2.0 * math.sqrt(rate * k_pole * w[-1])) / scale
             rf.update(k_pole=k_pole, w_asymptote=wa,
                       asymptote=form + float(rf["member"][-1]) - top)
-    # the circuit's finite-tau estimate -ln P_tau(w)/(tau scale), shifted to min 0
-    ws = work_rate_samples(stat, tau, m.force, burn_in=burn).ravel()
-    cnt, edges = np.histogram(ws, bins=25)
-    keep = cnt >= 10
-    dens = cnt / (ws.size * np.diff(edges))
-    est = -np.log(dens[keep]) / (tau * scale)
-    rf.update(w_circuit=0.5 * (edges[1:] + edges[:-1])[keep], rate_circuit=est - est.min(),
-              tau=tau)
+    rf.update(w_circuit=w_circ, rate_circuit=rate_circ, tau=tau)
     return rf
 
 
@@ -753,7 +811,7 @@ def member_text(a: MemberAnalysis) -> list[str]:
                     "stuck state: the stationary law has a density and no atom at v = 0.")
     if pure_shot:
         text.append(f"Exact P(v = 0) = {f['p_zero']:.4f}; the circuit's stuck fraction "
-                    f"(|v| < {STICK_THRESHOLD:g}, where the exact law has "
+                    f"(|v| < {stick_window(a.exp):.3g}, where the exact law has "
                     f"{next((c.theory for c in a.comparisons if c.observable == 'P(v=0)'), float('nan')):.4f}) "
                     f"is {f['p_zero_measured']:.4f}.")
     elif key == "spring":

@@ -26,6 +26,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -42,6 +43,9 @@ from .metrics import validate_metrics
 from .plan import RunOptions
 from .runs import ExperimentRuns, run_experiment_runs
 from ..circuit.simulate import POLL_S
+
+if TYPE_CHECKING:   # beyond is imported where it is used (start-up time)
+    from .beyond import MemberRuns
 
 __all__ = ["RunOptions", "run_experiment", "build_experiment_report", "build_paper_report",
            "build_report", "RunSummary", "ReportIncomplete", "experiment_section_text"]
@@ -154,10 +158,35 @@ def _load(name_or_exp) -> Experiment:
     return name_or_exp if isinstance(name_or_exp, Experiment) else load_experiment(name_or_exp)
 
 
-def run_experiment(name, opts: RunOptions) -> RunSummary:
-    """Run (or load from the store) every circuit run of one experiment."""
+@dataclass
+class MemberRunSummary:
+    """The circuit runs of a family member (:func:`analogue.report.beyond.member_runs`): the
+    very runs ``analogue report`` reads for it (same decks and seeds, from the store)."""
+
+    runs: MemberRuns
+    wall_time: float
+
+    def summary(self) -> str:
+        runs = self.runs.by_role()
+        reps = ", ".join(f"{role}: {e.replicas} x {float(e.t[-1] - e.t[0]):g}"
+                         for role, e in runs.items())
+        version = next(iter(runs.values())).meta.get("ngspice_version")
+        name, quick = self.runs.exp.name, self.runs.quick
+        return (f"{name}: runs stored ({reps}; the {'quick' if quick else 'full'} size of "
+                f"'analogue report {name}'); ngspice {version}; {self.wall_time:.1f} s")
+
+
+def run_experiment(name, opts: RunOptions) -> RunSummary | MemberRunSummary:
+    """Run (or load from the store) every circuit run of one experiment: a paper-model
+    experiment's runs (:func:`analogue.report.runs.run_experiment_runs`), or a family
+    member's (:func:`analogue.report.beyond.member_runs`: the runs its report reads)."""
+    from . import beyond
     exp = _load(name)
     _log(f"{exp.name}: running the circuit (stored runs are reused)")
+    if beyond.is_member_experiment(exp):
+        t0 = time.perf_counter()
+        runs = beyond.member_runs(exp, opts, progress=_log)
+        return MemberRunSummary(runs, time.perf_counter() - t0)
     return RunSummary(run_experiment_runs(exp, opts))
 
 

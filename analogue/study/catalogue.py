@@ -34,7 +34,7 @@ from ..model import Model
 from ..theory.stationary import integrated_autocorrelation, stationary_moments
 
 __all__ = ["KINDS", "Kind", "Observable", "TRANSITION", "STATIONARY", "density_moments",
-           "PAPER", "GAUSSIAN_MEMBER", "SHOT_MEMBER", "SPRING_MEMBER", "MEMBER_STICK_WINDOW",
+           "PAPER", "GAUSSIAN_MEMBER", "SHOT_MEMBER", "SPRING_MEMBER", "member_stick_window",
            "LawMoments", "law_moments", "transition_laws", "StationarySample", "StationaryTheory", "first_swing",
            "model_class", "member_observables", "reference_of", "stationary_sample",
            "transition_observables", "stationary_observables", "transition_values",
@@ -54,11 +54,31 @@ SPRING_MEMBER = "spring member"      # state (x, v): the Monte Carlo is the refe
 _MEMBERS = frozenset({GAUSSIAN_MEMBER, SHOT_MEMBER})
 _ALL_1D = frozenset({PAPER, GAUSSIAN_MEMBER, SHOT_MEMBER})
 
-# |v| below this (model units) counts as stuck on the family members.  The circuit's diode
-# bridge holds a stuck object at v = epsilon atanh(a/Delta) (shot: 0.01 atanh(0.4) = 0.0042),
-# never at 0: the window must contain that; the theory counts the atom plus the continuous
-# mass inside the window.
-MEMBER_STICK_WINDOW = 0.05
+# the member's stick window holds the circuit's stuck state eps atanh(|a|/Delta(0)) with this
+# margin (shot.toml: 4 x 0.0042 = 0.017, inside its 0.1 velocity-scale window 0.05)
+STUCK_STATE_MARGIN = 4.0
+
+
+def member_stick_window(model: Model, *, stick_threshold: float, epsilon: float = 0.0) -> float:
+    """|v| below this counts as stuck on a family member (estimator and theory read the same
+    window): ``stick_threshold`` (the experiment's ``[report] stick_threshold``, the paper
+    experiments' threshold too) times the model's velocity scale
+    (:attr:`analogue.Model.velocity_scale`, sqrt(tau_m/gamma) with the shot term in
+    quadrature), widened where needed to hold the circuit's stuck state: the diode bridge of
+    smoothing ``epsilon`` holds a stuck object at v = epsilon atanh(|a|/Delta(0)), never at 0
+    (the theory counts the atom plus the continuous mass inside the window).
+
+    Was the absolute 0.05 (issue 20): the same for a member whose velocities are 10x larger
+    or smaller.  circuits/shot.toml keeps 0.05 (0.1 x 0.5); cubic.toml's window is 0.0316,
+    stribeck.toml's 0.0447."""
+    w = float(stick_threshold) * model.velocity_scale
+    if not (w > 0 and math.isfinite(w)):
+        raise ValueError(f"stick window {w!r}: stick_threshold ({stick_threshold!r}) times the "
+                         f"velocity scale ({model.velocity_scale!r}) must be finite and > 0")
+    d0 = model.static_friction
+    if epsilon > 0 and abs(model.a) < d0:
+        w = max(w, STUCK_STATE_MARGIN * epsilon * math.atanh(abs(model.a) / d0))
+    return w
 
 
 def model_class(model: Model) -> str:
@@ -207,14 +227,13 @@ class LawMoments(NamedTuple):
     mean: float
     variance: float
     p_negative: float           # P(v < 0) (the atom excluded)
-    p_stuck: float              # P(|v| < MEMBER_STICK_WINDOW), the atom included
+    p_stuck: float              # P(|v| < window), the atom included (law_moments)
     # central fourth moment: the standard error of a sample variance from n independent
     # draws, sqrt(mu4/n - sigma^4 (n - 3)/(n (n - 1)))
     fourth: float = math.nan
 
 
-def law_moments(v: np.ndarray, f: np.ndarray, atom: float = 0.0,
-                window: float = MEMBER_STICK_WINDOW,
+def law_moments(v: np.ndarray, f: np.ndarray, atom: float = 0.0, window: float = 0.0,
                 point: tuple[float, float] | None = None) -> LawMoments:
     """Moments of the law ``f`` (continuous part, on the uniform grid ``v``; trapezoid) plus
     ``atom`` at v = 0 (shot noise: the object at rest) plus ``point = (v_p, mass)``, a delta
@@ -222,7 +241,8 @@ def law_moments(v: np.ndarray, f: np.ndarray, atom: float = 0.0,
     :func:`analogue.theory.family.unkicked`), normalised on the grid: total mass = integral
     of f + atom + mass.  Probabilities read the cumulative trapezoid integral, linearly
     interpolated at 0 and +-window (with v = 0 on a node, P(v < 0) is the trapezoid integral
-    up to that node: the paper's convention, the node at 0 counting half)."""
+    up to that node: the paper's convention, the node at 0 counting half).  ``window``: the
+    stick window of ``p_stuck`` (:func:`member_stick_window`; 0: the atom alone)."""
     vp, mp = (0.0, 0.0) if point is None else (float(point[0]), float(point[1]))
     tot = integrate.trapezoid(f, v) + atom + mp
     f = f / tot
@@ -357,7 +377,13 @@ class Kind:
     # integration differences are taken on the smoothed indicator
     # (analogue.estimators.smoothed_indicator; ``smoothing`` of the value functions below)
     window: Callable[[float], tuple[float, float]] | None = None
+    # a transition kind whose estimator also takes the stick window (estimator(v, threshold))
+    thresholded: bool = False
 
+
+# the stationary kind "moving forward" of shot members: v above the stick window (was
+# "P(v>0.05)", the absolute window's value in the label)
+ABOVE_WINDOW = "P(v>window)"
 
 _ONE_D = _relative(*_ONE_D_TERMS)
 
@@ -394,11 +420,12 @@ KINDS: tuple[Kind, ...] = (
                      "against the exact f(v, t | v0) at the circuit's epsilon, ~20 "
                      "equal-probability bins; (value, standard error sqrt(2/dof))"),
     Kind("P(v=0)", TRANSITION, ("t", "v0"),
-         lambda v: float(np.mean(np.abs(v) < MEMBER_STICK_WINDOW)),
+         lambda v, threshold: float(np.mean(np.abs(v) < threshold)),
          exact=lambda m: m.p_stuck, probability=True, classes=frozenset({SHOT_MEMBER}),
-         description=f"stuck at t from v0: |v| < {MEMBER_STICK_WINDOW:g}; theory: the atom "
-                     "plus the continuous mass in the window",
-         window=lambda thr: (-MEMBER_STICK_WINDOW, MEMBER_STICK_WINDOW)),
+         description="stuck at t from v0: |v| < the member's stick window "
+                     "(study.catalogue.member_stick_window); theory: the atom plus the "
+                     "continuous mass in the same window", thresholded=True,
+         window=lambda thr: (-thr, thr)),
     # stationary run (eq. (6), eqs. (3), (52), Green-Kubo); in label order
     Kind("mean v", STATIONARY, (), lambda s, tau=None: float(s.v.mean()),
          exact=lambda th, tau=None: th.moments.mean, description="stationary mean velocity",
@@ -416,7 +443,8 @@ KINDS: tuple[Kind, ...] = (
          lambda s, tau=None: float(np.mean(np.abs(s.v) < s.threshold)), exact=_stick_theory,
          probability=True,
          description="stationary P(|v| < threshold), threshold = report.stick_threshold "
-                     f"sqrt(tau_m/gamma) (family members: {MEMBER_STICK_WINDOW:g})",
+                     "sqrt(tau_m/gamma) (family members: study.catalogue."
+                     "member_stick_window)",
          classes=frozenset({PAPER, GAUSSIAN_MEMBER}), element=_ONE_D,
          window=lambda thr: (-thr, thr)),
     Kind("diffusion D_x", STATIONARY, (), _diffusion,
@@ -435,14 +463,14 @@ KINDS: tuple[Kind, ...] = (
     Kind("P(v=0)", STATIONARY, (),
          lambda s, tau=None: float(np.mean(np.abs(s.v) < s.threshold)), exact=_stick_theory,
          probability=True, classes=frozenset({SHOT_MEMBER}), element=_ONE_D,
-         description=f"stuck: |v| < {MEMBER_STICK_WINDOW:g} (the bridge holds a stuck object "
-                     "at epsilon atanh(a/Delta), not 0); theory: the atom P(v = 0) plus the "
+         description="stuck: |v| < the member's stick window (the bridge holds a stuck "
+                     "object at epsilon atanh(a/Delta), not 0); theory: the atom P(v = 0) plus the "
                      "continuous mass in the window",
          window=lambda thr: (-thr, thr)),
-    Kind(f"P(v>{MEMBER_STICK_WINDOW:g})", STATIONARY, (),
+    Kind(ABOVE_WINDOW, STATIONARY, (),
          lambda s, tau=None: float(np.mean(s.v >= s.threshold)), exact=_above_theory,
          probability=True, classes=frozenset({SHOT_MEMBER}), element=_ONE_D,
-         description="moving forward (above the stick window)",
+         description="moving forward: v above the member's stick window",
          window=lambda thr: (thr, math.inf)),
     Kind("mean x", STATIONARY, (), lambda s, tau=None: float(s.x.mean()), exact=no_exact,
          classes=frozenset({SPRING_MEMBER}), element=_leak_mean_x,
@@ -580,7 +608,8 @@ def estimate(o: Observable, ens: Ensemble, *, burn_in: float, threshold: float, 
     k = o.entry
     if o.run == TRANSITION:
         assert o.t is not None  # transition observables carry their time
-        return float(k.estimator(ens.at(o.t)))
+        v = ens.at(o.t)
+        return float(k.estimator(v, threshold) if k.thresholded else k.estimator(v))
     s = stationary_sample(ens, burn_in=burn_in, threshold=threshold, force=force,
                           position=position, model=model, friction=friction)
     return float(k.estimator(s, o.tau))
@@ -688,7 +717,7 @@ class StationaryValues:
                 cols[o.label] = _fraction_left_out(s.v > 0, labels, groups)
             elif name in ("stick fraction", "P(v=0)"):
                 cols[o.label] = _fraction_left_out(np.abs(s.v) < s.threshold, labels, groups)
-            elif name == f"P(v>{MEMBER_STICK_WINDOW:g})":
+            elif name == ABOVE_WINDOW:
                 cols[o.label] = _fraction_left_out(s.v >= s.threshold, labels, groups)
             elif name == "diffusion D_x":
                 cols[o.label] = diffusion_leave_group_out(ens, labels, groups,
@@ -703,23 +732,24 @@ class StationaryValues:
         return [{k: float(c[j]) for k, c in cols.items()} for j in range(groups)]
 
 
-def transition_laws(v: np.ndarray, f: np.ndarray, *, atom=None, point=None) -> list[LawMoments]:
-    """:func:`law_moments` of each row of ``f`` (one per time), with ``atom[i]`` at v = 0 and
-    ``point = (v_p[i], mass[i])`` (see :func:`law_moments`)."""
-    return [law_moments(v, row, 0.0 if atom is None else float(atom[i]),
+def transition_laws(v: np.ndarray, f: np.ndarray, *, atom=None, point=None,
+                    window: float = 0.0) -> list[LawMoments]:
+    """:func:`law_moments` of each row of ``f`` (one per time), with ``atom[i]`` at v = 0,
+    ``point = (v_p[i], mass[i])`` and the stick ``window`` (see :func:`law_moments`)."""
+    return [law_moments(v, row, 0.0 if atom is None else float(atom[i]), window=window,
                         point=None if point is None else (point[0][i], point[1][i]))
             for i, row in enumerate(f)]
 
 
 def transition_theory(v: np.ndarray, f: np.ndarray, v0: float, times, *,
                       weak_noise: bool = False, atom=None, observables=None,
-                      point=None) -> dict:
+                      point=None, window: float = 0.0) -> dict:
     """Exact (or, with ``weak_noise``, weak-noise) values of every transition observable
     from the densities ``f`` (rows: ``times``) on the grid ``v``, plus ``atom[i]`` at v = 0
     (shot noise) and the delta ``point`` (:func:`transition_laws`).  ``observables``: the
     transition observables to read (default: the paper's, :func:`transition_observables`)."""
     out = {}
-    laws = transition_laws(v, f, atom=atom, point=point)
+    laws = transition_laws(v, f, atom=atom, point=point, window=window)
     for t, m in zip(times, laws):
         obs = (transition_observables(v0, [t]) if observables is None else
                [o for o in observables if o.run == TRANSITION and o.t == float(t)])

@@ -21,7 +21,7 @@ pytestmark = pytest.mark.slow
 Z_FAMILY = float(norm.isf(0.01 / 49 / 2))
 # what each member must report (labels as the paper's experiments name theirs)
 EXPECTED = {
-    "shot": {"mean v", "var v", "P(v=0)", "P(v>0.05)", "P(v=0) at t=1 from v0=0"},
+    "shot": {"mean v", "var v", "P(v=0)", "P(v>window)", "P(v=0) at t=1 from v0=0"},
     "cubic": {"mean v", "var v", "P(v>0)", "stick fraction", "mean v at t=0.5 from v0=0"},
     "stribeck": {"mean v", "var v", "P(v>0)", "stick fraction", "P(v<0) at t=1 from v0=0"},
     "spring": {"mean v", "var v", "mean x", "var x", "half period (first swing)",

@@ -52,7 +52,7 @@ def test_shot_rate_function_data(shot_data):
     # on the scale of J (a factor gamma would make it 0 or inf)
     rc = np.asarray(d["rate_circuit"])
     assert rc.min() == 0.0 and 0.05 < rc.max() < 5.0
-    assert d["tau"] == beyond.WORK_TAU
+    assert d["tau"] == beyond.work_tau(m) == 4.0 * m.tau_m
 
 
 def test_shot_rate_function_figure(shot_data, tmp_path):

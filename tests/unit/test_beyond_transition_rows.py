@@ -55,10 +55,12 @@ def test_pure_shot_transition_theory_includes_the_unkicked_mass(model, v0, times
     assert ens.meta["shot_scheme"] == "event-driven, exact between kicks"
     obs = [o for o in C.member_observables(m, v0=v0, times=times) if o.run == C.TRANSITION]
     assert len(obs) == 3 * len(times)
-    theory = beyond._transition_theory(exp, m, v0, times, obs)
+    thr = beyond.stick_window(exp)
+    theory = beyond._transition_theory(exp, m, v0, times, obs, thr)
     for o in obs:
         x = ens.at(o.t)
-        got, want = o.entry.estimator(x), theory[o.label]
+        got = C.estimate(o, ens, burn_in=0.0, threshold=thr, force=m.force)
+        want = theory[o.label]
         if o.kind == "mean v":
             se = x.std() / math.sqrt(n)
         elif o.kind == "var v":
@@ -79,7 +81,7 @@ def test_transition_rows_carry_the_laws_standard_error():
     obs = [o for o in C.member_observables(m, v0=0.0, times=[0.5])
            if o.kind in ("mean v", "var v") and o.run == C.TRANSITION]
     assert len(obs) == 2
-    law = beyond._transition_laws(exp, m, 0.0, [0.5])[0]
+    law = beyond._transition_laws(exp, m, 0.0, [0.5], beyond.stick_window(exp))[0]
     for o in obs:
         want = o.entry.exact(law)
         fn = lambda e, o=o: C.estimate(o, e, burn_in=0.0, threshold=0.05, force=m.force)
@@ -147,7 +149,7 @@ def test_spring_force_balance_counts_the_mean_kick_force():
     obs = [o for o in C.member_observables(m) if o.kind.startswith("identity spring")]
     assert [o.kind for o in obs] == [
         "identity spring <x> - a - rate <z> + <Delta(v) sgn v> + cubic <v^3> = 0"]
-    fn = beyond._estimators(exp, obs)[obs[0].label]
+    fn = beyond._estimators(exp, obs, beyond.stick_window(exp))[obs[0].label]
     res, se = beyond._jk(fn, ens)
     assert abs(res) < 4 * se, (res, se)
 
@@ -203,7 +205,7 @@ def test_paper_law_of_the_figure_keeps_the_members_noise(shot):
 
 # ------------------------------------------------------------------ stationary window rows
 def test_pure_shot_window_rows_are_converged_in_the_grid():
-    """'P(v=0)' (the atom plus the mass in |v| < 0.05) and 'P(v>0.05)' of shot.toml's model
+    """'P(v=0)' (the atom plus the mass in |v| < 0.05) and 'P(v>window)' of shot.toml's model
     against the event-driven Monte Carlo (exact between kicks; 600000 independent replicas
     read after 15 tau_m; SE 6.4e-4).  The rows read the Kolmogorov-Feller grid law, first order in h:
     0.42912 at the default h, 0.43179 at h/2, 0.43313 at h/4 (extrapolated 0.4345), a bias of
@@ -213,9 +215,9 @@ def test_pure_shot_window_rows_are_converged_in_the_grid():
                        "shot": {"rate": 1.0, "mean": 0.5}}, 0.0)
     m = exp.model
     assert m == Model(1.0, 0.5, 0.2, math.inf, shot=ShotNoise(1.0, 0.5))
-    obs = [o for o in C.member_observables(m) if o.kind in ("P(v=0)", "P(v>0.05)")]
+    obs = [o for o in C.member_observables(m) if o.kind in ("P(v=0)", C.ABOVE_WINDOW)]
     assert len(obs) == 2
-    theory = beyond._stationary_theory(exp, m, obs)
+    theory = beyond._stationary_theory(exp, m, obs, 0.05)
     n = 600_000
     ens = simulate_sde(m, v0=0.0, t_end=15.0, replicas=n, seed=12, sample_dt=15.0)
     v = ens.v[:, -1]
@@ -264,7 +266,7 @@ def test_gaussian_stick_fraction_row_matches_quadrature(member):
     exp = load_experiment(standard_circuit(member))
     m = exp.model
     obs = [o for o in C.member_observables(m) if o.kind == "stick fraction"]
-    got = beyond._stationary_theory(exp, m, obs)[obs[0].label]
+    got = beyond._stationary_theory(exp, m, obs, 0.05)[obs[0].label]
     assert got == pytest.approx(_quad_window(m, 0.05), rel=1e-3)
 
 
@@ -275,8 +277,8 @@ def test_pure_shot_window_rows_with_the_density_jumping_at_zero():
     replicas) 0.05735 +- 0.00037."""
     exp = _experiment(SLIP, 0.0)
     m = exp.model
-    obs = [o for o in C.member_observables(m) if o.kind in ("P(v=0)", "P(v>0.05)")]
-    theory = beyond._stationary_theory(exp, m, obs)
+    obs = [o for o in C.member_observables(m) if o.kind in ("P(v=0)", C.ABOVE_WINDOW)]
+    theory = beyond._stationary_theory(exp, m, obs, 0.05)
     n = 400_000
     v = simulate_sde(m, v0=0.0, t_end=30.0, replicas=n, seed=22, sample_dt=30.0).v[:, -1]
     for o, got in zip(obs, (np.mean(np.abs(v) < 0.05), np.mean(v >= 0.05))):

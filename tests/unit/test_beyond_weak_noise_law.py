@@ -74,7 +74,7 @@ def test_weak_noise_text_and_figure(name, tmp_path):
     a.exp = exp
     s = family.sample_stationary(m, 400, seed=1)
     a.figures = {"stationary": {"v": v, "density": dens, "atom": 0.0, "samples": s,
-                                "threshold": beyond.STICK_THRESHOLD, "atom_measured": 0.0,
+                                "threshold": 0.05, "atom_measured": 0.0,
                                 "label": name, **r}}
     path, cap = fig_member_stationary(a, tmp_path)
     assert path.exists() and "weak-noise law exp(-gamma U)/Z" in cap and "minima of U" in cap

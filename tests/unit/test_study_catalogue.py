@@ -161,8 +161,8 @@ def test_model_classes_and_references():
 def test_law_moments_of_an_atom_plus_a_gaussian():
     """p delta(v) + (1 - p) N(mu, s^2): moments, P(v < 0) and the stuck window in closed form."""
     v = np.linspace(-8, 8, 16001)
-    p, mu, s, w = 0.3, 0.8, 0.6, C.MEMBER_STICK_WINDOW
-    m = C.law_moments(v, (1 - p) * norm.pdf(v, mu, s), p)
+    p, mu, s, w = 0.3, 0.8, 0.6, 0.05
+    m = C.law_moments(v, (1 - p) * norm.pdf(v, mu, s), p, window=w)
     mean = (1 - p) * mu
     assert m.mean == pytest.approx(mean, abs=1e-9)
     assert m.variance == pytest.approx((1 - p) * (s * s + mu * mu) - mean ** 2, rel=1e-6)
@@ -186,7 +186,7 @@ def test_member_stationary_theory_reads_the_grid_law():
     model = Model(tau_m=1.0, delta=0.5, a=0.2, gamma=math.inf,
                   shot=__import__("analogue").ShotNoise(1.0, 0.5))
     obs = C.member_observables(model)
-    assert [o.kind for o in obs] == ["mean v", "var v", "P(v=0)", "P(v>0.05)"]
+    assert [o.kind for o in obs] == ["mean v", "var v", "P(v=0)", "P(v>window)"]
 
     class Moments:
         mean, variance = 0.1, 0.2
@@ -194,7 +194,7 @@ def test_member_stationary_theory_reads_the_grid_law():
                               law=(v, dens, 0.4), observables=obs)
     dv = v[1] - v[0]
     assert out["P(v=0)"] == pytest.approx(0.4 + 0.3 * dv * np.sum(np.abs(v) < 0.05))
-    assert out["P(v>0.05)"] == pytest.approx(0.3 * (1 - 0.05), abs=2 * 0.3 * dv)
+    assert out["P(v>window)"] == pytest.approx(0.3 * (1 - 0.05), abs=2 * 0.3 * dv)
     assert out["mean v"] == 0.1 and out["var v"] == 0.2
 
 
