@@ -417,15 +417,17 @@ def _paired(fns: dict, a: Ensemble, b: Ensemble) -> dict:
     return out
 
 
-def _band(exp: Experiment, fns: dict, v0, t_end: float, replicas: int, seed: int) -> dict:
-    """Held minus white noise Monte Carlo on common increments (Gaussian members only)."""
+def _band(exp: Experiment, fns: dict, v0, t_end: float, replicas: int, seed: int, *,
+          sample_dt: float) -> dict:
+    """Held minus white noise Monte Carlo on common increments (Gaussian members only),
+    sampled every ``sample_dt`` (the member's, :class:`MemberSizes`; was an absolute 0.02)."""
     m = exp.mapping()
     if not math.isfinite(exp.model.gamma):
         return {}
     noise_dt = m.noise_dt
     t_end = noise_dt * round(t_end / noise_dt)
     held, white = held_noise_pair(m.model_effective, v0=v0, t_end=t_end, replicas=replicas,
-                                  seed=seed, noise_dt=noise_dt, sample_dt=0.02)
+                                  seed=seed, noise_dt=noise_dt, sample_dt=sample_dt)
     for e in (held, white):
         e.meta["_x0"] = exp.model.x0
         e.meta["_model_eff"] = m.model_effective
@@ -547,7 +549,8 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
         groups.append((trans_obs, trans, v00, max(times)))
     for run_obs, ens, v0_band, T in groups:
         fns = _estimators(exp, run_obs, thr)
-        band = _band(exp, fns, v0_band, T, 128 if np.ndim(v0_band) else 256, plan.member_band)
+        band = _band(exp, fns, v0_band, T, 128 if np.ndim(v0_band) else 256, plan.member_band,
+                     sample_dt=sizes.sample_dt)
         for o in run_obs:
             c, se = _jk(fns[o.label], ens)
             th_model = float(exact[o.label])

@@ -1,7 +1,7 @@
 """Beyond the paper (issue 9): ``analogue report <member> --quick`` for every family member,
 and the chapter "Beyond the paper" of the paper report.
 
-Quick sizes (32 stationary replicas of 40 time units, 32 transition replicas): ~5-20 s of
+Quick sizes (32 stationary replicas of 40 tau_m, 32 transition replicas): ~5-20 s of
 ngspice per member on 2 cores."""
 from __future__ import annotations
 

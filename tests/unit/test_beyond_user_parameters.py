@@ -145,3 +145,19 @@ def test_rate_function_grid_covers_the_work_spread_when_the_mean_is_small(tmp_pa
     # the exact curve spans the circuit's finite-tau points
     assert w[0] <= wc.min() and w[-1] >= wc.max()
     assert w[0] < d["mean"] < w[-1]
+
+
+def test_bandwidth_pair_samples_at_the_members_interval(tmp_path, monkeypatch):
+    """The held/white Monte Carlo pair of the bandwidth term reads the member's own sample
+    interval (0.02 tau_m at tau_m = 0.1), not an absolute 0.02 (10 samples per tau_m)."""
+    exp = _time_scaled("cubic", tmp_path, 0.1)
+    seen = {}
+
+    def fake_pair(model, **kw):
+        seen.update(kw)
+        raise RuntimeError("stop")
+    monkeypatch.setattr(beyond, "held_noise_pair", fake_pair)
+    sizes = beyond.member_sizes(exp, True)
+    with pytest.raises(RuntimeError, match="stop"):
+        beyond._band(exp, {}, 0.0, 1.0, 8, 1, sample_dt=sizes.sample_dt)
+    assert seen["sample_dt"] == pytest.approx(0.002)
