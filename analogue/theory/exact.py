@@ -26,7 +26,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.special import logsumexp
 
 from .. import checks
 from ..model import Model
@@ -192,6 +191,7 @@ def propagator(model: Model, v: ArrayLike, t: ArrayLike, v0: float, t0: float = 
 #: Gauss-Legendre points per cell for the mass of the interpolant (its log is a quadratic in
 #: the cell for the sgn law, smooth on the scale epsilon >= 8 h for tanh: error < 1e-12).
 _GAUSS_POINTS = 4
+_GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(_GAUSS_POINTS)
 
 
 def _log_interpolant(model: Model, grid: Grid, log_ratio: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -231,10 +231,11 @@ def _interpolate(model: Model, grid: Grid, dens: np.ndarray, v: np.ndarray, scal
         log_ratio = np.maximum(np.log(dens), -1e300) + gu_nodes
     # shift by the largest value so that neither the tails nor the mass overflow
     log_ratio -= np.max(log_ratio - gu_nodes, axis=1, keepdims=True)
-    xq, wq = np.polynomial.legendre.leggauss(_GAUSS_POINTS)
-    cells = nodes[:-1, None] + 0.5 * grid.h * (1.0 + xq[None, :])
+    cells = nodes[:-1, None] + 0.5 * grid.h * (1.0 + _GAUSS_X[None, :])
     log_cells = _log_interpolant(model, grid, log_ratio, cells.ravel())
-    log_mass = logsumexp(log_cells, b=np.tile(0.5 * grid.h * wq, grid.n - 1), axis=1)
+    top = log_cells.max(axis=1, keepdims=True)
+    weights = np.tile(0.5 * grid.h * _GAUSS_W, grid.n - 1)
+    log_mass = np.log(np.exp(log_cells - top) @ weights) + top[:, 0]
     log_out = _log_interpolant(model, grid, log_ratio, flat[inside]) - log_mass[:, None]
     out: np.ndarray = np.zeros((dens.shape[0], flat.size))
     out[:, inside] = np.exp(log_out)

@@ -34,8 +34,8 @@ __all__ = ["resolved_grid", "stationary_range", "propagator_grid", "PECLET", "DI
            "DEEP_START"]
 
 
-def stationary_range(model: Model, tail: float = 40.0) -> tuple[float, float]:
-    """``[lo, hi]`` with ``gamma (U(v) - U_min) = tail`` at both ends."""
+def stationary_range(model: Model, tail: float = 40.0, xtol: float = 1e-14) -> tuple[float, float]:
+    """``[lo, hi]`` with ``gamma (U(v) - U_min) = tail`` at both ends (to ``xtol``)."""
     c = model.potential_minimum()
     u_min = float(model.potential(c))
     reach = math.sqrt(2.0 * tail * model.tau_m / model.gamma) * 1.000001
@@ -44,8 +44,8 @@ def stationary_range(model: Model, tail: float = 40.0) -> tuple[float, float]:
         return model.gamma * (float(model.potential(v)) - u_min) - tail
 
     # U - U_min >= (v - c)^2/(2 tau_m): the Gaussian reach brackets the root on each side.
-    lo = optimize.brentq(excess, c - reach, c, xtol=1e-14, rtol=1e-12) if excess(c - reach) > 0 else c - reach
-    hi = optimize.brentq(excess, c, c + reach, xtol=1e-14, rtol=1e-12) if excess(c + reach) > 0 else c + reach
+    lo = optimize.brentq(excess, c - reach, c, xtol=xtol, rtol=1e-12) if excess(c - reach) > 0 else c - reach
+    hi = optimize.brentq(excess, c, c + reach, xtol=xtol, rtol=1e-12) if excess(c + reach) > 0 else c + reach
     return lo, hi
 
 
@@ -129,7 +129,8 @@ def _level_set(model: Model, v0: float, tail: float) -> tuple[float, float]:
     for end in (min(v0, c) - reach, max(v0, c) + reach):
         start = min(v0, c) if end < v0 else max(v0, c)
         # U - U(v0) >= (v - start)^2/(2 tau_m) beyond the start: the reach brackets the root
-        out.append(optimize.brentq(excess, end, start, xtol=1e-14, rtol=1e-12) if excess(end) > 0 else end)
+        # the range is rounded out to nodes anyway: 1e-6 of the reach is plenty
+        out.append(optimize.brentq(excess, end, start, xtol=1e-6 * reach) if excess(end) > 0 else end)
     return out[0], out[1]
 
 
@@ -164,7 +165,7 @@ def propagator_grid(model: Model, v0: float, t_min: float, h: float | None = Non
     lo = min(lo, max(v0 - reach, lv))
     hi = max(hi, min(v0 + reach, hv))
     if h is None:
-        c_lo, c_hi = stationary_range(model, CORE)
+        c_lo, c_hi = stationary_range(model, CORE, xtol=1e-3 * model.velocity_scale)
         p_lo, p_hi = min(c_lo, v0), max(c_hi, v0)
         slopes = [abs(_slope(model, p_lo, -1.0)), abs(_slope(model, p_hi, 1.0))]
         if p_lo <= 0.0 <= p_hi:
