@@ -497,8 +497,8 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
                         "SE = circuit and Monte Carlo SEs in quadrature. ")
             res.comparisons.append(compare(name, label, c, se, ref, "exact", b,
                                            note + o.entry.description))
-        th, ah = C.first_swing(circ.t, circ.v, _position(circ))
-        tm, am = C.first_swing(mc.t, mc.v, _position(mc))
+        th, ah = C.first_swing(circ.t, circ.v, _position(circ), thr)
+        tm, am = C.first_swing(mc.t, mc.v, _position(mc), thr)
         k = math.sqrt(m.spring)
         res.facts.update(omega_undamped_half_period=math.pi / k,
                          circuit_half_period=float(np.nanmean(th)),

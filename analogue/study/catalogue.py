@@ -147,9 +147,12 @@ def stationary_sample(ens: Ensemble, *, burn_in: float, threshold: float, force:
                             force=force, position=position, model=model, friction=friction)
 
 
-def first_swing(t: np.ndarray, v: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def first_swing(t: np.ndarray, v: np.ndarray, x: np.ndarray,
+                threshold: float) -> tuple[np.ndarray, np.ndarray]:
     """Per replica: the time the first swing ends (v returns to 0 after leaving rest,
-    |v| > 0.05: half a period of the damped oscillation) and |x| there (the first amplitude);
+    |v| > ``threshold``: half a period of the damped oscillation) and |x| there (the first
+    amplitude); the analysis passes the member's stick window
+    (:func:`member_stick_window`; the absolute 0.05 never fired for a member 100x slower);
     NaN for a replica that never completes it.  The swing's direction is that of the first
     departure: backward when released from x0 > 0 at rest, forward from x0 < 0 (a release
     moving forward first had its second swing measured before)."""
@@ -157,7 +160,7 @@ def first_swing(t: np.ndarray, v: np.ndarray, x: np.ndarray) -> tuple[np.ndarray
     t_half = np.full(n, np.nan)
     amp = np.full(n, np.nan)
     for r in range(n):
-        moving = np.flatnonzero(np.abs(v[r]) > 0.05)
+        moving = np.flatnonzero(np.abs(v[r]) > threshold)
         if moving.size == 0:
             continue
         j0 = moving[0]
@@ -171,12 +174,12 @@ def first_swing(t: np.ndarray, v: np.ndarray, x: np.ndarray) -> tuple[np.ndarray
 
 def _half_period(s: StationarySample, tau=None) -> float:
     assert s.position is not None  # spring kinds: the sample carries the position
-    return float(np.nanmean(first_swing(s.ens.t, s.ens.v, s.position)[0]))
+    return float(np.nanmean(first_swing(s.ens.t, s.ens.v, s.position, s.threshold)[0]))
 
 
 def _amplitude(s: StationarySample, tau=None) -> float:
     assert s.position is not None
-    return float(np.nanmean(first_swing(s.ens.t, s.ens.v, s.position)[1]))
+    return float(np.nanmean(first_swing(s.ens.t, s.ens.v, s.position, s.threshold)[1]))
 
 
 def _kick_force(m: Model) -> float:

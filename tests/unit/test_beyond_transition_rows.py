@@ -237,7 +237,7 @@ def test_first_swing_of_a_release_moving_forward_first():
     x0 = np.array([-2.0, 1.0])[:, None]          # forward first, then backward first
     x = x0 * np.cos(w * t)
     v = -x0 * w * np.sin(w * t)
-    half, amp = C.first_swing(t, v, x)
+    half, amp = C.first_swing(t, v, x, 0.05)
     assert half == pytest.approx(np.pi / w.ravel(), abs=2 * (t[1] - t[0]))
     assert amp == pytest.approx(np.abs(x0).ravel(), rel=1e-4)
 

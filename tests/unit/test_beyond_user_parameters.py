@@ -161,3 +161,29 @@ def test_bandwidth_pair_samples_at_the_members_interval(tmp_path, monkeypatch):
     with pytest.raises(RuntimeError, match="stop"):
         beyond._band(exp, {}, 0.0, 1.0, 8, 1, sample_dt=sizes.sample_dt)
     assert seen["sample_dt"] == pytest.approx(0.002)
+
+
+def test_spring_first_swing_is_the_same_in_other_velocity_units(tmp_path):
+    """A spring copy in velocity units 100x smaller (Delta, a, x0 x 0.01, gamma x 1e4): the same
+    noise gives the same paths times 0.01 (Monte Carlo, same seed), so the same first swing.
+    The absolute departure threshold |v| > 0.05 never fired there (swing speed ~0.015): every
+    half period NaN."""
+    c = 0.01
+    base = load_experiment(ROOT / "circuits" / "spring.toml")
+    m0 = base.model
+    small = _copy("spring", tmp_path, "myspring", delta=m0.delta * c, a=m0.a * c,
+                  x0=m0.x0 * c, gamma=m0.gamma / c ** 2)
+    obs = [o for o in C.member_observables(small.model) if o.kind.endswith("(first swing)")]
+    assert len(obs) == 2
+    got = {}
+    for exp in (base, small):
+        ens = simulate_sde(exp.model, v0=0.0, t_end=12.0, replicas=16, seed=9, sample_dt=0.01)
+        ens.meta["_x0"] = exp.model.x0
+        fns = beyond._estimators(exp, obs, beyond.stick_window(exp))
+        got[exp.name] = {o.kind: fns[o.label](ens) for o in obs}
+    assert beyond.stick_window(small) == pytest.approx(c * beyond.stick_window(base))
+    half = "half period (first swing)"
+    assert math.isfinite(got["myspring"][half])
+    assert got["myspring"][half] == pytest.approx(got["spring"][half], abs=0.02)
+    amp = "amplitude (first swing)"
+    assert got["myspring"][amp] == pytest.approx(c * got["spring"][amp], rel=0.02)

@@ -209,11 +209,11 @@ def test_first_swing_of_harmonic_releases():
     x0 = np.array([2.0, 1.0, 0.5])[:, None]
     x = x0 * np.cos(w * t)
     v = -x0 * w * np.sin(w * t)
-    half, amp = C.first_swing(t, v, x)
+    half, amp = C.first_swing(t, v, x, 0.05)
     assert half == pytest.approx(np.pi / w.ravel(), abs=2 * (t[1] - t[0]))
     assert amp == pytest.approx(x0.ravel(), rel=1e-4)
     # a replica at rest never swings: NaN, left out of the kind's mean
-    half, _ = C.first_swing(t, np.vstack([v, 0 * t]), np.vstack([x, 0 * t + 1]))
+    half, _ = C.first_swing(t, np.vstack([v, 0 * t]), np.vstack([x, 0 * t + 1]), 0.05)
     assert np.isnan(half[-1])
     s = C.stationary_sample(_spring_ensemble(t, np.vstack([v, 0 * t]), np.vstack([x, 0 * t + 1])),
                             burn_in=1.0, threshold=0.05, force=0.0,
