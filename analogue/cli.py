@@ -641,7 +641,7 @@ def theory(quantity, experiment_arg, experiment, tau_m, delta, a, gamma, mass, e
 @click.argument("experiment")
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path),
               callback=_out_dir_option, required=True,
-              help="Directory for schematic.svg, bom.csv, board.cir, metrics.json, index.html.")
+              help="Directory for schematic.svg, bom.csv, board.net, board.cir, metrics.json, index.html.")
 @click.option("--quick", is_flag=True, help="Few boards, short runs (about two minutes).")
 @click.option("--workers", type=click.IntRange(1, 256), default=None,
               help="ngspice processes at once (default: all cores).")

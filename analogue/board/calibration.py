@@ -1,7 +1,8 @@
 """Acquisition and calibration: recover tau_m, Delta, a and gamma of a built board.
 
 ADC (:data:`ADC_SPEC`): DC-coupled, simultaneous sampling of the integrator output (and the
-DAC monitor), +-10 V range, 16 bits, at the DAC rate (100 kS/s at theta = 1 ms, TS = 10 us).
+DAC monitor), +-10 V range, 16 bits, at the DAC rate (400 kS/s at theta = 1 ms, TS = 2.5 us;
+a USB-6363-class DAQ, see the board page's bench procedure).
 
 Procedure (each step a short ngspice run of the drawn board, exactly what the bench does):
 
@@ -40,7 +41,7 @@ from .netlist import BoardInstance, build_board_deck
 __all__ = ["ADC_SPEC", "NOISE_GAIN_RANGE", "V_TEST", "Calibration", "CalibrationError", "calibrate_board"]
 
 ADC_SPEC = {"coupling": "DC", "sampling": "simultaneous (velocity, DAC monitor)",
-            "range_V": 10.0, "bits": 16, "rate": "the DAC rate 1/TS (100 kS/s at TS = 10 us)",
+            "range_V": 10.0, "bits": 16, "rate": "the DAC rate 1/TS (400 kS/s at TS = 2.5 us)",
             "anti_alias": "none needed beyond the integrator (the velocity is band-limited by "
                           "tau_m) - sample synchronously with the DAC clock"}
 V_TEST = 10.0
@@ -106,8 +107,10 @@ def _fit_step(t, v):
     return v_inf, tau
 
 
-def calibrate_board(design: BoardDesign, board: BoardInstance, *, seed: int, noise_dir) -> Calibration:
-    """Run the calibration procedure (module docstring) on ``board``."""
+def calibrate_board(design: BoardDesign, board: BoardInstance, *, seed: int, noise_dir,
+                    ou_t: float = OU_T) -> Calibration:
+    """Run the calibration procedure (module docstring) on ``board``; ``ou_t``: length of the
+    OU run (model time units)."""
     off = board.replace(enable=False)
     v_f = board.v_force  # the experiment's force voltage (as set on the board)
     v_nom_f = design.force_sign * design.spec.v_force  # what the experimenter dialled
@@ -132,8 +135,8 @@ def calibrate_board(design: BoardDesign, board: BoardInstance, *, seed: int, noi
 
     # OU run: friction off, force off, noise on, from v = 0
     ou = off.replace(v_force=0.0)
-    t, v = _run(design, ou, t_end=OU_T, noise=True, seed=seed, noise_dir=noise_dir)
-    n = math.ceil(OU_T * design.theta / design.noise_ts) + 2
+    t, v = _run(design, ou, t_end=ou_t, noise=True, seed=seed, noise_dir=noise_dir)
+    n = math.ceil(ou_t * design.theta / design.noise_ts) + 2
     volts = noise_chain.dac_sequence(design, seed, 0, n)
     per = 8
     tf, cur = noise_chain.chain_current(design.values, np.concatenate([[0.0], volts]),

@@ -14,10 +14,11 @@ constant force ``(I_top - I_bot)/2`` (sliding limits), i.e. a friction asymmetry
 calibration absorbs.  Each source delivers ``(v_set - vos)/R_S``: op-amp offset and sense
 resistor tolerance set the mismatch.
 
-**OTA** (LM13700-class, :func:`ota_lines`): output current ``I_abc tanh(k V(out)/(2 V_T))``
-into ``sj`` through an input divider ``k``; the width ``2 V_T/k`` is tunable (k < 1 widens),
-the input offset is divided by ``k`` on the way to ``u`` and needs trimming, and the output
-mirrors' mismatch (a few %) is a friction asymmetry.
+**OTA** (LM13700-class, :func:`ota_lines`, behavioural): output current ``I_abc tanh(k
+V(out)/(2 V_T))`` into ``sj`` through an input divider ``k``.  Not offered for the board
+(issue 21): at k = 1 the output's +-10 V would sit across an input rated for about +-5 V, and
+a divider that fits (k <= 0.5) makes its width 2 V_T/k >= 103 mV, no narrower than the
+bridge's 98.6 mV, with the input offset divided by k on top.  The element stays for studies.
 
 A comparator driving an analogue switch (sharp sgn, then ``I_0`` switched between the two
 sources) is the third option: it removes the tanh width, but each switching event injects
@@ -54,6 +55,7 @@ def mosfet_models(vto: float = MOSFET_VTO) -> tuple[str, str]:
 # ``swno`` closes for a control voltage above 2.5 V, ``swnc`` (control pins swapped) below.
 SWITCH_RON = 35.0
 SWITCH_ROFF = 6e10
+SWITCH_C = 9e-12      # source/drain capacitance of a switch channel (DG413: 9 pF typical)
 SWITCH_MODELS = (f".model swno SW(VT=2.5 VH=0.2 RON={SWITCH_RON:g} ROFF={SWITCH_ROFF:g})",
                  f".model swnc SW(VT=-2.5 VH=0.2 RON={SWITCH_RON:g} ROFF={SWITCH_ROFF:g})")
 
@@ -67,7 +69,7 @@ def diode_model_line(name: str, part: DiodePart, is_scale: float = 1.0, temp_shi
 
 def bridge_lines(prefix: str, a: str, b: str, *, part: DiodePart, diode_models, r_s_top: float,
                  r_s_bot: float, v_set_top: float, v_set_bot: float, opamp_top: str,
-                 opamp_bot: str, enable: str = "en") -> list[str]:
+                 opamp_bot: str, enable: str | bool = "en") -> list[str]:
     """Element lines of one bridge between nodes ``a`` (virtual ground) and ``b`` (output),
     with its two current sources (op-amp subcircuits ``opamp_top``/``opamp_bot``, supplies
     ``vcc``/``vee``).  ``diode_models``: four model names (D1 top->a, D2 top->b, D3 a->bot,
@@ -78,16 +80,29 @@ def bridge_lines(prefix: str, a: str, b: str, *, part: DiodePart, diode_models, 
     running and their servos stay in regulation whatever the MOSFET threshold or the servo's
     output swing; with the enable low the bridge floats and only the switch's off leakage
     and the diodes' saturation currents reach it.  ``V{p}ia`` (0 V) in series with the bridge
-    at ``a`` measures the friction current into the virtual ground."""
+    at ``a`` measures the friction current into the virtual ground.  ``enable`` a bool: the
+    switches are static for the whole run and are written as their on/off resistances (the
+    same circuit; ngspice's operating point with switch elements in several replicas needed
+    gmin stepping and then missed the ``.ic`` values)."""
     p = checks.identifier("prefix", prefix)
-    en = checks.identifier("enable node", enable)
     top, bot, ia = f"{p}top", f"{p}bot", f"{p}ia"
     d1, d2, d3, d4 = diode_models
     lines = [f"V{p}ia {ia} {a} dc 0",
              f"D{p}1 {top} {ia} {d1}", f"D{p}2 {top} {b} {d2}",
-             f"D{p}3 {ia} {bot} {d3}", f"D{p}4 {b} {bot} {d4}",
-             f"S{p}et {p}dt {top} {en} 0 swno", f"S{p}dt {p}dt 0 0 {en} swnc",
-             f"S{p}eb {p}db {bot} {en} 0 swno", f"S{p}db {p}db 0 0 {en} swnc"]
+             f"D{p}3 {ia} {bot} {d3}", f"D{p}4 {b} {bot} {d4}"]
+    # the switch channels' capacitance to ground at the bridge's nodes: with the enable low
+    # these nodes float between reverse-biased diodes and a 60 GOhm off switch, and without it
+    # ngspice stopped on "timestep too small" there (calibration OU run, measured)
+    lines += [f"C{p}ct {top} 0 {_n('c_sw', SWITCH_C)}", f"C{p}cb {bot} 0 {_n('c_sw', SWITCH_C)}"]
+    if isinstance(enable, bool):
+        on, off = _n("ron", SWITCH_RON), _n("roff", SWITCH_ROFF)
+        r_no, r_nc = (on, off) if enable else (off, on)
+        lines += [f"R{p}et {p}dt {top} {r_no}", f"R{p}dt {p}dt 0 {r_nc}",
+                  f"R{p}eb {p}db {bot} {r_no}", f"R{p}db {p}db 0 {r_nc}"]
+    else:
+        en = checks.identifier("enable node", enable)
+        lines += [f"S{p}et {p}dt {top} {en} 0 swno", f"S{p}dt {p}dt 0 0 {en} swnc",
+                  f"S{p}eb {p}db {bot} {en} 0 swno", f"S{p}db {p}db 0 0 {en} swnc"]
     if part.rp:
         for i, (x, y) in enumerate(((top, ia), (top, b), (ia, bot), (b, bot)), 1):
             lines.append(f"R{p}p{i} {x} {y} {_n('rp', part.rp)}")

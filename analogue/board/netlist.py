@@ -194,7 +194,7 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
                       f"X1 inp inn vcc vee out {vendor[1]}", f".ends opa_{role}"]
     else:
         for role in ROLES:
-            lines.append(opamp.subcircuit(b.opamps[role], f"opa_{role}"))
+            lines.append(opamp.subcircuit(b.opamps[role], f"opa_{role}", rails=b.rails))
     dmodels = [f"dbr{k}" for k in range(4)]
     for name, scale in zip(dmodels, b.diode_is):
         lines.append(friction.diode_model_line(name, part, is_scale=scale))
@@ -208,8 +208,7 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
         edge = t0 + 100e-9
         lines += [f"Vsr sr 0 pwl(0 5 {_n('t0', t0)} 5 {_n('edge', edge)} 0)",
                   f"Ven en 0 pwl(0 0 {_n('t0', t0)} 0 {_n('edge', edge)} {_n('logic', logic)})"]
-    else:
-        lines.append(f"Ven en 0 dc {_n('logic', logic)}")
+
     files, ic = [], []
     val_ = b.values
     for j in range(v0.size):
@@ -222,7 +221,8 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
             lines += friction.bridge_lines(
                 f"b{j}", sj, o, part=part, diode_models=dmodels, r_s_top=val_["R_S_top"],
                 r_s_bot=val_["R_S_bot"], v_set_top=b.v_set_top, v_set_bot=b.v_set_bot,
-                opamp_top="opa_st", opamp_bot="opa_sb", enable="en")
+                opamp_top="opa_st", opamp_bot="opa_sb",
+                enable="en" if start == "reset" else bool(b.enable))
         else:
             lines += friction.ota_lines(f"b{j}", sj, o, temperature_k=temp_k, **(ota or {}))
         if np.isfinite(val_["R_F"]):
@@ -273,7 +273,9 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
     vectors = {"v": v_names, "x": x_names}
     if not save_all:
         lines.append(".save " + " ".join(v_names + (x_names or [])))
-    max_step = ts / 2.0
+    # two steps per DAC hold where the noise runs; noise-off decks (calibration steps) only
+    # need the sampling grid
+    max_step = ts / 2.0 if not noise_off else max(ts / 2.0, sample_dt * theta / 2.0)
     lines.append(f".tran {_n('tstep', sample_dt * theta)} {_n('tstop', t_end * theta + t0)} 0 "
                  f"{_n('max_step', max_step)}")
     lines.append(".end")

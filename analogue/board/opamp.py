@@ -10,14 +10,15 @@ The subcircuit (pins ``inp inn vcc vee out``) is a one-pole voltage-feedback amp
 - rail clamps: diodes from ``g`` to ``vcc - headroom`` and ``vee + headroom``, referenced to the
   *supply pins*, so the output follows the rails it is given;
 - a unity buffer and the open-loop output resistance ``rout`` behind a current limit ``i_sc``
-  (``I = x/(1 + |x/i_sc|^6)^(1/6)``, ``x = V/rout``: linear, then flat at ``i_sc``): the output swing against a load current ``I`` is
+  (``I = clip(V/rout, -i_sc, i_sc)``): the output swing against a load current ``I`` is
   ``headroom + rout I`` from the rail, and a short draws at most ``i_sc``
   (:func:`output_swing` is that law; a test checks the subcircuit against it);
-- the input common-mode range ``[V- + cm_neg, V+ - cm_pos]`` (issue 21): beyond it the
-  transconductance of a part with ``phase_reversal`` (TL07x: beyond the negative limit)
-  changes sign, so the output runs to the wrong rail; for a part without it the gain
-  collapses (a 50 mV-wide tanh edge).  The range is read at the non-inverting pin (in closed
-  loop both inputs sit within microvolts of each other).
+- the input common-mode range ``[V- + cm_neg, V+ - cm_pos]`` (issue 21): beyond it a current
+  that grows by twice the tail current per 50 mV overrides the input stage, driving the output
+  to the positive rail below the negative limit of a part with ``phase_reversal`` (TL07x: the
+  output inverts) and to the negative rail otherwise (the inputs no longer control it).  The
+  range is read at the non-inverting pin (in closed loop both inputs sit within microvolts of
+  each other).
 
 The parameter sets are "class" values read off typical and guaranteed (min/max) datasheet
 columns for a JFET-input TL072 and a JFET-input precision OPA2140 at +-15 V, 25 C.  They are
@@ -43,7 +44,11 @@ __all__ = [
     "vendor_model_path",
 ]
 
-R1 = 1e6  # gain-node resistance (ohm); gm and c1 follow from a0, gbw
+# The input stage's transconductance (S): the gain-node resistance a0/GM and capacitance
+# GM/(2 pi gbw) follow.  0.2 S for every part (the TL072's value at R1 = 1 MOhm): with R1 fixed
+# instead, the OPA2197's 3 S stage carried amperes inside the model and cost 2x the CPU per
+# time point (measured on the stick board, same accepted points).
+GM = 0.2
 CLAMP_MODEL = "dclampx"
 
 
@@ -93,7 +98,11 @@ class OpAmp:
 
     @property
     def gm(self) -> float:
-        return self.a0 / R1
+        return GM
+
+    @property
+    def r1(self) -> float:
+        return self.a0 / GM
 
     @property
     def c1(self) -> float:
@@ -175,8 +184,9 @@ def get_opamp(name: str) -> OpAmp:
 _n = checks.spice_number  # a deck number: _n(name, value)
 
 
-def subcircuit(p: OpAmp, name: str | None = None) -> str:
-    """SPICE text of the macromodel ``.subckt NAME inp inn vcc vee out`` (see module doc).
+def subcircuit(p: OpAmp, name: str | None = None, rails: float = 15.0) -> str:
+    """SPICE text of the macromodel ``.subckt NAME inp inn vcc vee out`` (see module doc);
+    ``rails``: the symmetric supply the common-mode limits refer to.
 
     The clamp diodes use the model ``dclampx`` (emitted here, once per subcircuit: a model
     inside a ``.subckt`` is local to it)."""
@@ -186,8 +196,6 @@ def subcircuit(p: OpAmp, name: str | None = None) -> str:
     # the clamp diode's own forward drop at the full transconductance current (N = 0.2:
     # 0.15 V for a TL072), added to the clamp voltage so that the swing is ``headroom``
     clamp = 0.2 * 0.025852 * math.log(p.i_max / 1e-14)
-    u = f"(v(o1)-v(out))/{_n('rout i_sc', p.rout * p.i_sc)}"
-    u2 = f"({u}*{u})"
     return "\n".join([
         f".subckt {name} inp inn vcc vee out",
         f"Vos inp ip1 dc {_n('vos', p.vos)}",
@@ -196,9 +204,9 @@ def subcircuit(p: OpAmp, name: str | None = None) -> str:
         f"Rin ip1 inn {_n('rin', p.rin)}",
         # transconductance with slew limiting (tail current i_max), times the common-mode
         # factor: -1 (phase reversal) or 0 (gain collapse) beyond the input range
-        (f"Bgm 0 g i={_n('i_max', p.i_max)}*tanh({_n('gm / i_max', p.gm / p.i_max)}*(v(ip1)-v(inn)))"
-         f"*{_cm_factor(p)}"),
-        f"R1 g 0 {_n('R1', R1)}",
+        f"Bgm 0 g i={_n('i_max', p.i_max)}*tanh({_n('gm / i_max', p.gm / p.i_max)}*(v(ip1)-v(inn)))",
+        *_cm_lines(p, rails),
+        f"R1 g 0 {_n('R1', p.r1)}",
         f"C1 g 0 {_n('c1', p.c1)}",
         # rail clamps referenced to the supply pins
         f"Vhp vcc chp dc {_n('headroom', p.headroom + clamp)}",
@@ -208,18 +216,32 @@ def subcircuit(p: OpAmp, name: str | None = None) -> str:
         f".model {CLAMP_MODEL} D(IS=1e-14 N=0.2)",
         "Ebuf o1 0 g 0 1",
         # open-loop output resistance behind the short-circuit current limit
-        # (u^6 written as a product: ngspice differentiates pow(x, 6) through ln x, NaN at 0)
-        (f"Bout o1 out i=(v(o1)-v(out))/{_n('rout', p.rout)}/pow(1+{u2}*{u2}*{u2},1/6)"),
+        # a hard clip: measured 2.0x the CPU time of a plain resistor with a smooth
+        # x/(1+|x/i_sc|^6)^(1/6) law, 1.17x with min/max
+        (f"Bout o1 out i=min(max((v(o1)-v(out))/{_n('rout', p.rout)},{_n('i_sc', -p.i_sc)}),"
+         f"{_n('i_sc', p.i_sc)})"),
         f".ends {name}",
     ])
 
 
-def _cm_factor(p: OpAmp) -> str:
-    """B-source factor of the common-mode range (50 mV edges at the limits)."""
-    lo = f"(v(inp)-v(vee)-({_n('cm_neg', p.cm_neg)}))/0.05"
-    hi = f"(v(vcc)-v(inp)-({_n('cm_pos', p.cm_pos)}))/0.05"
-    low_edge = f"tanh({lo})" if p.phase_reversal else f"0.5*(1+tanh({lo}))"
-    return f"{low_edge}*0.5*(1+tanh({hi}))"
+def _cm_lines(p: OpAmp, rails: float) -> list[str]:
+    """Outside the input common-mode range a current ``2 i_max`` per 50 mV beyond the limit
+    overrides the input stage: towards the positive rail below the negative limit of a part
+    with phase reversal (the TL07x's output inverts there), towards the negative rail
+    otherwise (the output is no longer controlled by the inputs).  Zero inside the range, so
+    a board whose inputs stay inside pays nothing for it (a multiplying factor on the input
+    stage cost 2x the CPU per time point, measured)."""
+    k = _n("k", 2.0 * p.i_max / 0.05)
+    # limits at the nominal rails, not at v(vcc)/v(vee): ngspice's source stepping ramps the
+    # supplies from 0 V, which put every input beyond a supply-referenced limit and latched the
+    # phase-reversing integrator at the rail (measured: the operating point then missed .ic)
+    lo, hi = p.common_mode_range(rails)
+    below = f"max({_n('cm low', lo)}-v(inp),0)"
+    above = f"max(v(inp)-({_n('cm high', hi)}),0)"
+    sign = "" if p.phase_reversal else "-"
+    # a limit at or beyond a rail is left out: no node of the board leaves the rails (tested)
+    return ([f"Bcml 0 g i={sign}{k}*{below}"] if p.cm_neg > 0 else []) + \
+        ([f"Bcmh 0 g i=-{k}*{above}"] if p.cm_pos > 0 else [])
 
 
 # ---------------------------------------------------------------------- vendor models

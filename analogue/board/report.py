@@ -9,7 +9,7 @@ from markupsafe import Markup
 
 from ..report.html import Figure, Section, Table, write_page
 from .calibration import ADC_SPEC
-from .friction import __doc__ as FRICTION_DOC
+from .netlist import R_IC, RESET_TIME
 
 __all__ = ["write_report"]
 
@@ -67,9 +67,17 @@ def write_report(out: Path, exp, design, metrics: dict) -> Path:
         (f"Rails ±{design.spec.rails:g} V, machine unit {design.spec.machine_unit:g} V; every node "
         "of the deck is checked to stay within the rails (test_every_node_stays_within_the_rails)."),
         ("Op-amps are our own macromodels (gain, GBW, slew rate, offset, bias current, output "
-        "resistance, rail clamps) with typical and worst-case sets for TL072- and OPA2140-class "
-        "parts; no vendor model is shipped (analogue.board.opamp.vendor_model_path validates a "
-        "file the user downloads and refuses .control/.exec/shell/.include lines)."),
+        "swing against load, short-circuit current, input common-mode range with the TL07x's "
+        "phase reversal) with typical and worst-case sets for TL072-, OPA2140- and "
+        "OPA2197-class parts; no vendor model is shipped (analogue.board.opamp.vendor_model_path "
+        "validates a file the user downloads and refuses .control/.exec/shell/.include lines). "
+        f"The current sources' servos are {design.spec.servo_opamp}-class (rail-to-rail input): "
+        f"their inputs sit {design.spec.v_set:g} V from a rail, outside a TL072's guaranteed "
+        "+-11 V."),
+        ("Friction enable: each source's drain goes through an SPDT switch (U3, DG413) to the "
+         "bridge or to ground; the sources stay in regulation and the bridge floats, whatever "
+         "the MOSFET threshold. Reset: U4 (DG412) closes R10 across C1 and feeds the IC voltage "
+         "through R11 while the enable is low and the noise DAC at mid-scale."),
     ], tables=[comp]))
 
     # ------------------------------------------------------------------ schematic + BOM
@@ -81,8 +89,10 @@ def write_report(out: Path, exp, design, metrics: dict) -> Path:
         figs.append(Figure(png, "Schematic drawn from the design (schemdraw); vector version "
                                 "schematic.svg."))
     sections.append(Section("Schematic and bill of materials", paragraphs=[
-        Markup('Vector schematic: <a href="schematic.svg">schematic.svg</a>; '
-               'netlist: <a href="board.cir">board.cir</a>; BOM: <a href="bom.csv">bom.csv</a>.')],
+        Markup('Vector schematic (overview and a parts sheet with every designator): '
+               '<a href="schematic.svg">schematic.svg</a>; KiCad netlist (Pcbnew: File, Import, '
+               'Netlist): <a href="board.net">board.net</a>; SPICE deck: '
+               '<a href="board.cir">board.cir</a>; BOM: <a href="bom.csv">bom.csv</a>.')],
         figures=figs, tables=[Table("Bill of materials (one channel)", bom[0], bom[1:])]))
 
     # ------------------------------------------------------------------ nominal
@@ -119,7 +129,8 @@ def write_report(out: Path, exp, design, metrics: dict) -> Path:
             "Noise-chain design study: bias of the coloured noise (DAC hold + Bessel + AC coupling) "
             "against white noise, SDE pair with common increments (difference ± se). The stick "
             "fraction is the sensitive one: near v = 0 the bridge relaxes in epsilon/Delta, a few "
-            "DAC samples at tau_m/100; a 4x faster DAC and a Bessel corner at half the DAC rate cut "
+            "DAC samples at tau_m/100; a 4x faster DAC and a Bessel corner at half the DAC rate (the "
+            "default since issue 21) cut "
             "its bias about 5x, at about 4x the simulation cost",
             ["DAC samples per tau_m", "Bessel corner / DAC rate", *keys],
             [[r["dac_rate_per_tau"], r["bessel_fc"]] + [f"{r[k][0]:+.4f} ± {r[k][1]:.4f}" for k in keys]
@@ -177,8 +188,11 @@ def write_report(out: Path, exp, design, metrics: dict) -> Path:
         f"by each tolerance class alone, over {st['sens_boards']} drawn boards, propagated through "
         "the gradients of exact theory with respect to (tau_m, Delta, a, gamma, epsilon, ADC "
         "offset)."),
-        "Classes carrying more than a quarter of the variance of some observable: "
-        + (", ".join(must) if must else "none") + ". The BOM marks their parts."],
+        (f"Matching is asked for only where a class's spread exceeds "
+         f"{metrics['matching']['fraction_of_se']:g} of the full job's statistical standard "
+         "error of some compared observable (from a seeded SDE ensemble of the realised model "
+         "at the full job's size, the same in --quick and full runs, so the BOM is too): "
+         + (", ".join(must) if must else "none") + ". The BOM marks their parts.")],
         tables=[Table("Spread per tolerance class", ["class"] + obs_names, rows),
                 Table("Spread per model parameter (all tolerances): which part to trim - tau_m: R "
                       "and C; Delta: the sense resistors R_S and references; a: R_F, the force "
@@ -207,19 +221,8 @@ def write_report(out: Path, exp, design, metrics: dict) -> Path:
         "parts), relative, mean ± spread over the Monte Carlo boards.")],
         tables=[Table("Calibration errors", ["parameter", "relative error", "max |rel| (or se)"], rows)]))
 
-    # ------------------------------------------------------------------ OTA
-    ota = metrics["ota"]
-    rows = [[k, ota["bridge"][k][0], ota["bridge"][k][1], ota["ota"][k][0], ota["ota"][k][1]]
-            for k in ota["bridge"]]
-    sections.append(Section("Alternative friction elements", paragraphs=[
-        ("OTA (LM13700 class, behavioural: I_abc tanh(k V/(2 V_T))): no floating source and a "
-        "width tunable with the input divider k, but its input offset (0.4-4 mV) appears at the "
-        "velocity as vos/k and must be trimmed, and its output mirrors' mismatch (a few %) is a "
-        "friction asymmetry. Nominal OTA board (k = 1, width 2 V_T = 52 mV, half the 1N4148 "
-        "bridge's) on the same noise as the bridge board:"),
-        FRICTION_DOC.split("A comparator")[1].join(["A comparator", ""]) if "A comparator" in FRICTION_DOC else ""],
-        tables=[Table("Bridge vs OTA, same replicas and noise", ["observable", "bridge", "se",
-                                                                 "OTA", "se"], rows)]))
+    # ------------------------------------------------------------------ bench
+    sections.append(_bench_section(design, metrics))
 
     sections.append(Section("Provenance", paragraphs=[
         (f"Seeds: {prov['seeds']}; ngspice {prov['ngspice_version']}; wall time {prov['wall_time_s']:.0f} s "
@@ -229,3 +232,62 @@ def write_report(out: Path, exp, design, metrics: dict) -> Path:
              f"a = {exp.model.a:g}, gamma = {exp.model.gamma:g}."),
              "Everything on this page was produced by `analogue board`; metrics.json holds the numbers."]
     return write_page(out / "index.html", f"A board you can build: {exp.name}", intro, sections)
+
+
+def _bench_section(design, metrics) -> Section:
+    """The bench procedure with named instruments, and the bench checks of this run."""
+    s = design.spec
+    rate = 1.0 / design.noise_ts
+    b = metrics["bench"]
+    cm = b["common_mode"]["instances"]
+    rows = [[inst, r["part"], r["role"], f"[{r['range'][0]:g}, {r['range'][1]:g}]", r["min"], r["max"],
+             min(r["margin_low"], r["margin_high"])] for inst, r in cm.items()]
+    rf = b["residual_friction"]
+    rs = b["reset_start"]
+    steps = [
+        "Instruments: a dual bench supply (Keysight E36313A or Rigol DP832: +-15 V, current "
+        "limit 100 mA per rail) into J6; a synchronous DAQ (NI USB-6363: AO0 noise into J1, AO1 "
+        "force into J2, AO2 IC voltage into J3, AI0 from J4, port-0 lines EN and RESET on J5, all "
+        f"on one sample clock at {rate / 1e3:g} kS/s); a 4.5-digit DMM for the DC checks. A "
+        "function generator and a scope cannot do it: the noise must be the seeded sequence "
+        "(analogue.board.noise_chain.dac_sequence), replayed sample by sample and recorded on "
+        "the same clock.",
+        "1. Power: supply at +-15 V with the limit set; DMM on TP5/TP6: +15 V - "
+        f"{s.v_set:g} V and -15 V + {s.v_set:g} V within 5 mV (references and servos working).",
+        "2. Enable low (EN = 0), RESET = 1, AO0 = 0 V: DMM on TP2 (OUT) follows -AO2 (the IC "
+        "network); TP3/TP4 float (friction off).",
+        "3. Calibration (analogue.board.calibration, about 50 tau_m of records): friction-off step "
+        "responses with EN = 0 at AO1 = +-10 V (tau_m, force gain and offset); terminal "
+        "velocities with EN = 1 at +-10 V (Delta and its asymmetry); an OU record with EN = 0, "
+        "AO1 = 0 and the noise sequence playing (gamma by regression on the known sequence). "
+        "Enter the fitted parameters in the comparison.",
+        f"4. A transient run: RESET = 1 with AO2 = ic_voltage(v0) for {RESET_TIME * 1e3:g} ms "
+        f"(R10 = R11 = {R_IC / 1e3:g} kOhm, time constant {R_IC * design.values['C'] * 1e6:g} us), "
+        "then on one clock edge RESET = 0, EN = 1 and the noise sequence starts; record AI0 for "
+        "the run length. Repeat with the next seed for every replica.",
+        f"5. Record lengths: at theta = {design.theta * 1e3:g} ms one tau_m is "
+        f"{design.theta * design.model.tau_m * 1e3:g} ms, so the full job's 32 replicas x 40 tau_m "
+        f"are {32 * 40 * design.theta * design.model.tau_m:.2g} s of data and a 10^4 tau_m "
+        f"stationary record {1e4 * design.theta * design.model.tau_m:.3g} s (16-bit samples at "
+        f"{rate / 1e3:g} kS/s: {2 * rate * 1e4 * design.theta / 1e6:.3g} MB).",
+    ]
+    checks = [
+        f"Common mode: every op-amp input stayed inside its part's guaranteed range over a 1 tau_m "
+        f"transient from v0 = +-2; smallest margin {b['common_mode']['min_margin']:.2f} V.",
+        f"Friction off: with EN = 0, the MOSFET threshold at {rf['mosfet_vto']:g} V (datasheet "
+        f"minimum) and the servos at their guaranteed swing ({rf['servo']}), the largest friction "
+        f"current over the settled +-10 V calibration steps was {rf['max_A'] * 1e9:.3g} nA = "
+        f"{rf['relative_to_I0']:.2g} I_0 (the bridge diodes' own saturation current and leakage); "
+        f"while the output slews, the switches' 9 pF at the floating bridge nodes carry up to "
+        f"{rf['capacitive_peak_A'] * 1e9:.3g} nA of C dV/dt (0.2 % of C1, part of the measured tau_m).",
+        f"Reset start: released after {rs['reset_time_s'] * 1e3:g} ms the board starts at "
+        f"v = {rs['initial'][0]:.5f} / {rs['initial'][1]:.5f} (target +-2) and follows the .ic start "
+        f"on the same noise to {rs['rms_vs_ic_start']:.2g} rms over 1 tau_m.",
+        "Latch: if the output ever leaves the current sources' compliance (|V(out)| above about "
+        "11.8 V, e.g. at power-up) friction turns one-sided and the integrator stays at a rail; "
+        "the reset switch recovers it, so every run starts with step 4's reset.",
+    ]
+    return Section("Bench procedure and bench checks", paragraphs=steps + checks,
+                   tables=[Table("Op-amp inputs against their guaranteed common-mode range (V)",
+                                 ["instance", "part", "role", "guaranteed range", "min", "max",
+                                  "margin"], rows)])

@@ -69,7 +69,7 @@ def test_ngspice_noise_chain_follows_the_seeded_sequence(tmp_path):
 
 
 TINY = JobSettings(replicas=4, t_end=4.0, burn_in=1.0, pair_replicas=16, integ_replicas=4,
-                   boards=2, mc_replicas=2, mc_t_end=3.0, sens_boards=8, ota_replicas=4,
+                   boards=2, mc_replicas=2, mc_t_end=3.0, sens_boards=8, cal_ou_t=6.0,
                    rate_points=False)
 
 
@@ -77,14 +77,21 @@ def test_board_job_writes_every_output(tmp_path):
     index = run_board_job("stick", tmp_path / "out", store=tmp_path / "store", workers=2,
                           settings=TINY, log=lambda *_: None)
     out = index.parent
-    for name in ("schematic.svg", "bom.csv", "board.cir", "metrics.json", "index.html"):
+    for name in ("schematic.svg", "bom.csv", "board.net", "board.cir", "metrics.json", "index.html"):
         assert (out / name).stat().st_size > 0, name
     metrics = json.loads((out / "metrics.json").read_text())
     validate_metrics(metrics)
     assert len(metrics["boards"]) == 2
-    assert len(metrics["bandwidth_study"]) == 6 and metrics["trajectory_check"]["rms"] < 0.01
+    assert len(metrics["bandwidth_study"]) == 8 and metrics["trajectory_check"]["rms"] < 0.01
     assert "<svg" in (out / "schematic.svg").read_text()
-    assert (out / "bom.csv").read_text().startswith("reference,part,value,tolerance,dielectric_or_rating,quantity")
+    assert (out / "bom.csv").read_text().startswith("references,quantity,value,description,"
+                                                    "manufacturer,mpn,second_source,footprint")
+    assert (out / "board.net").read_text().startswith('(export (version "E")')
+    bench = metrics["bench"]
+    assert bench["common_mode"]["min_margin"] > 0.5
+    assert bench["residual_friction"]["relative_to_I0"] < 1e-3
+    assert bench["reset_start"]["rms_vs_ic_start"] < 5e-3
+    assert "Bench procedure" in (out / "index.html").read_text()
     assert ".control" not in (out / "board.cir").read_text()
 
 

@@ -70,6 +70,5 @@ def test_macromodel_swing_against_load_and_short_circuit(name):
     assert rows[0] == pytest.approx(want[0], abs=0.15)
     assert rows[1] == pytest.approx(want[1], abs=0.15)
     assert rows[0] == pytest.approx(opamp.output_swing(p, 15.0, 10e3), abs=0.05)
-    # short circuit: the current runs into the limit and not beyond (the knee is soft: 0.9 i_sc
-    # for the typical TL072, whose 320 Ohm reach i_sc only at 12.8 V)
-    assert 0.85 * p.i_sc < rows[2] / 20.0 <= p.i_sc
+    # short circuit: the current stays at the limit
+    assert rows[2] / 20.0 == pytest.approx(p.i_sc, rel=1e-3)
