@@ -139,8 +139,8 @@ def propagator(model: Model, v: ArrayLike, t: ArrayLike, v0: float, t0: float = 
     every regime tried (stick, slip, a = Delta, gamma = 1 - 1000, tau_m = 1 - 1e5,
     t - t0 = 0.01 - 2 tau_m, and 0.01 - 30 dry relaxation times 1/(gamma Delta^2) at
     tau_m = 1e5): against the Delta = 0 closed form <= 8.2e-4, against the pure dry-friction
-    closed form (Caughey-Dienes; Touchette, Van der Straeten & Just 2010) <= 8.2e-4, elsewhere
-    against h/8 <= 8.1e-4; the largest errors are at the earliest times, where the lattice
+    closed form (Caughey-Dienes; Touchette, Van der Straeten & Just 2010) <= 8.9e-4, elsewhere
+    against h/8 <= 8.2e-4; the largest errors are at the earliest times, where the lattice
     kernel's excess kurtosis ``h^2/(2 (t - t0)/gamma)`` dominates, and fall to ~1e-4 by
     0.5 tau_m.  Not for starts deeper than ``gamma (U(v0) - U_min) = 180`` in the tail
     (:data:`~analogue.theory.exact_grid.DEEP_START`): the contour route cannot take them and

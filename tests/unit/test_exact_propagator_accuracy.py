@@ -144,3 +144,22 @@ def test_halving_h_gives_the_quoted_error_estimate(m, v0, t):
     assert c1 < 7.5e-4
     assert 2.5 < c1 / c2 < 5.5
     assert np.abs(f1 - f4).max() / peak < 1e-3
+
+
+def test_range_bounded_by_detailed_balance_and_deep_starts_keep_the_old_spacing():
+    """Dry friction at tau_m = 1e5: the range is set by gamma (U - U(v0)) <= 40 (+-41 at
+    gamma = Delta = 1), not by the Gaussian reach +-sqrt(80 tau_m/gamma) = +-2828, and the
+    density at its ends is below e^-30 of the peak at every time.  A start beyond the contour
+    route (gamma (U(v0) - U_min) > DEEP_START) keeps the previous spacing (documented)."""
+    from analogue.theory.exact_grid import DEEP_START, resolved_grid
+    m = Model(1e5, 1.0, 0.0, 1.0)
+    g = propagator_grid(m, 1.0, 0.3)
+    assert -42.0 < g.v[0] < -40.0 and 40.0 < g.v[-1] < 42.0
+    ends = np.array([g.v[0], g.v[-1], 0.0, 1.0])
+    f = exact.propagator(m, ends, [0.3, 3.0, 30.0], 1.0)
+    assert np.all(f[:, :2] < math.exp(-30) * f.max(axis=1, keepdims=True))
+    deep = Model(1.0, 0.7, 0.3, 1000.0)
+    assert deep.gamma * float(deep.potential(0.5)) > DEEP_START
+    old = resolved_grid(deep, extra=(0.5,), t_min=0.1)
+    h = propagator_grid(deep, 0.5, 0.1).h
+    assert old.h / 2 < h <= old.h  # only shrunk to put v0 on a node
