@@ -17,6 +17,10 @@ Procedure (each step a short ngspice run of the drawn board, exactly what the be
    Delta_bot)``, ``v_- = tau (-g V_t + o + Delta_top)`` (both sliding as long as g V_t > Delta).
    ``Delta = (Delta_top + Delta_bot)/2``; the friction asymmetry adds ``(Delta_top -
    Delta_bot)/2`` to the force: **a from the drift** ``a = a_off + (Delta_top - Delta_bot)/2``.
+   Then **stuck velocities, friction on, noise off**, force at +-Delta/2: the bridge width
+   ``epsilon`` from ``0 = -v/tau + F - Delta tanh(v/epsilon)`` (the bridge's tanh law; measured
+   on the stick design: 1e-4 of epsilon on the nominal board, 9e-4 on a drawn one at 27 +- 5 C,
+   where the vendor diode model's width moves by 0.33 %/K).
 3. **OU run, friction off, noise on, force 0**: the velocity is an Ornstein-Uhlenbeck process
    driven by the *known* DAC sequence.  Regressing the measured v(t) on the response of
    ``dv = -v/tau dt + eta`` to that sequence through the nominal chain gives the noise gain
@@ -62,10 +66,14 @@ class Calibration:
     force_gain: float
     force_offset: float
     noise_gain: float
+    epsilon: float = math.nan
 
-    def model(self, template: Model, epsilon: float) -> Model:
+    def model(self, template: Model, epsilon: float | None = None) -> Model:
+        """``template`` at the calibrated parameters; ``epsilon`` (the bridge width) is the
+        calibrated one unless given."""
+        eps = self.epsilon if epsilon is None else epsilon
         return template.replace(tau_m=self.tau_m, delta=self.delta, a=self.a, gamma=self.gamma,
-                                epsilon=epsilon)
+                                epsilon=eps)
 
     def as_dict(self) -> dict:
         return {k: getattr(self, k) for k in self.__dataclass_fields__}
@@ -133,6 +141,20 @@ def calibrate_board(design: BoardDesign, board: BoardInstance, *, seed: int, noi
     delta = 0.5 * (d_top + d_bot)
     a = a_off + 0.5 * (d_top - d_bot)
 
+    # bridge width (issue 21 item 6: the vendor model's width at 16 uA per diode moves with
+    # temperature): friction on, noise off, force at +-Delta/2; the stuck velocity solves
+    # 0 = -v/tau + F - Delta tanh(v/epsilon), F = g V + o + (Delta_top - Delta_bot)/2
+    eps = []
+    for sign in (1.0, -1.0):
+        f_target = 0.5 * sign * delta
+        volts = (f_target - o - 0.5 * (d_top - d_bot)) / g
+        tw, vw = _run(design, board.replace(v_force=volts * v_f / v_nom_f), t_end=STEP_T,
+                      noise=False, seed=seed, noise_dir=noise_dir)
+        v_stuck = float(np.mean(vw[-50:]))
+        f_eff = g * volts + o + 0.5 * (d_top - d_bot)
+        eps.append(v_stuck / math.atanh((f_eff - v_stuck / tau) / delta))
+    epsilon = float(np.mean(eps))
+
     # OU run: friction off, force off, noise on, from v = 0
     ou = off.replace(v_force=0.0)
     t, v = _run(design, ou, t_end=ou_t, noise=True, seed=seed, noise_dir=noise_dir)
@@ -166,4 +188,4 @@ def calibrate_board(design: BoardDesign, board: BoardInstance, *, seed: int, noi
     g_var = tau * factor / var
     return Calibration(tau_m=tau, delta=delta, delta_top=d_top, delta_bot=d_bot, a=a,
                        gamma=gamma, gamma_variance=g_var, gamma_variance_se=g_var * var_se / var,
-                       force_gain=g, force_offset=o, noise_gain=float(k))
+                       force_gain=g, force_offset=o, noise_gain=float(k), epsilon=epsilon)

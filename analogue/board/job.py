@@ -197,7 +197,7 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
                               seed=seed, store=store, workers=workers))
         cal = calibration.calibrate_board(design, b, seed=seed, noise_dir=ndir, ou_t=st.cal_ou_t)
         eff = tolerance.effective_model(design, b)
-        cal_model = cal.model(model, design.realised.epsilon)
+        cal_model = cal.model(model)          # with the calibrated bridge width
         exact_cal = theory_observables(cal_model, 0.0, thr)
         exact_eff = theory_observables(eff, tolerance.readout_offset(design, b), thr)
         boards.append({"label": b.label, "offset": tolerance.readout_offset(design, b), "draws": {k: (list(v) if isinstance(v, tuple) else v)
@@ -319,7 +319,7 @@ def rate_function_effect(design, boards: list, grads: dict) -> dict:
         for b in boards:
             e, c = b["effective"], b["calibrated"]
             xe = np.array([e["tau_m"], e["delta"], e["a"], e["gamma"], e["epsilon"], b["offset"]])
-            xc = np.array([c["tau_m"], c["delta"], c["a"], c["gamma"], e["epsilon"], 0.0])
+            xc = np.array([c["tau_m"], c["delta"], c["a"], c["gamma"], c.get("epsilon", e["epsilon"]), 0.0])
             before.append(float((xe - x0) @ g))
             after.append(float((xe - xc) @ g))
         out[k] = {"before": _stats(before), "after": _stats(after)}
@@ -353,7 +353,7 @@ def figure_density(design, ens, burn_in: float, path: Path) -> Path:
 def calibration_errors(boards: list) -> dict:
     """Calibrated minus effective (first-order prediction from the drawn parts) parameters."""
     out = {}
-    for p in ("tau_m", "delta", "a", "gamma"):
+    for p in ("tau_m", "delta", "a", "gamma", "epsilon"):
         e = [b["calibrated"][p] - b["effective"][p] for b in boards]
         r = [b["calibrated"][p] / b["effective"][p] - 1.0 for b in boards]
         out[p] = {"abs": _stats(e), "rel": _stats(r),

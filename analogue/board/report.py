@@ -207,14 +207,16 @@ def write_report(out: Path, exp, design, metrics: dict) -> Path:
 
     # ------------------------------------------------------------------ calibration
     ce = metrics["calibration_errors"]
-    rows = [[p, _pm(ce[p]["rel"]), ce[p]["max_abs_rel"]] for p in ("tau_m", "delta", "a", "gamma")]
+    rows = [[p, _pm(ce[p]["rel"]), ce[p]["max_abs_rel"]] for p in ("tau_m", "delta", "a", "gamma", "epsilon")
+            if p in ce]
     rows.append(["gamma (OU variance route)", _pm(ce["gamma_variance_route"]["rel"]),
                  ce["gamma_variance_route"]["se_rel"]])
     sections.append(Section("Acquisition and calibration", paragraphs=[
         "ADC: " + "; ".join(f"{k}: {v}" for k, v in ADC_SPEC.items()),
         ("Procedure (analogue.board.calibration): tau_m from friction-off step responses at ±10 V "
         "force; Delta from the terminal velocities with friction on at ±10 V; a from the drift "
-        "(offset force of the step responses plus the friction asymmetry); D (gamma) by regressing "
+        "(offset force of the step responses plus the friction asymmetry); epsilon (the bridge "
+        "width) from the stuck velocities at a force of ±Delta/2; D (gamma) by regressing "
         "the friction-off Ornstein-Uhlenbeck response on the known DAC sequence, and by the OU "
         "variance (shown for comparison, with its standard error)."),
         ("Errors: calibrated minus the board's first-order effective parameters (from its drawn "
@@ -258,7 +260,8 @@ def _bench_section(design, metrics) -> Section:
         "network); TP3/TP4 float (friction off).",
         "3. Calibration (analogue.board.calibration, about 50 tau_m of records): friction-off step "
         "responses with EN = 0 at AO1 = +-10 V (tau_m, force gain and offset); terminal "
-        "velocities with EN = 1 at +-10 V (Delta and its asymmetry); an OU record with EN = 0, "
+        "velocities with EN = 1 at +-10 V (Delta and its asymmetry); stuck velocities with EN = 1 "
+        "at a force of +-Delta/2 (the bridge width epsilon); an OU record with EN = 0, "
         "AO1 = 0 and the noise sequence playing (gamma by regression on the known sequence). "
         "Enter the fitted parameters in the comparison.",
         f"4. A transient run: RESET = 1 with AO2 = ic_voltage(v0) for {RESET_TIME * 1e3:g} ms "
