@@ -251,7 +251,7 @@ def _cumulative_flux(v: np.ndarray, pi: np.ndarray) -> tuple[np.ndarray, np.ndar
     pi_j`` between nodes i and i + 1, summed from whichever end is nearer (left of the mode
     from the left, right of it from the right, where F_i = -sum_{j > i}), so the tails are
     not differences of O(1) numbers; and the mode's index."""
-    dv = v - np.dot(v, pi)
+    dv = v - np.sum(v * pi)  # pairwise sum: no BLAS thread-count rounding
     f = dv * pi
     left = np.cumsum(f)[:-1]
     right = -np.cumsum(f[::-1])[::-1][1:]
@@ -393,8 +393,12 @@ def _integrated_on_grid(model: Model, grid: Grid, taus: np.ndarray,
     from scipy.linalg import lapack
     from .propagation import CONTOUR_MIN_NODES, _talbot
     diag, off, y, u = _poisson_solution(model, grid, observable)
-    d_x = -float(y @ u)                    # Green-Kubo D = -y^T S^+ y
-    uu = float(u @ u)
+    # Dot products by numpy's pairwise sum, not BLAS: a threaded OpenBLAS ddot rounds
+    # differently with the thread count, and the report computes these both in its
+    # one-BLAS-thread theory thread and in the main thread (the stationary rows' exact SE):
+    # the same comparison must not differ in the last bit with where it was computed.
+    d_x = -float(np.sum(y * u))            # Green-Kubo D = -y^T S^+ y
+    uu = float(np.sum(u * u))
     z, c = _talbot(CONTOUR_MIN_NODES)
     uc = u.astype(complex)
     out = np.empty(taus.size)
@@ -409,7 +413,7 @@ def _integrated_on_grid(model: Model, grid: Grid, taus: np.ndarray,
             _, _, _, x, info = lapack.zgtsv(sub, zj - tau * diag, sub, uc)
             if info != 0:  # pragma: no cover - z_j is off the real spectrum
                 raise np.linalg.LinAlgError(f"contour solve failed (info={info})")
-            quad += cj * (u @ x)
+            quad += cj * np.sum(u * x)
         out[k] = 2.0 * (2.0 * quad.real - uu + tau * d_x)
     return out
 
