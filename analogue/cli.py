@@ -338,7 +338,8 @@ def _timeout_option(ctx, param, value):
 
 def _run_options(f):
     f = click.option("--workers", type=click.IntRange(1, 256), default=None,
-                     help="Local worker processes (default: all cores).")(f)
+                     help="Local worker processes (default: the CPUs this process may use: affinity mask "
+                          "and cgroup quota).")(f)
     f = click.option("--scheduler", default=None, metavar="ADDRESS", callback=_scheduler_option,
                      help="Dask scheduler address (tcp://host:port) to run the decks on.")(f)
     f = click.option("--store", default=None, metavar="DIRECTORY", callback=_store_dir_option,
@@ -644,7 +645,7 @@ def theory(quantity, experiment_arg, experiment, tau_m, delta, a, gamma, mass, e
               help="Directory for schematic.svg, bom.csv, board.net, board.cir, metrics.json, index.html.")
 @click.option("--quick", is_flag=True, help="Few boards, short runs (about two minutes).")
 @click.option("--workers", type=click.IntRange(1, 256), default=None,
-              help="ngspice processes at once (default: all cores).")
+              help="ngspice processes at once (default: the CPUs this process may use).")
 @click.option("--store", "board_store", default=None, metavar="DIRECTORY",
               callback=_store_dir_option, help="Run-store directory (default $ANALOGUE_STORE or ~/.cache/analogue/runs).")
 @click.option("--seed", type=click.IntRange(0, 2**31 - 1), default=None,
