@@ -50,7 +50,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
-from . import checks
+from . import checks, noise_free
 
 __all__ = ["LIMIT", "VELOCITY_LIMIT", "MechanicalParameters", "Model", "ShotNoise"]
 
@@ -486,8 +486,7 @@ class Model:
             return 0.0
         s = 1.0 if v0 > 0 else -1.0
         if self.cubic or self.stribeck is not None or self.spring:
-            from .theory.deterministic import stick_time
-            return stick_time(self, v0)
+            return noise_free.stick_time(self, v0)
         b = (self.delta - s * self.a) * self.tau_m  # relaxation offset on v0's half line
         if b <= 0:
             return math.inf
@@ -508,8 +507,7 @@ class Model:
         if np.any(t < 0) or not np.all(np.isfinite(t)):
             raise ValueError("t must be finite and >= 0")
         if self.cubic or self.stribeck is not None or self.spring:
-            from .theory.deterministic import flow
-            return flow(self, v0, self.x0, t)[0]
+            return noise_free.flow(self, v0, self.x0, t)[0]
         if self.epsilon > 0:
             return self._deterministic_smooth(v0, t)
         if v0 < 0 or (v0 == 0 and self.a < 0):

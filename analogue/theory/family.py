@@ -41,7 +41,7 @@ import dataclasses
 import math
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, cast
+from typing import cast
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -53,9 +53,8 @@ from .. import checks
 from ..model import Model, ShotNoise
 from .kolmogorov_feller import (Kicks, ShotGrid, _grid_range, default_spacing, shot_generator,
                                stable_zeros)
+from .moments import StationaryMoments
 
-if TYPE_CHECKING:
-    from .stationary import StationaryMoments
 
 _Solve = Callable[[np.ndarray], np.ndarray]   # b -> x of a factorised linear system
 
@@ -384,7 +383,6 @@ def stationary_moments(model: Model, h: float | None = None) -> StationaryMoment
     one; shot + Gaussian: Richardson over the nodal grids (h, h/2).  Tests check them against
     closed forms (Gamma law, the ODE reduction) to 2e-4 and against exact Monte Carlo.
     """
-    from .stationary import StationaryMoments
     check_one_dimensional(model)
     if h is None:
         h = default_spacing(model)

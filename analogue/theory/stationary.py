@@ -29,8 +29,8 @@ Dynamics (autocorrelation, Green-Kubo diffusion) use the Scharfetter-Gummel grid
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterable, Iterator, Mapping
-from dataclasses import asdict, dataclass, fields
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -40,8 +40,12 @@ from scipy.sparse.linalg import expm_multiply
 
 from .. import checks
 from ..model import Model
+from . import family
 from .exact_grid import resolved_grid
 from .fokker_planck import Grid, generator, symmetric_generator
+# StationaryMoments lives below this module and the family's (both return it); re-exported here,
+# where it has always been imported from.
+from .moments import StationaryMoments
 
 __all__ = ["StationaryMoments", "stationary_moments", "half_line_moments", "diffusion_coefficient",
            "autocorrelation", "sample_stationary", "stationary_std", "central_bin_bias",
@@ -52,47 +56,6 @@ _SQRT_2PI = math.sqrt(2.0 * math.pi)
 # the continued fraction (which converges fast there) takes over.
 _CF_SWITCH = 5.0
 _CF_TERMS = 400
-
-
-@dataclass(frozen=True)
-class StationaryMoments(Mapping[str, float]):
-    """Stationary observables (exact at the given gamma).  Also a read-only mapping.
-
-    mean, drift : <v> (drift is the same number: the mean sliding velocity, dx/dt on average)
-    variance    : <v^2> - <v>^2
-    p_positive  : P(v > 0);  p_negative: P(v < 0) (each computed directly, not as 1 - other)
-    mean_sign   : <sgn v> (epsilon = 0) or <tanh(v/epsilon)>
-    diffusion   : Green-Kubo D_x = int_0^inf <dv(0) dv(t)> dt; Var x(t) ~ 2 D_x t
-    p_zero      : P(v = 0), the atom of the law (probability of being stuck): 0 except for
-                  pure shot noise in the stick regime (:mod:`analogue.theory.family`)
-    """
-
-    mean: float
-    variance: float
-    p_positive: float
-    p_negative: float
-    mean_sign: float
-    diffusion: float
-    drift: float
-    p_zero: float = 0.0
-
-    def as_dict(self) -> dict[str, float]:
-        return asdict(self)
-
-    def __getitem__(self, key: str) -> float:
-        if key not in self._names():
-            raise KeyError(key)
-        return float(getattr(self, key))
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(self._names())
-
-    def __len__(self) -> int:
-        return len(self._names())
-
-    @classmethod
-    def _names(cls) -> tuple[str, ...]:
-        return tuple(f.name for f in fields(cls))
 
 
 def _check_model(model: object) -> None:
@@ -284,8 +247,7 @@ def diffusion_coefficient(model: Model, h: float | None = None, richardson: bool
     _check_model(model)
     _check_h(h)
     if not model.is_paper:
-        from .family import stationary_moments as family_moments
-        return float(family_moments(model, h=h).diffusion)
+        return float(family.stationary_moments(model, h=h).diffusion)
     coarse, fine = _refined_grids(model, h)
     d_fine = _diffusion_on_grid(model, fine)
     if not richardson:
@@ -340,8 +302,7 @@ def autocorrelation(model: Model, lags: ArrayLike, h: float | None = None,
     _check_model(model)
     _check_h(h)
     if not model.is_paper:
-        from .family import autocorrelation as family_autocorrelation
-        return family_autocorrelation(model, lags, h=h)
+        return family.autocorrelation(model, lags, h=h)
     try:
         lags = np.asarray(lags, dtype=float)
     except (TypeError, ValueError):
@@ -495,8 +456,7 @@ def sample_stationary(model: Model, size: int | tuple[int, ...],
     """
     _check_model(model)
     if not model.is_paper:
-        from .family import sample_stationary as family_sample
-        return family_sample(model, size, seed)
+        return family.sample_stationary(model, size, seed)
     sizes = np.atleast_1d(np.asarray(size, dtype=object))
     if not all(isinstance(s, (int, np.integer)) and not isinstance(s, bool) for s in sizes):
         raise ValueError(f"size must be an int or a tuple of ints, got {size!r}")
