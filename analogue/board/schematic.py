@@ -11,7 +11,7 @@ from pathlib import Path
 
 from .design import BoardDesign
 
-__all__ = ["draw_schematic", "eng"]
+__all__ = ["build_schematic", "draw_schematic", "eng"]
 
 
 def eng(x: float, unit: str) -> str:
@@ -68,90 +68,100 @@ def _parts_sheet(d, design: BoardDesign, origin: tuple) -> None:
         col_y[c] -= h + 2.6
 
 
-def draw_schematic(design: BoardDesign, path, fmt: str = "svg") -> Path:
-    """Write the schematic as SVG (schemdraw's own backend) or PNG (matplotlib backend)."""
+def build_schematic(design: BoardDesign):
+    """The placed drawing (a ``schemdraw.Drawing``, nothing rendered yet): the overview and
+    the parts sheet.  Rendering is left to :func:`draw_schematic`, so that a test can render
+    the same elements on a matplotlib canvas and measure where the text lands."""
     import schemdraw
     import schemdraw.elements as elm
+    v = design.values
+    spec = design.spec
+    d = schemdraw.Drawing(show=False)
+    d.config(fontsize=11, unit=2.5, margin=2.0)
+    # integrator; the feedback network spans sj .. xr, one unit right of the op-amp output, so
+    # that the bridge has room for the designators and the current sources between its rows
+    op = d.add(elm.Opamp(leads=True).anchor("in1").label("U1A\n" + spec.opamp, loc="center",
+                                                        ofst=(-0.4, 0)))
+    d.add(elm.Line().at(op.in2).left(0.5))
+    d.add(elm.Ground())
+    sj = op.in1
+    xr = op.out[0] + 1.0
+    width = xr - sj[0]
+    d.add(elm.Dot().at(sj))
+    d.add(elm.Line().at(op.out).right(1.0))
+    out = d.here
+    # feedback: C, R, bridge stacked above
+    d.add(elm.Line().at(sj).up(1.5))
+    top1 = d.here
+    d.add(elm.Capacitor().right(width).label(f"C1 {eng(v['C'], 'F')}\nC0G 1 %"))
+    d.add(elm.Line().down(1.5 + sj[1] - out[1]))
+    d.add(elm.Line().at(top1).up(2.0))
+    top2 = d.here
+    d.add(elm.Resistor().right(width).label(f"R1 {eng(v['R'], 'Ω')} 1 %"))
+    d.add(elm.Line().down(2.0))
+    # bridge, bottom pair: D3 sj -> bot, D4 out -> bot, I_bot from bot to the -rail (drawn
+    # up into the gap between the rows; its rail is in the note on the right)
+    d.add(elm.Line().at(top2).up(2.5))
+    row3 = d.here
+    d.add(elm.Diode().right(width / 2).label("D3", loc="bottom"))
+    bot = d.here
+    d.add(elm.Diode().right(width / 2).reverse().label("D4", loc="bottom"))
+    d.add(elm.Line().down(2.5))
+    d.add(elm.SourceI().at(bot).up(1.6).label("I_bot", loc="bottom"))
+    # bridge, top pair: D1 top -> sj, D2 top -> out, I_top from the +rail into top
+    d.add(elm.Line().at(row3).up(3.0))
+    d.add(elm.Diode().right(width / 2).reverse().label("D1", loc="bottom"))
+    mid = d.here
+    d.add(elm.Diode().right(width / 2).label("D2", loc="bottom"))
+    d.add(elm.Line().down(3.0))
+    d.add(elm.SourceI().at(mid).up(1.6).reverse().label("I_top", loc="bottom"))
+    notes = (f"bridge D1-D4: 4 × {spec.diode}\n"
+             f"I_top = {spec.v_set:g} V / R_S: Q1 + U2A + VR1,\n"
+             f"    R2 {eng(v['R_S'], 'Ω')} to +{spec.rails:g} V, via U3 (enable)\n"
+             f"I_bot: Q2 + U2B + VR2, R3 {eng(v['R_S'], 'Ω')}\n"
+             f"    to -{spec.rails:g} V, via U3 (enable)")
+    d.add(elm.Label().at((xr + 1.0, row3[1] + 1.5)).label(notes, halign="left"))
+    d.add(elm.Dot().at(out))
+    d.add(elm.Line().at(out).right(1.0))
+    d.add(elm.Dot(open=True).label(f"OUT = -{design.kappa:.3g} V × v  (J4, DAQ AI0)\n"
+                                   "reset: U4 closes R10 across C1, R11 from J3 (IC)",
+                                   loc="right"))
+    # force input, at a node far enough left of sj for the sj label above the wire
+    d.add(elm.Line().at(sj).left(4.0))
+    node = d.here
+    d.add(elm.Label().at((sj[0] - 2.0, sj[1] + 0.35)).label("sj (virtual ground)"))
+    d.add(elm.Resistor().at(node).up(2.0).label(f"R4 {eng(v['R_F'], 'Ω')}", loc="top"))
+    d.add(elm.Dot(open=True).label(f"V_F = {design.force_sign * spec.v_force:+g} V (J2, DAQ AO1)",
+                                   loc="top"))
+    # noise chain
+    d.add(elm.Resistor().at(node).left(2.5).label(f"R5 {eng(v['R_N'], 'Ω')}"))
+    d.add(elm.Capacitor().left(2.5).label(f"C4 {eng(v['C_AC'], 'F')}\nfilm"))
+    d.add(elm.Line().left(1.0))
+    d.add(elm.RBox().left(2.5).label(f"Bessel (U1B, R6, R7, C2, C3)\nf_c {eng(spec.bessel_fc / design.noise_ts, 'Hz')}\n"
+                                      f"R {eng(v['R_B1'], 'Ω')}, C {eng(v['C_B1'], 'F')}/{eng(v['C_B2'], 'F')}",
+                                      loc="top"))
+    d.add(elm.Line().left(1.5))
+    d.add(elm.SourceSin().down(2.0).label(
+        f"J1: DAQ AO0 {spec.dac_bits} bit\n{eng(1.0 / design.noise_ts, 'S/s')}\n{spec.dac_rms:g} V rms\n"
+        "seeded Gaussian", loc="top", ofst=(-1.6, 0)))
+    d.add(elm.Ground())
+    _parts_sheet(d, design, origin=(-14.0, -9.0))
+    return d
+
+
+def draw_schematic(design: BoardDesign, path, fmt: str = "svg") -> Path:
+    """Write the schematic as SVG (schemdraw's own backend) or PNG (matplotlib backend)."""
     if fmt not in ("svg", "png"):
         raise ValueError(f"fmt must be 'svg' or 'png', got {fmt!r}")
+    path = Path(path)
+    d = build_schematic(design)
     if fmt == "png":
         import matplotlib
         matplotlib.use("Agg")
-        schemdraw.use("matplotlib")
-    else:
-        schemdraw.use("svg")
-    v = design.values
-    spec = design.spec
-    path = Path(path)
-    with schemdraw.Drawing(show=False) as d:
-        d.config(fontsize=11, unit=2.5, margin=2.0)
-        # integrator
-        op = d.add(elm.Opamp(leads=True).anchor("in1").label("U1A\n" + spec.opamp, loc="center",
-                                                            ofst=(-0.4, 0)))
-        d.add(elm.Line().at(op.in2).left(0.5))
-        d.add(elm.Ground())
-        sj = op.in1
-        d.add(elm.Dot().at(sj))
-        d.add(elm.Label().at(sj).label("sj (virtual ground)", loc="bottom", ofst=(0.0, -0.6)))
-        # feedback: C, R, bridge stacked above
-        d.add(elm.Line().at(sj).up(1.5))
-        top1 = d.here
-        d.add(elm.Capacitor().right(op.out[0] - sj[0]).label(f"C1 {eng(v['C'], 'F')}\nC0G 1 %"))
-        d.add(elm.Line().down(1.5).to(op.out))
-        d.add(elm.Line().at(top1).up(2.0))
-        top2 = d.here
-        d.add(elm.Resistor().right(op.out[0] - sj[0]).label(f"R1 {eng(v['R'], 'Ω')} 1 %"))
-        d.add(elm.Line().down(2.0))
-        width = op.out[0] - sj[0]
-        # bridge, bottom pair: D3 sj -> bot, D4 out -> bot, I_bot from bot to the -rail
-        d.add(elm.Line().at(top2).up(2.5))
-        row3 = d.here
-        d.add(elm.Diode().right(width / 2).label("D3"))
-        bot = d.here
-        d.add(elm.Diode().right(width / 2).reverse().label("D4"))
-        d.add(elm.Line().down(2.5))
-        d.add(elm.SourceI().at(bot).up(1.6).label(
-            f"I_bot: Q2 + U2B + VR2, R3 {eng(v['R_S'], 'Ω')}\nto -{spec.rails:g} V, via U3 (enable)",
-            loc="bottom"))
-        # bridge, top pair: D1 top -> sj, D2 top -> out, I_top from the +rail into top
-        d.add(elm.Line().at(row3).up(3.0))
-        d.add(elm.Diode().right(width / 2).reverse().label("D1"))
-        mid = d.here
-        d.add(elm.Diode().right(width / 2).label("D2"))
-        d.add(elm.Line().down(3.0))
-        d.add(elm.SourceI().at(mid).up(1.6).reverse().label(
-            f"I_top = {spec.v_set:g} V / R_S: Q1 + U2A + VR1,\nR2 {eng(v['R_S'], 'Ω')} to "
-            f"+{spec.rails:g} V, via U3 (enable)",
-            loc="top"))
-        d.add(elm.Label().at((mid[0], mid[1] - 1.2)).label(f"bridge D1-D4: 4 × {spec.diode}"))
-        d.add(elm.Dot().at(op.out))
-        d.add(elm.Line().at(op.out).right(1.0))
-        d.add(elm.Dot(open=True).label(f"OUT = -{design.kappa:.3g} V × v  (J4, DAQ AI0)\n"
-                                       "reset: U4 closes R10 across C1, R11 from J3 (IC)",
-                                       loc="right"))
-        # force input
-        d.add(elm.Line().at(sj).left(1.0))
-        node = d.here
-        d.add(elm.Resistor().up(2.0).label(f"R4 {eng(v['R_F'], 'Ω')}", loc="bottom"))
-        d.add(elm.Dot(open=True).label(f"V_F = {design.force_sign * spec.v_force:+g} V (J2, DAQ AO1)",
-                                       loc="left"))
-        # noise chain
-        d.add(elm.Resistor().at(node).left(2.5).label(f"R5 {eng(v['R_N'], 'Ω')}"))
-        d.add(elm.Capacitor().left(2.5).label(f"C4 {eng(v['C_AC'], 'F')}\nfilm"))
-        d.add(elm.Line().left(0.5))
-        d.add(elm.RBox().left(2.5).label(f"Bessel (U1B, R6, R7, C2, C3)\nf_c {eng(spec.bessel_fc / design.noise_ts, 'Hz')}\n"
-                                          f"R {eng(v['R_B1'], 'Ω')}, C {eng(v['C_B1'], 'F')}/{eng(v['C_B2'], 'F')}",
-                                          loc="top"))
-        d.add(elm.Line().left(0.5))
-        d.add(elm.SourceSin().down(2.0).label(
-            f"J1: DAQ AO0 {spec.dac_bits} bit\n{eng(1.0 / design.noise_ts, 'S/s')}\n{spec.dac_rms:g} V rms\n"
-            "seeded Gaussian", loc="top", ofst=(-1.6, 0)))
-        d.add(elm.Ground())
-        _parts_sheet(d, design, origin=(-14.0, -9.0))
+    d.draw(show=False, canvas="matplotlib" if fmt == "png" else "svg")
     data = d.get_imagedata(fmt)
     path.write_bytes(data if isinstance(data, bytes) else data.encode())
     if fmt == "png":
         import matplotlib.pyplot as plt
-        plt.close("all")
-        schemdraw.use("svg")
+        plt.close(d.fig.fig)
     return path
