@@ -10,6 +10,8 @@ from typing import Any
 
 import numpy as np
 
+from . import netcdf_layout
+
 __all__ = ["Ensemble"]
 
 # provenance keys shown by Ensemble.__repr__ (when present), in this order
@@ -150,21 +152,18 @@ class Ensemble:
     def to_xarray(self):
         """An ``xarray.Dataset``: ``v`` and ``x`` on dims (``replica``, ``time``), the noise
         (when recorded) on (``replica``, ``noise_time``), units on every coordinate and
-        variable, provenance as JSON-safe attributes.  See :mod:`analogue.data`."""
-        from .data import ensemble_to_xarray
-        return ensemble_to_xarray(self)
+        variable, provenance as JSON-safe attributes.  See :mod:`analogue.netcdf_layout`."""
+        return netcdf_layout.to_dataset(self)
 
     @classmethod
     def from_xarray(cls, dataset) -> Ensemble:
         """Inverse of :meth:`to_xarray` (exact: arrays and meta)."""
-        from .data import ensemble_from_xarray
-        return ensemble_from_xarray(dataset)
+        return cls(**netcdf_layout.fields_from_dataset(dataset))
 
     def to_netcdf(self, path) -> None:
         """Write a netCDF-4 file that :func:`analogue.open_ensemble`
         reads back exactly; written atomically."""
-        from .data import write_netcdf
-        write_netcdf(self, path)
+        netcdf_layout.write_dataset(self.to_xarray(), path)
 
     def save(self, path) -> None:
         """Write to a compressed ``.npz`` (meta stored as JSON)."""
