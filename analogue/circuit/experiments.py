@@ -30,7 +30,7 @@ Schema (every table and key optional unless marked; unknown keys are errors)::
     [netlist]                      # the representative deck committed in netlists/
     replicas = 4                   # total replicas in that deck (v0 values cycled)
 
-    [report]                       # what the report measures: analogue.report.plan
+    [report]                       # what the report measures: analogue.study.settings
 
 The whole document is validated when it is loaded, before anything runs: the tables, the
 cross-references between ``[experiment]`` and ``[report]``, the time grids of every run and
@@ -64,8 +64,8 @@ import numpy as np
 
 from .. import model as _model_module
 from ..model import Model
-from ..report.plan import ReportSettings, report_settings_from_dict
 from .. import checks
+from ..study.settings import ReportSettings, report_settings_from_dict
 from .mapping import (FIXED_TRTOL, CircuitMapping, CircuitSpec, check_mapping_values,
                       check_spec_ranges, map_model)
 from .netlist import Deck, build_deck
