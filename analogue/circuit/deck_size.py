@@ -41,6 +41,8 @@ import numpy as np
 
 from .. import checks
 from ..model import Model
+from .mapping import map_model
+from .tolerances import RunDecks, require_run
 
 __all__ = [
     "DEFAULT_BOUNDS",
@@ -126,9 +128,8 @@ def _check_bounds(bounds) -> tuple[int, int]:
 
 
 def _calibrate(model: Model, spec, *, store, scheduler, workers, executor=None,
-               timeout=None) -> dict:
-    from .mapping import map_model
-    from .simulate import simulate
+               timeout=None, run: RunDecks | None = None) -> dict:
+    simulate = require_run(run, "choose_deck_size")
     mapping = map_model(model, spec)
     t_cal = CAL_HOLDS * mapping.noise_dt
     out = {}
@@ -158,7 +159,7 @@ _MEMO: dict = {}
 def choose_deck_size(model: Model, spec, *, replicas: int, t_end: float, workers: int,
                      bounds=DEFAULT_BOUNDS, store=None, scheduler=None, executor=None,
                      timeout=None, measured: dict | None = None,
-                     min_replica_holds: int = 0) -> DeckSizeChoice:
+                     min_replica_holds: int = 0, run: RunDecks | None = None) -> DeckSizeChoice:
     """Replicas per deck for a run of ``replicas`` paths of length ``t_end``; ``spec`` must
     have its tolerances set (:mod:`analogue.circuit.tolerances`).  The cost model assumes
     :data:`NOTIONAL_WORKERS` processes whatever ``workers`` is (the processes that run the
@@ -166,14 +167,15 @@ def choose_deck_size(model: Model, spec, *, replicas: int, t_end: float, workers
     alone, the same on every machine.
     ``measured``: points per hold by deck size, skipping the calibration (tests).  Runs of
     fewer than ``min_replica_holds`` replica-holds get ``DEFAULT_REPLICAS_PER_DECK`` (within
-    the bounds) without a calibration (source "default")."""
+    the bounds) without a calibration (source "default").  ``run``: how the calibration's
+    decks run (as for :func:`analogue.circuit.tolerances.choose_tolerances`); needed only when
+    a calibration runs."""
     lo, hi = _check_bounds(bounds)
     replicas = checks.integer("replicas", replicas, minimum=1)
     workers = checks.integer("workers", workers, minimum=1)
     allowed = [s for s in SIZES if lo <= s <= hi] or [lo, hi]
     if replicas <= lo:
         return DeckSizeChoice(lo, "measured")
-    from .mapping import map_model
     holds = t_end / map_model(model, spec).noise_dt
     if measured is None and replicas * holds < min_replica_holds:
         return DeckSizeChoice(min(max(DEFAULT_REPLICAS_PER_DECK, lo), hi), "default")
@@ -181,7 +183,8 @@ def choose_deck_size(model: Model, spec, *, replicas: int, t_end: float, workers
         key = (repr(model.as_dict()), repr(spec))
         if key not in _MEMO:
             _MEMO[key] = _calibrate(model, spec, store=store, scheduler=scheduler,
-                                    workers=workers, executor=executor, timeout=timeout)
+                                    workers=workers, executor=executor, timeout=timeout,
+                                    run=run)
         measured = _MEMO[key]
     pred = {r: job_time(r, replicas, holds, NOTIONAL_WORKERS, measured) for r in allowed}
     best = min(allowed, key=lambda r: (round(pred[r], 6), -r))

@@ -39,7 +39,10 @@ from ..ensemble import Ensemble
 from ..model import Model
 from . import limits
 from . import ngspice as _ng
-from .deck_size import DEFAULT_REPLICAS_PER_DECK
+from .deck_size import DEFAULT_REPLICAS_PER_DECK, choose_deck_size
+from .deck_size import MIN_CALIBRATED_REPLICA_HOLDS as MIN_DECK_HOLDS
+from .tolerances import MIN_CALIBRATED_REPLICA_HOLDS as MIN_TOLERANCE_HOLDS
+from .tolerances import resolve_spec
 from .store_index import note_keys
 from .store import SCHEMA_VERSION, batch_key, open_store
 
@@ -902,20 +905,17 @@ def simulate(model: Model, *, v0: float | ArrayLike | Literal["stationary"], t_e
     tol_choice = None
     if spec.unset_tolerances:
         # Tolerances by measured accuracy (cached in the run store): see circuit.tolerances.
-        from .tolerances import MIN_CALIBRATED_REPLICA_HOLDS, resolve_spec
         spec, tol_choice = resolve_spec(model, spec, replicas=replicas, t_end=t_end,
                                         store=store, workers=workers,
                                         scheduler=scheduler, executor=executor, timeout=timeout,
-                                        min_replica_holds=MIN_CALIBRATED_REPLICA_HOLDS)
+                                        min_replica_holds=MIN_TOLERANCE_HOLDS, run=simulate)
     deck_choice = None
     if per_deck is None:
-        from .deck_size import MIN_CALIBRATED_REPLICA_HOLDS as min_holds
-        from .deck_size import choose_deck_size
         deck_choice = choose_deck_size(model, spec, replicas=replicas, t_end=t_end,
                                        workers=workers or usable_cpus(),
                                        store=store, timeout=timeout,
                                        scheduler=scheduler, executor=executor,
-                                       min_replica_holds=min_holds)
+                                       min_replica_holds=MIN_DECK_HOLDS, run=simulate)
         per_deck = deck_choice.replicas_per_deck
     mapping = map_model(model, spec)
     # Before allocating anything: replicas x time points x decks, and the bytes to be stored.

@@ -52,11 +52,13 @@ overridden: only the unset ones are chosen, among candidates that agree with the
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from .. import checks
+from ..ensemble import Ensemble
 from ..estimators.smoothed_indicator import kernel_width, window
 from ..model import Model
 from .mapping import (
@@ -87,6 +89,21 @@ __all__ = [
     "resolve_spec",
     "select",
 ]
+
+# How a calibration's decks run: simulate(model, circuit=spec, **run_options) -> Ensemble, handed
+# in by the simulator (which imports this module; the reverse would be an import circle).
+RunDecks = Callable[..., Ensemble]
+
+
+def require_run(run: RunDecks | None, who: str) -> RunDecks:
+    if run is None:
+        raise ValueError(f"{who}: a calibration must run circuit decks; pass run= (for example "
+                         "analogue.circuit.simulate.simulate, which does so itself)")
+    if not callable(run):
+        raise TypeError(f"{who}: run must be callable like analogue.circuit.simulate.simulate, "
+                        f"got {type(run).__name__}")
+    return run
+
 
 DEFAULT_FRACTION = 0.1
 CAL_REPLICAS = 16
@@ -336,9 +353,10 @@ _MEMO: dict = {}
 
 
 def _calibrate(model: Model, spec: CircuitSpec, candidates, *, store, workers, scheduler,
-               executor=None, timeout=None):
-    """Run (or load) the calibration; returns (results, t_cal)."""
-    from .simulate import simulate
+               executor=None, timeout=None, run: RunDecks | None = None):
+    """Run (or load) the calibration through ``run`` (:func:`choose_tolerances`); returns
+    (results, t_cal)."""
+    simulate = require_run(run, "choose_tolerances")
     mapping = map_model(model, spec.replace(**FIXED.as_dict()))
     t_cal = CAL_HOLDS * mapping.noise_dt
     tightest = min(candidates, key=lambda c: c.reltol)
@@ -385,7 +403,7 @@ def choose_tolerances(model: Model, spec: CircuitSpec | None = None, *, replicas
                       store=None, workers=None, scheduler=None, executor=None,
                       timeout=None, min_replica_holds: int = 0,
                       check_replicas: int | None = None,
-                      observables=None) -> ToleranceChoice:
+                      observables=None, run: RunDecks | None = None) -> ToleranceChoice:
     """The tolerances for a run of ``replicas`` paths of length ``t_end`` (model units) of
     ``model`` in the circuit ``spec`` (module docstring).  Values set in ``spec`` win.
     Runs of fewer than ``min_replica_holds`` replica-holds get the fixed values instead of a
@@ -393,7 +411,11 @@ def choose_tolerances(model: Model, spec: CircuitSpec | None = None, *, replicas
     measured on that many of its paths (the report's check), which adds its own noise
     (module docstring).  ``observables``: the run is compared on those only
     (:data:`TRANSITION_OBSERVABLES` for a transition run, :data:`STATIONARY_OBSERVABLES` for
-    a stationary one; None: every one of :func:`path_observables`)."""
+    a stationary one; None: every one of :func:`path_observables`).
+    ``run``: how the calibration's decks run, ``run(model, circuit=spec, v0=..., t_end=...,
+    replicas=..., seed=..., replicas_per_deck=..., **options) -> Ensemble`` --
+    :func:`analogue.circuit.simulate.simulate` passes itself; needed only when a calibration
+    runs (this module never imports the simulator that calls it)."""
     if observables is not None:
         observables = tuple(observables)
         unknown = [o for o in observables if o not in ALL_OBSERVABLES]
@@ -428,7 +450,7 @@ def choose_tolerances(model: Model, spec: CircuitSpec | None = None, *, replicas
         pool = list(dict.fromkeys(Tolerances(**{**c.as_dict(), **given}) for c in candidates))
     results, t_cal = _calibrate(model, spec.replace(**{k: None for k in unset}), tuple(pool),
                                 store=store, workers=workers, scheduler=scheduler,
-                                executor=executor, timeout=timeout)
+                                executor=executor, timeout=timeout, run=run)
     best, met, name, ratio = select(results, replicas=replicas, t_end=float(t_end), t_cal=t_cal,
                                     fraction=fraction, check_replicas=check_replicas,
                                     observables=observables)

@@ -225,6 +225,7 @@ def _choose(model, spec, replicas: int, t_end: float, kw: dict, check: int, obse
     integration error is measured on about ``check`` of its paths, compared on
     ``observables`` (circuit.tolerances.STATIONARY_OBSERVABLES, or None: all)."""
     from ..circuit.deck_size import choose_deck_size
+    from ..circuit.simulate import simulate
     from ..circuit.tolerances import resolve_spec
     # (the run's --timeout holds for the calibrations too: issue 19, a hung ngspice kept a
     # --timeout 3 run going for the calibrations' default hour per deck)
@@ -232,9 +233,9 @@ def _choose(model, spec, replicas: int, t_end: float, kw: dict, check: int, obse
     workers = default_workers(kw)
     spec, tol = resolve_spec(model, spec, replicas=replicas, t_end=t_end, workers=workers,
                              check_replicas=min(check, replicas), observables=observables,
-                             fraction=REPORT_FRACTION, **common)
+                             fraction=REPORT_FRACTION, run=simulate, **common)
     deck = choose_deck_size(model, spec, replicas=replicas, t_end=t_end, workers=workers,
-                            **common)
+                            run=simulate, **common)
     return spec, deck.replicas_per_deck, {"tolerances": tol.as_dict(),
                                           "deck_size": deck.as_dict()}
 

@@ -56,3 +56,31 @@ def test_choice_does_not_depend_on_the_machines_workers(measured, replicas):
     chosen = {ds.choose_deck_size(STICK, SPEC, replicas=replicas, t_end=10.0, workers=w,
                                   measured=measured).replicas_per_deck for w in (1, 2, 3, 16)}
     assert len(chosen) == 1
+
+
+def test_the_calibration_runs_through_the_given_run_and_needs_one():
+    """The chooser calibrates through ``run`` (the simulator hands in itself: the chooser never
+    imports the simulator that calls it, issue 20); without one a calibration is refused by
+    name, before anything runs."""
+    import numpy as np
+
+    from analogue import Ensemble
+    ds._MEMO.clear()
+    with pytest.raises(ValueError, match="run="):
+        ds.choose_deck_size(STICK, SPEC, replicas=500, t_end=10.0, workers=2)
+    calls = []
+
+    def run(model, *, circuit, replicas, replicas_per_deck, **kw):
+        calls.append((circuit, replicas, replicas_per_deck))
+        t = np.linspace(0.0, 1.0, 3)
+        # points growing like r per hold (STEEP): small decks must win
+        pts = 5.0 * replicas * ds.CAL_HOLDS / 4
+        return Ensemble(t, np.zeros((replicas, 3)), np.zeros((replicas, 3)),
+                        {"deck_raw_points": [pts]})
+    try:
+        c = ds.choose_deck_size(STICK, SPEC, replicas=512, t_end=10.0, workers=2, run=run)
+    finally:
+        ds._MEMO.clear()
+    assert [(r, d) for _, r, d in calls] == [(r, r) for r in ds.CAL_SIZES]
+    assert all(spec == SPEC for spec, _, _ in calls)
+    assert c.source == "measured" and c.replicas_per_deck == 4

@@ -205,3 +205,12 @@ def test_the_report_kinds_of_run_cover_every_path_observable():
 def test_unknown_observables_are_refused(bad):
     with pytest.raises(ValueError, match="observables"):
         tl.choose_tolerances(STICK, CircuitSpec(), replicas=4, t_end=1.0, observables=bad)
+
+
+def test_a_calibration_without_run_is_refused_by_name():
+    """The chooser calibrates through ``run`` (handed in by the simulator, which it does not
+    import: issue 20); a direct call that needs a calibration and gives none says so."""
+    with pytest.raises(ValueError, match="run="):
+        tl.choose_tolerances(STICK, CircuitSpec(), replicas=16, t_end=1.0)
+    with pytest.raises(TypeError, match="run must be callable"):
+        tl.choose_tolerances(STICK, CircuitSpec(), replicas=16, t_end=1.0, run="ngspice")
