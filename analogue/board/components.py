@@ -90,8 +90,20 @@ def _rkm(x: float, digits: int) -> str:
     raise ValueError(f"resistance {x} out of range")
 
 
+def eng(x: float, unit: str) -> str:
+    """Engineering notation: 4.42e3 -> '4.42 k' + unit (the schematic's labels; here, below
+    :mod:`.schematic`, which imports this module, so that the two do not import each other)."""
+    if x == 0:
+        return f"0 {unit}"
+    prefixes = [(1e9, "G"), (1e6, "M"), (1e3, "k"), (1.0, ""), (1e-3, "m"), (1e-6, "µ"),
+                (1e-9, "n"), (1e-12, "p")]
+    for scale, p in prefixes:
+        if abs(x) >= scale * 0.999:
+            return f"{x / scale:.3g} {p}{unit}"
+    return f"{x:.3g} {unit}"
+
+
 def _eng(x: float, unit: str) -> str:
-    from .schematic import eng
     return eng(x, unit).replace(" ", "")
 
 

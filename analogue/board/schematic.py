@@ -9,21 +9,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from .components import board_components, eng
 from .design import BoardDesign
 
 __all__ = ["build_schematic", "draw_schematic", "eng"]
-
-
-def eng(x: float, unit: str) -> str:
-    """Engineering notation: 4.42e3 -> '4.42 k' + unit."""
-    if x == 0:
-        return f"0 {unit}"
-    prefixes = [(1e9, "G"), (1e6, "M"), (1e3, "k"), (1.0, ""), (1e-3, "m"), (1e-6, "µ"),
-                (1e-9, "n"), (1e-12, "p")]
-    for scale, p in prefixes:
-        if abs(x) >= scale * 0.999:
-            return f"{x / scale:.3g} {p}{unit}"
-    return f"{x:.3g} {unit}"
 
 
 def _parts_sheet(d, design: BoardDesign, origin: tuple) -> None:
@@ -31,7 +20,6 @@ def _parts_sheet(d, design: BoardDesign, origin: tuple) -> None:
     rows of four, then the multi-pin parts (pin number, function and net on each pin)."""
     import schemdraw.elements as elm
 
-    from .components import board_components
     parts = [p for p in board_components(design) if not p.off_board]
     x0, y = origin
     d.add(elm.Label().at((x0, y)).label("Parts sheet: every part, pins on net labels "
