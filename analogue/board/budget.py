@@ -7,7 +7,7 @@ term (each an independent estimate, in the observable's units):
 - ``rounding``: E-series values implement another model (:attr:`BoardDesign.realised`);
   exact(realised, eps = 0) - exact(requested);
 - ``smoothing``: the bridge's tanh width; exact(realised) - exact(realised, eps = 0);
-- ``bandwidth``: the noise chain (DAC hold, quantisation, Bessel, AC coupling) instead of white
+- ``bandwidth``: the noise chain (DAC hold, quantisation, Bessel, optional AC coupling) instead of white
   noise; an SDE pair on the realised model driven by the same increments, coloured minus white,
   |difference| + 2 standard errors;
 - ``integration``: ngspice at reltol 1e-3 (the runs) against 1e-4, path-wise on the same noise

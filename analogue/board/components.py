@@ -156,6 +156,7 @@ def board_components(design: BoardDesign, matched: tuple = ()) -> list[Part]:
         return MATCH_ADVICE.get(ref.rstrip("0123456789"), "0.1 %")
 
     rate = 1.0 / design.noise_ts
+    ac = "C_AC" in v      # AC coupling only where BoardSpec.ac_corner asks for it
     parts = [
         # ---------------------------------------------------------------- integrator
         Part("C1", _eng(v["C"], "F"), "mass capacitor (integrator feedback)", "TDK",
@@ -222,16 +223,16 @@ def board_components(design: BoardDesign, matched: tuple = ()) -> list[Part]:
         # ---------------------------------------------------------------- force and noise
         _resistor("R4", v["R_F"], "FORCE_IN", "SJ", "force resistor, I_F = V_F/R_F", "R0f",
                   tol("R4", "1 %, 50 ppm/K")),
-        _resistor("R5", v["R_N"], "AC", "SJ", "noise resistor, I_n = V_n/R_N", "R0n",
+        _resistor("R5", v["R_N"], "AC" if ac else "BO", "SJ", "noise resistor, I_n = V_n/R_N", "R0n",
                   tol("R5", "1 %, 50 ppm/K")),
         _resistor("R6", v["R_B1"], "NOISE_IN", "B1", "Bessel low-pass resistor", "Rn0b1"),
         _resistor("R7", v["R_B2"], "B1", "B2", "Bessel low-pass resistor", "Rn0b2"),
         _c0g("C2", v["C_B1"], "B1", "BO", "Bessel low-pass feedback capacitor", "Cn0b1"),
         _c0g("C3", v["C_B2"], "B2", "GND", "Bessel low-pass capacitor to ground", "Cn0b2"),
-        Part("C4", _eng(v["C_AC"], "F"), "AC-coupling capacitor of the noise chain", "WIMA",
-             f"MKS4 {_eng(v['C_AC'], 'F')} 63 V (MKS4D series)", "KEMET R60 series, same value",
-             FILM, ((1, "1", "BO"), (2, "2", "AC")), "10 %", "polyester film 63 V (not "
-             "electrolytic: leakage)", "C0ac", v["C_AC"], "C"),
+        *([Part("C4", _eng(v["C_AC"], "F"), "AC-coupling capacitor of the noise chain", "WIMA",
+                f"MKS4 {_eng(v['C_AC'], 'F')} 63 V (MKS4D series)", "KEMET R60 series, same value",
+                FILM, ((1, "1", "BO"), (2, "2", "AC")), "10 %", "polyester film 63 V (not "
+                "electrolytic: leakage)", "C0ac", v["C_AC"], "C")] if ac else []),
         # ---------------------------------------------------------------- power
         Part("U5", "78L05", "+5 V for the switches' logic supply (VL)", "STMicroelectronics",
              "L78L05ABUTR", "onsemi MC78L05ACHT1G", SOT89,

@@ -75,9 +75,21 @@ class BoardSpec:
     v_force: magnitude of the force voltage (V); resistor_series / capacitor_series: E-series
     for rounding; dac_bits, dac_rms (V rms of the noise DAC, clip at dac_range), dac_range (V),
     noise_dt (hold time in model units; None: tau_m/800), bessel_fc (Bessel -3 dB frequency in
-    units of the DAC sample rate), ac_corner (AC-coupling corner frequency in units of
+    units of the DAC sample rate), ac_corner (None, the default: no AC-coupling capacitor,
+    R_N driven DC-coupled by the Bessel buffer; else the AC-coupling corner in units of
     1/tau_m: f_AC = ac_corner/(tau_m theta) Hz, time constant R_N C_AC = tau_m/(2 pi
     ac_corner) = 159 tau_m at 0.001); temperature: board temperature (C).
+
+    No AC coupling by default (issue 21 item 6), measured on the stick design: a capacitor
+    small enough to settle within the burn-in (R_N C_AC = burn-in/5 = 0.4 tau_m) leaves only
+    0.29 of the OU velocity variance (ou_variance_factor; 0.17 at 0.2 tau_m); at 0.001 (R_N
+    C_AC = 156 tau_m, the former default) its DC state never settles in a run (the bench
+    needs 0.8 s after power-up) and it still removes 0.6 % of the variance (factor 0.9931
+    against 0.9995 for the DAC hold and Bessel alone).  What it blocked, the DC offsets of the
+    Bessel buffer and the integrator across R_N, is a constant force (vos_int - vos_bf)/R_N:
+    0.019 in a per 3 mV (TL072 typical), 1e-4/K of drift; calibration step 1 measures it with
+    the noise DAC at mid-scale (:mod:`analogue.board.calibration`), and the tolerance
+    analysis carries it (:func:`analogue.board.tolerance.effective_model`).
 
     Noise defaults (issue 21): inside the bridge the velocity relaxes in epsilon/Delta = 0.03
     tau_m, so the noise must be white on that scale.  SDE pairs (coloured minus white on common
@@ -109,14 +121,14 @@ class BoardSpec:
     dac_range: float = 10.0
     noise_dt: float | None = None
     bessel_fc: float = 0.5
-    ac_corner: float = 0.001
+    ac_corner: float | None = None
     temperature: float = 27.0
 
     def __post_init__(self):
         for name in ("rails", "machine_unit", "sigma_volts", "time_scale", "capacitance", "v_set",
-                     "v_force", "dac_rms", "dac_range", "bessel_fc", "ac_corner"):
+                     "v_force", "dac_rms", "dac_range", "bessel_fc"):
             object.__setattr__(self, name, checks.positive(name, getattr(self, name)))
-        for name in ("kappa", "noise_dt"):
+        for name in ("kappa", "noise_dt", "ac_corner"):
             if getattr(self, name) is not None:
                 object.__setattr__(self, name, checks.positive(name, getattr(self, name)))
         object.__setattr__(self, "temperature", checks.finite("temperature", self.temperature))
@@ -131,7 +143,7 @@ class BoardSpec:
                              f"got {self.dac_rms}")
         if not self.bessel_fc <= 0.5:
             raise ValueError(f"bessel_fc must be in (0, 0.5] (fraction of the DAC rate), got {self.bessel_fc}")
-        if not self.ac_corner < 0.2:
+        if self.ac_corner is not None and not self.ac_corner < 0.2:
             raise ValueError(f"ac_corner must be in (0, 0.2), got {self.ac_corner}")
         object.__setattr__(self, "dac_bits", checks.integer("dac_bits", self.dac_bits, minimum=8, maximum=24))
         for name, allowed in (("resistor_series", ("E24", "E96", "E192")),
@@ -290,11 +302,12 @@ def design_board(model: Model, spec: BoardSpec | None = None, v0=()) -> BoardDes
     f_dac = 1.0 / noise_ts
     r_b = 10e3
     c_b1, c_b2 = bessel2_sallen_key(spec.bessel_fc * f_dac, r_b)
-    # AC coupling: C_AC in series with R_N; corner f = ac_corner/(tau_m theta) Hz
-    c_ac = 1.0 / (2.0 * math.pi * spec.ac_corner / (model.tau_m * theta) * r_noise)
     ideal = {"C": spec.capacitance, "R": r_visc, "R_S": spec.v_set / i0,
              "R_F": spec.v_force / i_force if i_force > 0 else math.inf,
-             "R_N": r_noise, "C_AC": c_ac, "R_B1": r_b, "R_B2": r_b, "C_B1": c_b1, "C_B2": c_b2}
+             "R_N": r_noise, "R_B1": r_b, "R_B2": r_b, "C_B1": c_b1, "C_B2": c_b2}
+    if spec.ac_corner is not None:
+        # AC coupling: C_AC in series with R_N; corner f = ac_corner/(tau_m theta) Hz
+        ideal["C_AC"] = 1.0 / (2.0 * math.pi * spec.ac_corner / (model.tau_m * theta) * r_noise)
     values = {}
     for k, x in ideal.items():
         if not math.isfinite(x):

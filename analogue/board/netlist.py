@@ -233,8 +233,11 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
         files.append(str(path))
         lines += noise_chain.dac_lines(f"n{j}", f"d{j}", path, sha, time_offset=t0)
         lines += noise_chain.bessel_lines(f"n{j}", f"d{j}", f"bo{j}", design, "opa_bf", val_)
-        lines += [f"C{j}ac bo{j} ac{j} {_n('C_AC', val_['C_AC'])}",
-                  f"R{j}n ac{j} {sj} {_n('R_N', val_['R_N'])}"]
+        if "C_AC" in val_:
+            lines += [f"C{j}ac bo{j} ac{j} {_n('C_AC', val_['C_AC'])}",
+                      f"R{j}n ac{j} {sj} {_n('R_N', val_['R_N'])}"]
+        else:
+            lines.append(f"R{j}n bo{j} {sj} {_n('R_N', val_['R_N'])}")
         spring = "R_K" in val_
         if spring:
             # position integrator (reset = the .ic below) and inverter; spring current
@@ -257,9 +260,9 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
                       f"S{j}i ic{j} {j}ri sr 0 swno", f"R{j}i {j}ri {sj} {_n('R_IC', R_IC)}"]
             continue
         # the virtual ground's own equilibrium, -vos - V(out)/a0: holding it at 0 through the
-        # operating point would charge the AC-coupling capacitor to the offset, which then
-        # bleeds a current vos/R_N into sj for ~R_N C_AC = 170 tau_m (measured: 0.5 uA, a
-        # force error of 0.01 for vos = 4 mV)
+        # operating point would, on a board with the optional AC-coupling capacitor, charge it
+        # to the offset, which then bleeds a current vos/R_N into sj for ~R_N C_AC = 170
+        # tau_m (measured: 0.5 uA, a force error of 0.01 for vos = 4 mV)
         amp = b.opamps["int"]
         v_sj = -amp.vos - vo / amp.a0
         ic.append(f"v({o})={_n('vo', vo)} v(xu{j}.g)={_n('vo', vo)} v({sj})={_n('v_sj', v_sj)}")

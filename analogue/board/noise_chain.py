@@ -1,11 +1,12 @@
-"""The noise chain: seeded digital Gaussian -> DAC -> Bessel low-pass -> AC coupling -> R_N.
+"""The noise chain: seeded digital Gaussian -> DAC -> Bessel low-pass -> R_N.
 
 What a microcontroller or FPGA runs: ``z_k`` standard normal from numpy's PCG64 seeded with
 ``SeedSequence(seed, spawn_key=(replica,))`` (so a built board can be driven by the very
 sequence the simulation used), scaled to ``dac_rms`` volts, rounded to the DAC's LSB
 (``2 dac_range / 2^bits``), clipped to the range, held for ``TS`` (the DAC's zero-order hold),
-then a unity-gain 2nd-order Sallen-Key Bessel low-pass, a series AC-coupling capacitor and the
-noise resistor into the integrator's virtual ground.
+then a unity-gain 2nd-order Sallen-Key Bessel low-pass and the noise resistor into the
+integrator's virtual ground (a series AC-coupling capacitor only where ``BoardSpec.ac_corner``
+asks for one; none by default, issue 21 item 6).
 
 In ngspice the DAC is an XSPICE ``filesource`` with ``amplstep=true`` (measured here: 40 000
 samples in 0.4 s, where an inline ``pwl`` source costs 220 s because every evaluation scans
@@ -73,7 +74,7 @@ def write_dac_file(directory: Path, volts: np.ndarray, ts: float) -> tuple[Path,
     returns (path, sha256)."""
     directory = Path(directory)
     # mid-scale (0 V) while the integrator is held in reset, sample k from (k + 1) TS on:
-    # the AC-coupling capacitor then starts uncharged (a first sample held through the
+    # an optional AC-coupling capacitor then starts uncharged (a first sample held through the
     # operating point would charge it and leave a decaying force offset).
     t = np.concatenate([[0.0], (np.arange(volts.size) + 1) * ts])
     volts = np.concatenate([[0.0], volts])
@@ -121,11 +122,13 @@ def bessel_lines(prefix: str, inp: str, out: str, design: BoardDesign, opamp: st
 
 def chain_transfer(values: dict) -> signal.lti:
     """H(s) from the DAC voltage to the current into the virtual ground, times R_N (unit DC
-    gain of the pass band): Bessel ``1/(1 + s R (C1 + ... ))`` times AC coupling
-    ``s tau_ac/(1 + s tau_ac)``, ``tau_ac = C_AC R_N``."""
+    gain of the pass band): Bessel ``1/(1 + s R (C1 + ... ))``, times the AC coupling
+    ``s tau_ac/(1 + s tau_ac)``, ``tau_ac = C_AC R_N``, where the design has ``C_AC``."""
     r1, r2, c1, c2 = values["R_B1"], values["R_B2"], values["C_B1"], values["C_B2"]
     # Sallen-Key unity gain: H = 1/(s^2 R1 R2 C1 C2 + s C2 (R1 + R2) + 1)
     den_b = [r1 * r2 * c1 * c2, c2 * (r1 + r2), 1.0]
+    if "C_AC" not in values:
+        return signal.lti([1.0], den_b)
     tau = values["C_AC"] * values["R_N"]
     num = np.polymul([tau, 0.0], [1.0])
     den = np.polymul(den_b, [tau, 1.0])

@@ -28,7 +28,7 @@ def _trajectory_text(tc) -> str:
         return ""
     return (f"Trajectory by trajectory: the first {tc['replicas']} replicas of the board against the "
             "realised equations (tanh friction) driven by the same seeded DAC sequences through the "
-            "exact numpy model of the DAC hold, Bessel filter and AC coupling "
+            "exact numpy model of the DAC hold and Bessel filter "
             f"(analogue.board.trajectory): rms path difference {tc['rms']:.2g} (stationary spread "
             f"{tc['stationary_std']:.2g}), largest {tc['max']:.2g}, time averages {tc['board_mean']:.4g} "
             f"(board) and {tc['reference_mean']:.4g} (equations). A built board fed the same "
@@ -126,7 +126,7 @@ def write_report(out: Path, exp, design, metrics: dict) -> Path:
     if study:
         keys = ("mean v", "var v", "P(v>0)", "stick fraction")
         sections[-1].tables.append(Table(
-            "Noise-chain design study: bias of the coloured noise (DAC hold + Bessel + AC coupling) "
+            "Noise-chain design study: bias of the coloured noise (DAC hold + Bessel) "
             "against white noise, SDE pair with common increments (difference ± se). The stick "
             "fraction is the sensitive one: near v = 0 the bridge relaxes in epsilon/Delta, a few "
             "DAC samples at tau_m/100; a 4x faster DAC and a Bessel corner at half the DAC rate (the "

@@ -123,7 +123,10 @@ def build_schematic(design: BoardDesign):
                                    loc="top"))
     # noise chain
     d.add(elm.Resistor().at(node).left(2.5).label(f"R5 {eng(v['R_N'], 'Ω')}"))
-    d.add(elm.Capacitor().left(2.5).label(f"C4 {eng(v['C_AC'], 'F')}\nfilm"))
+    if "C_AC" in v:       # the AC coupling, only where BoardSpec.ac_corner asks for it
+        d.add(elm.Capacitor().left(2.5).label(f"C4 {eng(v['C_AC'], 'F')}\nfilm"))
+    else:
+        d.add(elm.Line().left(2.5))
     d.add(elm.Line().left(1.0))
     d.add(elm.RBox().left(2.5).label(f"Bessel (U1B, R6, R7, C2, C3)\nf_c {eng(spec.bessel_fc / design.noise_ts, 'Hz')}\n"
                                       f"R {eng(v['R_B1'], 'Ω')}, C {eng(v['C_B1'], 'F')}/{eng(v['C_B2'], 'F')}",

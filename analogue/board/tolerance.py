@@ -151,6 +151,11 @@ def effective_model(design: BoardDesign, b: BoardInstance) -> Model:
     is_mean = part.IS * float(np.mean(b.diode_is))
     i_f = (b.v_force + amp["int"].vos) / v["R_F"] if math.isfinite(v["R_F"]) else 0.0
     i_f -= amp["int"].ib
+    if "C_AC" not in v:
+        # DC-coupled noise resistor: the Bessel buffer's output (-vos_bf with the DAC at
+        # mid-scale, the same series offset as U1's) against V(sj) = -vos drives
+        # (vos - vos_bf)/R_N into the virtual ground
+        i_f += (amp["int"].vos - amp["bf"].vos) / v["R_N"]
     r_tot = 1.0 / (1.0 / v["R"] + (2.0 / part.rp if part.rp else 0.0))
     temp_k = b.temperature + 273.15
     eps_v = 2.0 * part.N * thermal_voltage(temp_k) + part.RS * 0.5 * (i_top + i_bot)

@@ -2,7 +2,7 @@
 sequence.
 
 A built board is fed the seeded sequence ``(seed, replica)``; the same numbers, passed through
-the exact (numpy) model of the DAC hold, Bessel low-pass and AC coupling
+the exact (numpy) model of the DAC hold, Bessel low-pass (and AC coupling, where fitted)
 (:func:`analogue.board.noise_chain.chain_current`), drive ``dv/dt = -v/tau_m - Delta
 tanh(v/epsilon) - spring x + a + eta(t)`` (eq. (4) with the bridge's tanh law, the realised
 parameters).  Heun's method on the chain's fine grid (TS/8; the stiffest rate near v = 0 is

@@ -59,7 +59,8 @@ def test_ngspice_noise_chain_follows_the_seeded_sequence(tmp_path):
     deck = build_board_deck(DESIGN, nominal_instance(DESIGN), v0=[0.0], t_end=t_end, sample_dt=0.01,
                             seed=5, noise_dir=tmp_path, save_all=True)
     plot = ng.run_deck(deck.text, t_stop=t_end * DESIGN.theta, files=deck.noise_files).plot
-    i_spice = (plot["v(ac0)"] - plot["v(sj0)"]) / DESIGN.values["R_N"]
+    # R_N runs from the Bessel output (no AC-coupling capacitor by default, issue 21 item 6)
+    i_spice = (plot["v(bo0)"] - plot["v(sj0)"]) / DESIGN.values["R_N"]
     n = int(np.ceil(t_end * DESIGN.theta / DESIGN.noise_ts)) + 2
     seq = noise_chain.dac_sequence(DESIGN, 5, 0, n)
     t, cur = noise_chain.chain_current(DESIGN.values, np.concatenate([[0.0], seq]), DESIGN.noise_ts)

@@ -146,7 +146,7 @@ def test_board_readme_quotes_the_design():
               f"C1 = {v['C'] * 1e9:g} nF", f"R1 = {v['R'] / 1e3:g} kOhm",
               f"R2 = R3 = {v['R_S'] / 1e3:g} kOhm", f"(I_0 = {DESIGN.i_delta * 1e6:.3g} uA)",
               f"R4 = {v['R_F'] / 1e3:g} kOhm", f"R5 = {v['R_N'] / 1e3:g} kOhm",
-              f"C4 = {v['C_AC'] * 1e6:g} uF", f"DAC at {1e-3 / DESIGN.noise_ts:g} kS/s",
+              f"DAC at {1e-3 / DESIGN.noise_ts:g} kS/s",
               f"({DESIGN.noise_dt ** -1:g} samples per tau_m)",
               f"corner at {DESIGN.spec.bessel_fc / DESIGN.noise_ts / 1e3:g} kHz",
               f"width {DESIGN.eps_volts * 1e3:.4g} mV", f"epsilon = {DESIGN.realised.epsilon:.3g}"]
