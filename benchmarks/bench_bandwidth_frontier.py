@@ -136,7 +136,7 @@ def main(argv=None) -> int:
         hold = mapping.noise_dt
         v0s = np.asarray(sample_stationary(mapping.model_effective, args.replicas, 3), dtype=float)
         smooths = ([float(s) for s in args.smoothing.split(",")] if args.smoothing
-                   else [exp.spec.smoothing])
+                   else [mapping.smoothing])
         rt = replica_time(exp)
         base = None
         if not args.no_ngspice:
@@ -162,7 +162,7 @@ def main(argv=None) -> int:
                                      replicas=args.replicas, t_end=args.t_end)
                     ct = (ngspice_cpu(exp, spec, hold, v0=exp.v0[0], replicas=args.replicas,
                                       t_end=args.t_end) / (args.replicas * args.t_end)
-                          if s != exp.spec.smoothing else base["transition"])
+                          if s != mapping.smoothing else base["transition"])
                     now = (rt["stationary"] * cs / (args.replicas * args.t_end)
                            + rt["transition"] * ct)
 

@@ -944,6 +944,8 @@ def simulate(model: Model, *, v0: float | ArrayLike | Literal["stationary"], t_e
         "model": model.as_dict(),
         "model_effective": model_eff.as_dict(),
         "circuit_spec": spec,
+        # the spec's unset values (smoothing, noise_dt) as chosen from the model, and why
+        "circuit_defaults": mapping.chosen,
         "circuit": mapping.table(),
         "seed": seed,
         "deck_seeds": seeds,

@@ -723,7 +723,8 @@ def rate_function_data(m: Model, stat: Ensemble, burn: float, tau: float | None 
 def _prov(exp: Experiment, ens: Ensemble, sizes: MemberSizes, seeds: dict) -> dict:
     return {"experiment": exp.name, "parameters": exp.model.as_dict(),
             "model_effective": exp.mapping().model_effective.as_dict(),
-            "circuit_spec": exp.spec.as_dict(), "seeds": seeds,
+            "circuit_spec": exp.spec.as_dict(), "circuit_defaults": exp.mapping().chosen,
+            "seeds": seeds,
             "replicas": {"stationary": sizes.stationary_replicas,
                          "transition": sizes.transition_replicas, "monte_carlo": sizes.mc_replicas},
             "ngspice_version": ens.meta.get("ngspice_version"),

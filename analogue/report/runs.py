@@ -175,6 +175,8 @@ class ExperimentRuns:
             "parameters": self.exp.model.as_dict(),
             "model_effective": self.model_effective.as_dict(),
             "circuit_spec": self.exp.spec.as_dict(),
+            # the spec's unset values as chosen from the model, and why (issue 20 item 5)
+            "circuit_defaults": self.exp.mapping().chosen,
             # the stationary runs' finer hold (plan.stationary_noise_dt), model units
             "stationary_noise_dt": self.stationary.meta.get("noise_dt"),
             "quick": self.quick,

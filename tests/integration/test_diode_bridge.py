@@ -31,7 +31,7 @@ def test_ideal_bridge_is_tanh(tmp_path):
     law = m.i_delta_total * np.tanh(v / (2 * m.emission * thermal_voltage()))
     assert np.max(np.abs(i - law)) < 1e-5 * m.i_delta_total
     # the emission coefficient realises the requested smoothing width in volts
-    assert 2 * m.emission * thermal_voltage() == pytest.approx(m.spec.smoothing * STICK_A02.velocity_scale * m.kappa)
+    assert 2 * m.emission * thermal_voltage() == pytest.approx(m.smoothing * STICK_A02.velocity_scale * m.kappa)
 
 
 @pytest.mark.parametrize("emission", [0.05, 1.0, 3.0])

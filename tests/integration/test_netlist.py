@@ -122,7 +122,8 @@ def base_doc():
     (lambda d: d["experiment"].update(histogram_times=[100.0]), "histogram_times"),
     (lambda d: d["experiment"].update(seed=-3), "seed"),
     (lambda d: d["circuit"].update(diode="1N4001"), "diode"),
-    (lambda d: d["model"].update(gamma=1e4), "smoothing"),
+    # a smoothing the user sets is kept and checked (unset, it is chosen to fit: issue 20)
+    (lambda d: (d["model"].update(gamma=1e4), d["circuit"].update(smoothing=0.02)), "smoothing"),
 ])
 def test_experiment_schema_errors_name_the_key(mutate, name):
     doc = base_doc()

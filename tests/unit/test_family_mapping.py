@@ -96,7 +96,8 @@ def test_stribeck_and_shot_values():
     (CUBIC, CircuitSpec(cubic_element="diode-network", cubic_branches=1), "cubic_branches"),
     (SPRING, CircuitSpec(time_scale=1e-4, inductor_q=5.0), "inductor_q"),
     (SHOT, CircuitSpec(shot_width=0.2), "shot_width"),
-    (STRIBECK.replace(stribeck=(1.0, 0.01)), CircuitSpec(coulomb="behavioural"), "smoothing"),
+    (STRIBECK.replace(stribeck=(1.0, 0.01)), CircuitSpec(coulomb="behavioural", smoothing=0.02),
+     "smoothing"),
 ])
 def test_bias_refused_naming_the_parameter(model, spec, name):
     with pytest.raises(ValueError, match=name):

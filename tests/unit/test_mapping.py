@@ -33,7 +33,9 @@ def test_round_trip_recovers_effective_model(model, spec):
 def test_smoothing_meets_request():
     for spec in SPECS[:4]:
         m = map_model(STICK_A02, spec)
-        assert m.smoothing_fraction == pytest.approx(spec.smoothing, rel=1e-9)
+        # the spec's smoothing, or (unset) the one chosen from the model
+        assert m.smoothing_fraction == pytest.approx(m.smoothing, rel=1e-9)
+        assert m.smoothing == (spec.smoothing if spec.smoothing is not None else 0.02)
     assert map_model(STICK_A02, CircuitSpec(coulomb="behavioural-sgn")).epsilon == 0.0
 
 
@@ -125,7 +127,9 @@ def test_table_rows_have_units_and_meanings():
 # ------------------------------------------------------------------ refusals
 def test_bias_from_smoothing_is_refused_unless_allowed():
     model = Model(tau_m=1.0, delta=0.7, a=0.2, gamma=100.0)
-    fine_noise = CircuitSpec(noise_dt=0.002)
+    # a smoothing the user sets is checked as before; unset, it is chosen to pass (issue 20)
+    fine_noise = CircuitSpec(noise_dt=0.002, smoothing=0.02)
+    assert map_model(model, CircuitSpec(noise_dt=0.002)).bias["smoothing"] <= 0.04
     with pytest.raises(ValueError, match="smoothing.*bias_tolerance"):
         map_model(model, fine_noise)
     m = map_model(model, fine_noise.replace(allow_bias=True))
@@ -156,7 +160,12 @@ def test_bias_from_noise_hold_is_refused_unless_allowed():
         map_model(STICK_A02, CircuitSpec(noise_dt=0.2))
     # weak noise in the stick regime: the peak at v = 0 relaxes in ~ gamma std^2 << tau_m
     with pytest.raises(ValueError, match="noise_dt.*t_rel"):
-        map_model(Model(1.0, 0.7, 0.2, 100.0), CircuitSpec(smoothing=0.01))
+        map_model(Model(1.0, 0.7, 0.2, 100.0), CircuitSpec(smoothing=0.01, noise_dt=0.01))
+    # unset, noise_dt is chosen from the model so that the same check passes
+    # (at 0.8 of bias_tolerance = 0.05)
+    chosen = map_model(Model(1.0, 0.7, 0.2, 100.0), CircuitSpec(smoothing=0.01))
+    assert chosen.bias["noise"] == pytest.approx(0.04, rel=1e-9)
+    assert chosen.noise_dt < 0.01 and "noise_dt" in chosen.chosen
     assert map_model(STICK_A02, CircuitSpec(noise_dt=0.2, allow_bias=True)).noise_correlation == pytest.approx(0.2)
 
 
@@ -355,12 +364,12 @@ def test_refusals_give_working_fixes():
     weak = Model(1.0, 0.7, 0.2, 1e3)
     # smoothing bias at weak noise -> lower smoothing below the stated value
     with pytest.raises(ValueError, match="smoothing.*lower smoothing below about") as exc:
-        map_model(weak, CircuitSpec(noise_dt=5e-4))
+        map_model(weak, CircuitSpec(noise_dt=5e-4, smoothing=0.02))
     s_fix = float(_re.search(r"below about ([0-9.e+-]+)", str(exc.value)).group(1))
     assert map_model(weak, CircuitSpec(noise_dt=5e-4, smoothing=0.9 * s_fix)).bias["smoothing"] <= 0.05
     # held-noise bias -> lower noise_dt below the stated value
     with pytest.raises(ValueError, match="noise_dt.*lower noise_dt below") as exc:
-        map_model(weak, CircuitSpec(smoothing=0.005))
+        map_model(weak, CircuitSpec(smoothing=0.005, noise_dt=0.01))
     n_fix = float(_re.search(r"lower noise_dt below ([0-9.e+-]+)", str(exc.value)).group(1))
     map_model(weak, CircuitSpec(smoothing=0.005, noise_dt=0.9 * n_fix))
     # reverse-voltage rating with automatic kappa -> raise smoothing above the stated value
