@@ -65,6 +65,7 @@ import numpy as np
 from .. import model as _model_module
 from ..model import Model
 from .. import checks
+from ..study.figure_layout import fig5_layout
 from ..study.settings import ReportSettings, report_settings_from_dict
 from .mapping import (FIXED_TRTOL, CircuitMapping, CircuitSpec, check_mapping_values,
                       check_spec_ranges, map_model)
@@ -332,7 +333,6 @@ def _check_figures(exp: Experiment, where: str) -> None:
     m = exp.model
     if not m.is_paper:
         return
-    from ..plots.paper_theory import fig5_layout
     from ..theory import weak_noise
     if m.regime == "stick":
         v0s = exp.v0[:2] if len(exp.v0) > 1 else (exp.v0[0], -exp.v0[0])

@@ -17,6 +17,9 @@ from pathlib import Path
 import numpy as np
 
 from ..model import Model
+# Fig. 5's layout is derived from the experiment's model in the study layer (the experiment
+# checks it when its file is loaded); re-exported here, where it was first.
+from ..study.figure_layout import FIG5_END_TAUS, FIG5_EXAMPLE_TAUS, FIG5_MARGIN, fig5_layout  # noqa: F401
 from .style import KIND_COLOURS, TIME, VELOCITY, new_figure, save
 
 __all__ = ["fig1_deterministic", "fig2_paths_stick", "fig3_paths_slip_up", "fig4_paths_slip_down",
@@ -129,41 +132,7 @@ def fig4_paths_slip_down(axes=None, tau_m=1.0, delta=0.7, a=1.2, points=FIG4_POI
 
 
 # ------------------------------------------------------------------------- Fig. 5
-# Fig. 5's times, in relaxation times tau_m after the stick time t_a(v0) of the panel: the
-# boundaries w, u open at t_a and then grow like e^{(t - t_a)/tau_m}, so the example paths
-# sit at t_a + 1.4 tau_m and the panel ends at t_a + 2.4 tau_m (3.0 and 4.0 for the paper's
-# panel (a): tau_m = 1, t_a+ = ln 5).  The example paths end |v0| * 0.4 beyond the stick band
-# (0.8 for the paper's v0 = 2).  Fixed times (t = 3) failed for a user's model whose t_a is
-# later (tau_m = 2, Delta = 0.5, a = 0.3: t_a+ = 2 ln 6 = 3.58; issue 20 item 1).
-FIG5_EXAMPLE_TAUS = 1.4
-FIG5_END_TAUS = 2.4
-FIG5_MARGIN = 0.4
-
-
-def fig5_layout(model: Model, v0: float) -> dict:
-    """What a Fig. 5 panel from ``v0`` draws, from the model alone: ``t_a`` (the stick time,
-    where the boundaries start), ``t_example`` (where the example paths end), ``t_max`` (the
-    panel's end), ``margin`` (how far beyond the stick band the direct examples end) and
-    ``v_lim`` (the velocity axis, symmetric, holding v0 and every example end).  Raises
-    ValueError outside the stick regime (no boundaries: :func:`weak_noise.boundaries`)."""
-    from ..theory import weak_noise
-    if not abs(model.a) <= model.delta:
-        raise ValueError(f"Fig. 5 needs the stick regime |a| <= Delta (boundaries w, u exist "
-                         f"only there), got a={model.a:g}, Delta={model.delta:g}")
-    t_a = float(model.stick_time(v0))
-    t_example = t_a + FIG5_EXAMPLE_TAUS * model.tau_m
-    t_max = t_a + FIG5_END_TAUS * model.tau_m
-    if v0 != 0:
-        margin = FIG5_MARGIN * abs(v0)
-    else:  # from rest: the band's own width sets the scale
-        b = weak_noise.boundaries(model, t_example, v0)
-        margin = FIG5_MARGIN * abs(float(b["w"]) - float(b["u"]))
-    ends = weak_noise.boundary_examples(model, t_example, v0, margin)
-    v_lim = 1.15 * max([abs(v0)] + [abs(x) for x in ends.values()])
-    return {"t_a": t_a, "t_example": t_example, "t_max": t_max, "margin": margin,
-            "v_lim": v_lim, "examples": ends}
-
-
+# (the panel's times and ranges: analogue.study.figure_layout.fig5_layout)
 def fig5_boundaries(axes=None, tau_m=1.0, delta=0.7, a=0.2, v0s=(2.0, -2.0), t_max=None,
                     t_end=None, margin=None):
     """Fig. 5: boundary lines w^pm (eq. (41)) and u^pm (eq. (45)) for a < Delta; between them the
