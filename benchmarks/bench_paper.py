@@ -1,6 +1,8 @@
 """The paper job on an empty store (issue 10, item 5): wall time, CPU seconds (this process's
-children: the ``analogue paper`` process and its ngspice processes) and the phase breakdown
-from ``metrics.json`` provenance.
+children: the ``analogue paper`` process and its ngspice processes), the phase breakdown
+from ``metrics.json`` provenance, and the critical path (issue 22, item 1: the job's wall
+time with unlimited cores, its longest chain of dependent phases) as a ratio to the wall
+time of the same run.
 
     .venv/bin/python benchmarks/bench_paper.py            # quick paper
     .venv/bin/python benchmarks/bench_paper.py --full     # the full paper
@@ -162,6 +164,8 @@ def run_paper(code: Path, full: bool, store: Path | None = None) -> dict:
             "load_1min": (load0, load1), "report_wall_s": prov["wall_time_s"],
             "paper_wall_s": prov.get("paper_wall_time_s"),
             "beyond_wall_s": prov.get("beyond_wall_time_s"),
+            "critical_path_s": prov.get("critical_path_s"),
+            "critical_path": prov.get("critical_path"),
             "phases": by_thread, "timeline": prov["phases"], "summary": metrics["summary"],
             "sampled": sampled}
 
@@ -176,6 +180,17 @@ def _print(r: dict) -> None:
           f"load average (1 min) {r['load_1min'][0]:.2f} -> {r['load_1min'][1]:.2f}; "
           f"{r['summary']['comparisons']} comparisons, {r['summary']['within_budget']} within "
           f"budget, {r['summary']['failed_sections']} failed sections")
+    if r.get("critical_path_s") is not None:
+        # the job with unlimited cores (analogue.report.critical_path: circuit runs as their
+        # calibrations plus longest deck), against the same run's wall time
+        cp = r["critical_path_s"]
+        print(f"critical path (unlimited cores) {cp:.1f} s; report wall {r['report_wall_s']:.1f} s"
+              f" (ratio critical path / wall {cp / r['report_wall_s']:.2f}), process wall "
+              f"{r['wall_s']:.1f} s (ratio {cp / r['wall_s']:.2f}; the imports are before the "
+              f"report's clock)")
+        print("chain: " + " -> ".join(
+            c["phase"] + (f" ({c['experiment']})" if c["experiment"] else "")
+            + f" {c['seconds']:.1f} s" for c in r["critical_path"]))
     for what, smp in r["sampled"].items():
         if smp is not None:
             print(f"sampled ({what}, to {smp['until_s']:.1f} s): CPU {smp['cpu_s']:.1f} s "

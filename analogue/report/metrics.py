@@ -115,7 +115,7 @@ def validate_metrics(obj: dict) -> None:
         if k not in prov:
             raise ValueError(f"provenance lacks {k!r}")
     # optional (added keys: older documents lack them): seconds from the start, or null
-    for k in ("paper_wall_time_s", "beyond_wall_time_s"):
+    for k in ("paper_wall_time_s", "beyond_wall_time_s", "critical_path_s"):
         v = prov.get(k)
         if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float))
                               or not v >= 0):

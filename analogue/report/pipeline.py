@@ -36,6 +36,7 @@ from ..circuit.experiments import (FIG1_EXPERIMENTS,
                                    load_experiment, standard_circuit)
 from . import figures, prose
 from .budget import terms_above_se_text
+from .critical_path import critical_path_text, report_critical_path
 from .comparisons import BandwidthTerms, ExperimentAnalysis, analyse, bandwidth_terms
 from .theory_curves import ExperimentTheory, experiment_theory, figure_curves
 from .html import Figure, Section, Table, write_page
@@ -776,6 +777,8 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
     provs = {r.exp.name: r.provenance() for r in all_runs}
     provs.update({a.exp.name: a.provenance for a in member_analyses})
     software = _software()
+    circuit_timing = {k: p.get("timing") for k, p in provs.items() if p.get("timing")}
+    crit = report_critical_path(phases.items, circuit_timing)
     provenance: dict = {
         "parameters": {k: p["parameters"] for k, p in provs.items()},
         "model_effective": {k: p["model_effective"] for k, p in provs.items()},
@@ -789,6 +792,12 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
         "tolerances": {k: p.get("tolerances") for k, p in provs.items()},
         "deck_size": {k: p.get("deck_size") for k, p in provs.items()},
         "wall_time_s": wall,
+        # the wall time with unlimited cores: the longest chain of dependent phases, each
+        # circuit run counted as its calibrations plus its longest deck (issue 22, item 1;
+        # analogue.report.critical_path), and that chain
+        "critical_path_s": crit["critical_path_s"],
+        "critical_path": crit["chain"],
+        "circuit_timing": circuit_timing,
         # when the paper's chapters (its experiments, Fig. 1, the open question) were
         # complete, from the start; the chapter "Beyond the paper" runs after their circuit
         # runs, beside their comparisons and figures
@@ -806,7 +815,10 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
                          "end": [round(x, 2) for x in os.getloadavg()]},
     }
     prov_rows = [[k, json.dumps(v, default=str)[:400]] for k, v in provenance.items()
-                 if k not in ("deck_hashes", "phases")]
+                 if k not in ("deck_hashes", "phases", "critical_path")]
+    prov_rows.insert(next((i + 1 for i, r in enumerate(prov_rows) if r[0] == "critical_path_s"),
+                          len(prov_rows)),
+                     ["critical path (unlimited cores)", critical_path_text(crit, wall)])
     sections.append(Section("Provenance", [
         "Everything needed to reproduce this report: model parameters, seeds, ngspice version, "
         "the sha256 of every deck (full list in metrics.json), software versions, wall time."],

@@ -135,6 +135,10 @@ class ExperimentRuns:
                                 # prefix window (stationary_check_plan)
     wall_time: float = 0.0
     seeds: dict = field(default_factory=dict)
+    # seconds before the decks (tolerance and deck-size calibrations) and the longest deck
+    # run here (0.0 when all came from the store): the runs' time with unlimited cores
+    # (analogue.report.critical_path)
+    timing: dict = field(default_factory=dict)
 
     def check_pair(self, kind: str) -> tuple[Ensemble, Ensemble]:
         """``(check, nominal)`` on the same rows and times, row i of both driven by the same
@@ -188,6 +192,7 @@ class ExperimentRuns:
             "tolerances": {k: e.meta.get("tolerances") for k, e in ens.items()},
             "deck_size": {k: e.meta.get("deck_size") for k, e in ens.items()},
             "wall_time_s": self.wall_time,
+            "timing": self.timing,
         }
 
 
@@ -209,7 +214,8 @@ def _noise_free_run(exp: Experiment, seed: int, kw: dict) -> Ensemble:
             "tolerances": {"reltol": mapping.reltol, "trtol": mapping.trtol,
                            "method": mapping.method,
                            "source": "user" if not exp.spec.unset_tolerances else "fixed"},
-            **{k: info[k] for k in ("ngspice_version", "store_keys", "from_store", "wall_time")
+            **{k: info[k] for k in ("ngspice_version", "store_keys", "from_store", "wall_time",
+                                    "ran_deck_wall_times")
                if k in info}}
     return Ensemble(times, v, x, meta)
 
@@ -403,7 +409,10 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
                                      replicas_per_deck=trans_deck))
              for i, v0 in enumerate(exp.v0)]
     jobs.append(("noise_free", lambda ex: _noise_free_run(exp, seeds["noise_free"], {**kw, **ex})))
+    t_jobs = time.perf_counter()
     done = _run_jobs(jobs, kw)
+    ran = [float(w) for e in done.values() for w in e.meta.get("ran_deck_wall_times") or ()
+           if w is not None]
 
     transition = {}
     for i, v0 in enumerate(exp.v0):
@@ -422,5 +431,8 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
     return ExperimentRuns(exp=exp, settings=settings, quick=opts.quick, transition=transition,
                           stationary=stationary, noise_free=done["noise_free"],
                           check_transition=check_transition, check_stationary=check_stationary,
-                          wall_time=time.perf_counter() - t_start, seeds=seeds)
+                          wall_time=time.perf_counter() - t_start, seeds=seeds,
+                          timing={"before_decks_s": round(t_jobs - t_start, 3),
+                                  "longest_deck_s": round(max(ran, default=0.0), 3),
+                                  "decks_run": len(ran)})
 

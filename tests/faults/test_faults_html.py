@@ -90,6 +90,14 @@ def test_failing_experiments_keep_finished_work_and_are_recorded(tmp_path, monke
     assert all("ngspice failed" in f["error"] for f in failed.values())
     from analogue.report.metrics import validate_metrics
     validate_metrics(metrics)
+    # the job's critical path (issue 22 item 1) is recorded for a failed report too: a chain
+    # of its recorded phases (here all of them about 0 s), no longer than the job
+    prov = metrics["provenance"]
+    assert 0 <= prov["critical_path_s"] <= prov["wall_time_s"]
+    assert prov["critical_path"] and prov["circuit_timing"] == {}
+    assert prov["critical_path_s"] == pytest.approx(
+        sum(c["seconds"] for c in prov["critical_path"]), abs=1e-2)
+    assert "critical path (unlimited cores)" in html
 
 
 def test_a_failing_figure_keeps_the_other_figures(tmp_path, monkeypatch):

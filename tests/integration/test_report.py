@@ -108,6 +108,17 @@ def test_quick_paper_writes_valid_report(paper_report):
     kinds = {c["theory_kind"] for c in metrics["comparisons"]}
     assert kinds == {"exact", "weak-noise"}
     prov = metrics["provenance"]
+    # the wall time with unlimited cores (issue 22 item 1): a chain of the job's own phases,
+    # no longer than the job; every experiment's circuit runs timed (calibrations, longest
+    # deck, which ran on an empty store)
+    assert 0 < prov["critical_path_s"] <= prov["wall_time_s"]
+    assert prov["critical_path"] and prov["critical_path"][-1]["phase"] == "figures and page"
+    assert sum(c["seconds"] for c in prov["critical_path"]) == pytest.approx(
+        prov["critical_path_s"], abs=1e-2)
+    assert set(prov["circuit_timing"]) == set(PAPER_EXPERIMENTS)
+    assert all(t["longest_deck_s"] > 0 and t["decks_run"] > 0
+               for t in prov["circuit_timing"].values())
+    assert "critical path (unlimited cores)" in (out / "index.html").read_text()
     assert re.fullmatch(r"\d+(\.\d+)*", str(prov["ngspice_version"]))
     # every run lists the sha256 of each of its decks
     runs = [h for per_exp in prov["deck_hashes"].values() for h in per_exp.values()]

@@ -111,6 +111,12 @@ def test_second_call_runs_no_ngspice(tmp_path, counted):
     second = analogue.simulate(STICK_A02, store=tmp_path, **KW)
     assert counted["runs"] == 4  # nothing ran
     assert second.meta["from_store"] == 4 and second.meta["ran"] == 0
+    # the wall times of the decks this call ran (the report's critical path): none from the
+    # store, while deck_wall_times keeps every deck's (the stored ones' from their run)
+    assert len(first.meta["ran_deck_wall_times"]) == 4
+    assert all(w > 0 for w in first.meta["ran_deck_wall_times"])
+    assert second.meta["ran_deck_wall_times"] == []
+    assert len(second.meta["deck_wall_times"]) == 4
     np.testing.assert_array_equal(first.v, second.v)
     np.testing.assert_array_equal(first.x, second.x)
     assert second.meta["store_keys"] == first.meta["store_keys"]

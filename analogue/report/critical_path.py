@@ -1,0 +1,160 @@
+"""The report job's critical path (issue 22, item 1): the wall time it would take with
+unlimited cores, i.e. the longest chain of dependent work, computed from the phase timeline
+the report records (``provenance["phases"]``, :class:`analogue.report.pipeline._Phases`).
+
+Pure functions over the recorded timeline: :func:`longest_chain` on any dependency graph,
+:func:`report_critical_path` with the report's dependencies (as :func:`analogue.report.
+pipeline._build` waits on its futures):
+
+- roots (need nothing): an experiment's ``exact theory`` and ``bandwidth term``, the ``open
+  question``, its ``circuit runs``, each ``family member`` (its wait for the paper's chapters
+  is a choice of schedule on few cores, not a data dependency);
+- ``theory curves`` (e) <- ``circuit runs`` (e);
+- ``comparisons`` (e) <- ``circuit runs``, ``exact theory`` and ``bandwidth term`` (e);
+- ``figures`` (e) <- ``comparisons`` and ``theory curves`` (e);
+- ``figures: open question`` <- ``open question``;  ``figures: Fig. 1`` <- every
+  ``circuit runs``;
+- ``figures and page`` <- everything else.
+
+The ``waiting for ...`` phases are not work and are left out.  With unlimited cores an
+experiment's circuit runs take their work before the decks (tolerance and deck-size
+calibrations) plus their longest single deck (``circuit`` timing recorded by
+:func:`analogue.report.runs.run_experiment_runs`); without that record, or where it exceeds
+the phase, the phase's own duration.  A family member's phase counts whole (its decks are
+not recorded apart): an upper bound for its share.  Every duration is a measured one on the
+machine that ran the job, so the result is that machine's per-core speed with unlimited
+cores, not a prediction for another machine.
+"""
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+#: phases that wait rather than work (excluded from the graph)
+WAITING_PREFIX = "waiting for"
+
+CIRCUIT = "circuit runs"
+THEORY = "exact theory"
+BANDWIDTH = "bandwidth term (held/white Monte Carlo)"
+CURVES = "theory curves"
+COMPARISONS = "comparisons"
+FIGURES = "figures"
+OPEN_QUESTION = "open question (exact rate functions)"
+OPEN_QUESTION_FIG = "figures: open question"
+FIG1 = "figures: Fig. 1"
+PAGE = "figures and page"
+
+
+def longest_chain(nodes: Mapping) -> tuple[float, list]:
+    """``(length, chain)`` of the longest path through a dependency graph.
+
+    ``nodes``: key -> ``(seconds, deps)``, deps an iterable of keys (a key absent from
+    ``nodes`` is ignored).  Length is the largest sum of seconds along a chain in which each
+    node depends on the one before; ``chain`` lists its keys, first to last.  Raises
+    ValueError on a cycle or a negative duration."""
+    finish: dict = {}
+    best_dep: dict = {}
+    state: dict = {}
+
+    def visit(k) -> float:
+        if state.get(k) == 2:
+            return finish[k]
+        if state.get(k) == 1:
+            raise ValueError(f"the dependency graph has a cycle through {k!r}")
+        state[k] = 1
+        seconds, deps = nodes[k]
+        if not seconds >= 0:
+            raise ValueError(f"phase {k!r} has duration {seconds!r}: must be >= 0")
+        start, prev = 0.0, None
+        for d in deps:
+            if d in nodes and d != k:
+                f = visit(d)
+                if prev is None or f > start:
+                    start, prev = f, d
+        finish[k] = start + float(seconds)
+        best_dep[k] = prev
+        state[k] = 2
+        return finish[k]
+
+    if not nodes:
+        return 0.0, []
+    for k in nodes:
+        visit(k)
+    end = max(nodes, key=lambda k: finish[k])
+    chain = []
+    k = end
+    while k is not None:
+        chain.append(k)
+        k = best_dep[k]
+    return finish[end], chain[::-1]
+
+
+def circuit_unlimited_s(phase_seconds: float, timing: Mapping | None) -> float:
+    """An experiment's circuit runs with unlimited cores: the work before its decks plus its
+    longest deck run in this job (0 when every deck came from the store), at most the
+    phase's measured duration; the phase's duration without a timing record."""
+    if not timing:
+        return phase_seconds
+    before = timing.get("before_decks_s")
+    longest = timing.get("longest_deck_s")
+    if before is None or longest is None:
+        return phase_seconds
+    return min(phase_seconds, float(before) + float(longest))
+
+
+def report_graph(phases: Sequence[Mapping], circuit: Mapping | None = None) -> dict:
+    """The report's dependency graph (module docstring) from its phase timeline: key
+    ``(phase, experiment)`` -> ``(seconds, deps)``.  A phase recorded twice under one key
+    (none today) counts its total.  ``circuit``: experiment -> its circuit timing record."""
+    circuit = circuit or {}
+    secs: dict = {}
+    for p in phases:
+        if p["phase"].startswith(WAITING_PREFIX):
+            continue
+        key = (p["phase"], p.get("experiment"))
+        secs[key] = secs.get(key, 0.0) + float(p["seconds"])
+    for key in list(secs):
+        if key[0] == CIRCUIT:
+            secs[key] = circuit_unlimited_s(secs[key], circuit.get(key[1]))
+    runs = [k for k in secs if k[0] == CIRCUIT]
+    nodes: dict = {}
+    for key, s in secs.items():
+        phase, exp = key
+        if phase == CURVES:
+            deps: list = [(CIRCUIT, exp)]
+        elif phase == COMPARISONS:
+            deps = [(CIRCUIT, exp), (THEORY, exp), (BANDWIDTH, exp)]
+        elif phase == FIGURES:
+            deps = [(COMPARISONS, exp), (CURVES, exp)]
+        elif phase == OPEN_QUESTION_FIG:
+            deps = [(OPEN_QUESTION, None)]
+        elif phase == FIG1:
+            deps = runs
+        elif phase == PAGE:
+            deps = [k for k in secs if k[0] != PAGE]
+        else:
+            deps = []
+        nodes[key] = (s, deps)
+    return nodes
+
+
+def report_critical_path(phases: Sequence[Mapping], circuit: Mapping | None = None) -> dict:
+    """``{"critical_path_s": seconds, "chain": [{"phase", "experiment", "seconds"}, ...]}``:
+    the report job's wall time with unlimited cores (module docstring), from its recorded
+    phases and circuit timings."""
+    nodes = report_graph(phases, circuit)
+    length, chain = longest_chain(nodes)
+    return {"critical_path_s": round(length, 3),
+            "chain": [{"phase": k[0], "experiment": k[1], "seconds": round(nodes[k][0], 3)}
+                      for k in chain]}
+
+
+def _step(c: Mapping) -> str:
+    where = f" ({c['experiment']})" if c.get("experiment") else ""
+    return f"{c['phase']}{where} {c['seconds']:.1f} s"
+
+
+def critical_path_text(crit: Mapping, wall_s: float) -> str:
+    """The page's line: the critical path against the wall time, and its chain."""
+    ratio = (f" ({crit['critical_path_s'] / wall_s:.0%} of the wall time {wall_s:.1f} s)"
+             if wall_s > 0 else "")
+    return f"{crit['critical_path_s']:.1f} s{ratio}: " + " -> ".join(map(_step, crit["chain"]))

@@ -1,0 +1,112 @@
+"""The report's critical path (issue 22, item 1): longest chains on synthetic timelines whose
+answers are worked out by hand, and the report's dependencies."""
+import pytest
+
+from analogue.report.critical_path import (critical_path_text, longest_chain,
+                                           report_critical_path)
+
+
+def test_a_chain_sums_its_durations():
+    nodes = {"a": (1.0, []), "b": (2.5, ["a"]), "c": (0.5, ["b"])}
+    length, chain = longest_chain(nodes)
+    assert length == pytest.approx(4.0)    # 1 + 2.5 + 0.5
+    assert chain == ["a", "b", "c"]
+
+
+def test_fork_join_takes_the_longer_branch():
+    # a (1) forks into b (3) and c (5), joined by d (2): 1 + 5 + 2 = 8
+    nodes = {"a": (1.0, []), "b": (3.0, ["a"]), "c": (5.0, ["a"]), "d": (2.0, ["b", "c"])}
+    length, chain = longest_chain(nodes)
+    assert length == pytest.approx(8.0)
+    assert chain == ["a", "c", "d"]
+
+
+def test_parallel_branches_the_longest_wins():
+    # x1 -> x2 = 4 + 4 = 8; y1 -> y2 -> y3 = 3 + 3 + 3 = 9; z = 8.5 alone
+    nodes = {"x1": (4.0, []), "x2": (4.0, ["x1"]), "y1": (3.0, []), "y2": (3.0, ["y1"]),
+             "y3": (3.0, ["y2"]), "z": (8.5, [])}
+    length, chain = longest_chain(nodes)
+    assert length == pytest.approx(9.0)
+    assert chain == ["y1", "y2", "y3"]
+
+
+def test_unknown_dependencies_are_ignored_and_empty_graph_is_zero():
+    assert longest_chain({"a": (2.0, ["gone"])}) == (2.0, ["a"])
+    assert longest_chain({}) == (0.0, [])
+
+
+def test_cycle_and_negative_duration_are_errors():
+    with pytest.raises(ValueError, match="cycle"):
+        longest_chain({"a": (1.0, ["b"]), "b": (1.0, ["a"])})
+    with pytest.raises(ValueError, match="duration"):
+        longest_chain({"a": (-1.0, [])})
+
+
+def _ph(phase, exp, seconds, thread="main"):
+    return {"phase": phase, "experiment": exp, "thread": thread, "start_s": 0.0,
+            "seconds": seconds}
+
+
+def _timeline():
+    return [
+        _ph("exact theory", "e1", 6.0, "theory"),
+        _ph("bandwidth term (held/white Monte Carlo)", "e1", 1.0, "theory"),
+        _ph("circuit runs", "e1", 20.0, "circuit"),
+        _ph("theory curves", "e1", 3.0, "theory"),
+        _ph("waiting for theory", "e1", 50.0),          # not work: left out
+        _ph("comparisons", "e1", 2.0),
+        _ph("figures", "e1", 1.5),
+        _ph("exact theory", "e2", 1.0, "theory"),
+        _ph("bandwidth term (held/white Monte Carlo)", "e2", 1.0, "theory"),
+        _ph("circuit runs", "e2", 4.0, "circuit"),
+        _ph("comparisons", "e2", 1.0),
+        _ph("theory curves", "e2", 0.5, "theory"),
+        _ph("figures", "e2", 1.0),
+        _ph("open question (exact rate functions)", None, 9.0, "theory"),
+        _ph("figures: open question", None, 1.0),
+        _ph("figures: Fig. 1", None, 0.5),
+        _ph("family member (circuit and theory)", "m", 12.0, "members"),
+        _ph("waiting for family members", "m", 30.0),
+        _ph("figures and page", None, 2.0),
+    ]
+
+
+def test_report_path_without_deck_times_uses_the_phases():
+    # e1: runs 20 -> curves 3 (> comparisons 2, which also waits for theory 6 < 20)
+    # -> figures 1.5 -> page 2 = 26.5; open question 9 + 1 + 2 = 12; member 12 + 2 = 14
+    crit = report_critical_path(_timeline())
+    assert crit["critical_path_s"] == pytest.approx(26.5)
+    assert [(c["phase"], c["experiment"]) for c in crit["chain"]] == [
+        ("circuit runs", "e1"), ("theory curves", "e1"), ("figures", "e1"),
+        ("figures and page", None)]
+
+
+def test_report_path_counts_a_deck_batch_as_its_longest_deck():
+    # e1's runs with unlimited cores: 1 s of calibrations + its 4 s longest deck = 5 s; then
+    # e1: max(runs 5, theory 6, band 1) + comparisons 2 = 8, max(8, 5 + 3) + figures 1.5
+    # + page 2 = 11.5; the open question 12 and the member 14 are now longer: 14
+    timing = {"e1": {"before_decks_s": 1.0, "longest_deck_s": 4.0},
+              "e2": {"before_decks_s": 0.5, "longest_deck_s": 30.0}}  # capped at its 4 s phase
+    crit = report_critical_path(_timeline(), timing)
+    assert crit["critical_path_s"] == pytest.approx(14.0)
+    assert [c["phase"] for c in crit["chain"]] == ["family member (circuit and theory)",
+                                                   "figures and page"]
+    without_member = [p for p in _timeline() if p["experiment"] != "m"]
+    crit = report_critical_path(without_member, timing)
+    assert crit["critical_path_s"] == pytest.approx(12.0)   # open question 9 + 1 + page 2
+    # the e1 chain through the exact theory: 6 + 2 + 1.5 + 2 = 11.5 < 12
+    timing["e1"]["longest_deck_s"] = 3.0   # runs 4: curves end at 7, comparisons at 8
+    slow_theory = [dict(p, seconds=10.0) if p["phase"] == "exact theory"
+                   and p["experiment"] == "e1" else p for p in without_member]
+    crit = report_critical_path(slow_theory, timing)
+    assert crit["critical_path_s"] == pytest.approx(15.5)   # 10 + 2 + 1.5 + 2
+    assert [c["phase"] for c in crit["chain"]] == ["exact theory", "comparisons", "figures",
+                                                   "figures and page"]
+
+
+def test_fig1_waits_for_every_circuit_run():
+    tl = [_ph("circuit runs", "a", 3.0), _ph("circuit runs", "b", 7.0),
+          _ph("figures: Fig. 1", None, 1.0), _ph("figures and page", None, 0.5)]
+    crit = report_critical_path(tl)
+    assert crit["critical_path_s"] == pytest.approx(8.5)     # 7 + 1 + 0.5
+    assert "8.5 s (50% of the wall time 17.0 s)" in critical_path_text(crit, 17.0)
