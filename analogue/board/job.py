@@ -32,6 +32,7 @@ import numpy as np
 
 from ..circuit import ngspice as ng
 from ..circuit.experiments import load_experiment
+from ..ensemble import Ensemble
 from ..report.metrics import validate_metrics
 from ..study.seeds import SeedPlan
 from ..theory.exact import rate_function, sample_stationary, stationary_moments
@@ -186,8 +187,16 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
     t0 = _time.perf_counter()
     v0_mc = v0[:st.mc_replicas]
     fn_mc = budget.observables_fn(model, burn_in=st.burn_in, threshold=thr, taus=())
-    ref = fn_mc(run_board(design, nominal, v0=v0_mc, t_end=st.mc_t_end, sample_dt=SAMPLE_DT,
-                          seed=seed, store=store, workers=workers))
+    if vendor is None and st.mc_replicas <= st.replicas and st.mc_t_end <= st.t_end:
+        # the nominal reference is the nominal run's first mc_replicas over its first mc_t_end:
+        # the same v0 and the same DAC sequences (a shorter sequence is a prefix of the
+        # longer), so a separate ngspice run of it only repeated that work
+        k_mc = int(np.searchsorted(ens.t, st.mc_t_end + 1e-9))
+        ref = fn_mc(Ensemble(ens.t[:k_mc], ens.v[:st.mc_replicas, :k_mc],
+                             ens.x[:st.mc_replicas, :k_mc], ens.meta))
+    else:
+        ref = fn_mc(run_board(design, nominal, v0=v0_mc, t_end=st.mc_t_end, sample_dt=SAMPLE_DT,
+                              seed=seed, store=store, workers=workers))
     ndir = noise_directory(store)
     exact_req = theory_observables(model, 0.0, thr)
     boards = []
