@@ -20,7 +20,6 @@ from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy import integrate
 
 __all__ = ["flow", "stick_time", "NoiseFreeMember"]
 
@@ -78,6 +77,9 @@ def _leave_direction(model: NoiseFreeMember, x: float) -> float:
 def _segments(model: NoiseFreeMember, v0: float, x0: float, t_end: float
               ) -> Iterator[tuple[float, float, tuple[str, Any]]]:
     """Yield (t_start, t_stop, dense(t) -> (v, x) or None for rest at x) up to t_end."""
+    # scipy where it is used: `import analogue` (which loads this module with the model) loads
+    # no scipy (tests/unit/test_startup_imports.py, issue 22 item 3)
+    from scipy import integrate
     t0, v, x = 0.0, float(v0), float(x0)
     smooth = model.epsilon > 0
     scale = max(abs(v0), model.tau_m * (abs(model.a) + model.static_friction), 1e-300)
