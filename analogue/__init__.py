@@ -4,6 +4,32 @@ Public entry points: :class:`Model`, :class:`Ensemble`, :func:`simulate` (the ci
 ngspice), :func:`open_ensemble` (netCDF files of ``Ensemble.to_netcdf`` / ``analogue export``),
 :func:`load_runs` (an experiment's circuit runs by role), the theory packages :mod:`analogue.theory.weak_noise` and
 :mod:`analogue.theory.exact`, and the estimators in :mod:`analogue.estimators`.
+
+Where things live (layers, lowest first; an import only points down,
+``tests/unit/test_import_layers.py`` checks it):
+
+==========================  ============================================================
+foundations                 ``checks`` (argument checks), ``cores`` (usable CPUs), ``files``
+                            (atomic UTF-8 writes), ``noise_free`` (deterministic motion),
+                            ``netcdf_layout``, ``paper`` (the paper's parameters)
+model and data              ``model`` (:class:`Model`, the family's variants), ``ensemble``
+                            (:class:`Ensemble`, simulated paths with provenance)
+theory                      ``theory.weak_noise*`` (the paper's gamma -> inf results),
+                            ``theory.exact`` / ``stationary`` / ``propagation`` /
+                            ``exact_grid`` (Fokker-Planck), ``work_statistics`` (tilted
+                            generator), ``family`` / ``kolmogorov_feller`` (family members,
+                            shot noise), ``friction_law`` (any odd friction law, real diodes),
+                            ``spectrum``, ``first_passage``, ``bias_transport``
+estimators                  ``estimators.*``: densities, stationary moments, work, spectra,
+                            first passage, jackknife/resampling, with standard errors
+runs                        ``montecarlo`` (SDE reference), ``circuit.*`` (mapping, decks,
+                            ngspice, the run store, :func:`simulate`), ``data`` (netCDF)
+study                       ``study.*`` (settings, seeds, the observable catalogue, figure
+                            layout), ``circuit.experiments`` (TOML experiments)
+pages                       ``report.*`` (runs, comparisons, budgets, figures, the page),
+                            ``plots.*``, ``board.*`` (a buildable board), ``export``
+command line                ``cli``
+==========================  ============================================================
 """
 from .model import Model, MechanicalParameters, ShotNoise
 from .ensemble import Ensemble
