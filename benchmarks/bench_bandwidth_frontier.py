@@ -6,7 +6,7 @@ divisor ``k`` (the stationary runs hold the noise for ``noise_dt / k``,
 ``[report] stationary_hold_divisor``; the transition runs keep ``noise_dt``) it prints
 
 - the budget's bandwidth term of every comparison (``|d| + 2 SE(d)`` from the held/white
-  Monte Carlo pair on the report's seeds, :func:`analogue.report.budget.held_noise_pair`),
+  Monte Carlo pair on the report's seeds, :func:`analogue.study.budget.held_noise_pair`),
   in units of the circuit's statistical error at full size.  That error is estimated from
   the white Monte Carlo run of the same pair (delete-a-group jackknife over replicas),
   scaled by ``sqrt(n_mc / n_circuit)`` to the report's replica count: the circuit is that
@@ -17,7 +17,7 @@ divisor ``k`` (the stationary runs hold the noise for ``noise_dt / k``,
   relative to ``k = 1`` (the hold before the stationary holds were refined), and the cost of
   the full report's runs relative to ``k = 1``: each run kind weighted by its replica-time
   in the full report (checks at 5x the nominal cost per unit time, as in
-  :mod:`analogue.report.runs`) times its measured CPU per replica-time.
+  :mod:`analogue.study.runs`) times its measured CPU per replica-time.
 
 The last lines sum the report cost over the experiments (the paper: the goal is at most 1.25x).
 
@@ -38,9 +38,9 @@ from analogue import simulate
 from analogue.circuit.experiments import load_experiment, standard_circuit
 from analogue.circuit.mapping import map_model
 from analogue.estimators.resampling import jackknife, jackknife_difference
-from analogue.report.budget import SE_MULTIPLIER, held_noise_pair
-from analogue.report.comparisons import MC_REPLICAS, MC_STATIONARY_REPLICAS
-from analogue.report.theory_curves import stationary_taus
+from analogue.study.budget import SE_MULTIPLIER, held_noise_pair
+from analogue.study.comparisons import MC_REPLICAS, MC_STATIONARY_REPLICAS
+from analogue.study.theory_curves import stationary_taus
 from analogue.study.catalogue import StationaryValues, transition_values
 from analogue.study.seeds import SeedPlan
 from analogue.theory.exact import sample_stationary

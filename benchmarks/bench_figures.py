@@ -45,10 +45,10 @@ def cpu_seconds() -> float:
 def build_analyses(names, quick: bool, store: Path | None) -> list:
     """(runs, analysis) per experiment, as the report builds them (runs from the store)."""
     from analogue.circuit.experiments import load_experiment, standard_circuit
-    from analogue.report.comparisons import analyse
+    from analogue.study.comparisons import analyse
     from analogue.report.plan import RunOptions
-    from analogue.report.runs import run_experiment_runs
-    from analogue.report.theory_curves import experiment_theory, figure_curves
+    from analogue.study.runs import run_experiment_runs
+    from analogue.study.theory_curves import experiment_theory, figure_curves
 
     opts = RunOptions(quick=quick, progress=False, store=store)
     out = []

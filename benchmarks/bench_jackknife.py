@@ -14,10 +14,10 @@ import sys
 import time
 from dataclasses import asdict
 from pathlib import Path
-from analogue.report.runs import run_experiment_runs
+from analogue.study.runs import run_experiment_runs
 from analogue.report.plan import RunOptions
-from analogue.report.comparisons import analyse
-from analogue.report.theory_curves import experiment_theory
+from analogue.study.comparisons import analyse
+from analogue.study.theory_curves import experiment_theory
 from analogue.circuit.experiments import load_experiment, standard_circuit
 from analogue.estimators import resampling as R
 

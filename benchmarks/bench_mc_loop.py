@@ -1,6 +1,6 @@
 """Benchmark of the time-stepped SDE loop (``analogue.montecarlo._stepped``) where the report
 spends it: the held/white noise pair of the bandwidth budget term
-(:func:`analogue.report.budget.held_noise_pair` -> ``simulate_sde_held_pair``), old against new,
+(:func:`analogue.study.budget.held_noise_pair` -> ``simulate_sde_held_pair``), old against new,
 side by side (not a test).
 
 "old" is ``analogue/montecarlo.py`` as of a git ref (``--old-ref``, default ``085af38``, the
@@ -40,7 +40,7 @@ from bench_report_runs import old_module  # noqa: E402
 
 from analogue import montecarlo  # noqa: E402
 from analogue.circuit.experiments import load_experiment  # noqa: E402
-from analogue.report.comparisons import MC_REPLICAS, MC_STATIONARY_REPLICAS  # noqa: E402
+from analogue.study.comparisons import MC_REPLICAS, MC_STATIONARY_REPLICAS  # noqa: E402
 
 
 def cpu_seconds() -> float:

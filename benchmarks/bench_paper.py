@@ -181,7 +181,7 @@ def _print(r: dict) -> None:
           f"{r['summary']['comparisons']} comparisons, {r['summary']['within_budget']} within "
           f"budget, {r['summary']['failed_sections']} failed sections")
     if r.get("critical_path_s") is not None:
-        # the job with unlimited cores (analogue.report.critical_path: circuit runs as their
+        # the job with unlimited cores (analogue.study.critical_path: circuit runs as their
         # calibrations plus longest deck), against the same run's wall time
         cp = r["critical_path_s"]
         print(f"critical path (unlimited cores) {cp:.1f} s; report wall {r['report_wall_s']:.1f} s"

@@ -1,7 +1,7 @@
 """Benchmark of the report's circuit runs (issue 10): ``run_experiment_runs`` for the paper's
 experiments at the ``--quick`` size, old against new, side by side (not a test).
 
-"old" is ``analogue/report/runs.py`` and ``analogue/circuit/deck_size.py`` as of a git ref
+"old" is ``analogue/study/runs.py`` and ``analogue/circuit/deck_size.py`` as of a git ref
 (``--old-ref``, default ``main``; before issue 10's run scheduling: one ``simulate`` call after
 another, the stationary check over the whole run, the deck-size cost model of one-replica
 decks); "new" is the checkout's.  Each runs on its own empty run store (calibrations included), so
@@ -10,7 +10,7 @@ its ngspice children (user + sys), wall seconds, the load average, and the repor
 integration term in units of the statistical standard error (the largest over the stationary
 observables and over the transition observables of the first v0): ``(|mean d| + 2 SE(d)) /
 SE``, ``d`` the paired check-minus-nominal difference, ``SE`` the circuit estimate's jackknife
-error (as in analogue.report.comparisons).
+error (as in analogue.study.comparisons).
 
 Usage:  PYTHONPATH=. .venv/bin/python benchmarks/bench_report_runs.py [stick slip work]
         [--old-ref main] [--only new|old] [--workers 2]
@@ -32,9 +32,9 @@ import numpy as np
 
 from analogue.circuit.experiments import load_experiment, standard_circuit
 from analogue.estimators.resampling import jackknife, jackknife_difference, subset
-from analogue.report.budget import SE_MULTIPLIER
+from analogue.study.budget import SE_MULTIPLIER
 from analogue.report.plan import RunOptions
-from analogue.report.theory_curves import stationary_taus
+from analogue.study.theory_curves import stationary_taus
 from analogue.study.catalogue import stationary_values, transition_values
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -117,7 +117,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     from analogue.report import runs as new
     with tempfile.TemporaryDirectory(prefix="bench-report-runs-") as tmp:
-        old = old_module(args.old_ref, Path(tmp), "analogue/report/runs.py", "_runs_old",
+        old = old_module(args.old_ref, Path(tmp), "analogue/study/runs.py", "_runs_old",
                          "analogue.report")
         old_ds = old_module(args.old_ref, Path(tmp), "analogue/circuit/deck_size.py",
                             "_deck_size_old", "analogue.circuit")

@@ -233,8 +233,8 @@ def bench_report_pieces(quick):
     from analogue.circuit.experiments import load_experiment
     from analogue.plots.open_question import CASES, open_question_data
     from analogue.report.plan import RunOptions
-    from analogue.report.runs import run_experiment_runs
-    from analogue.report.theory_curves import experiment_theory, figure_curves
+    from analogue.study.runs import run_experiment_runs
+    from analogue.study.theory_curves import experiment_theory, figure_curves
 
     print("\n8. the quick report's theory pieces, CPU s, cold cache")
     opts = RunOptions(quick=True, workers=1, progress=False)

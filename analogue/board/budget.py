@@ -1,7 +1,7 @@
 """Nominal board against exact theory, with the board's error budget.
 
 Theory: exact finite-noise values of the *requested* ideal model (sgn friction, white noise;
-:func:`analogue.report.observables.exact_stationary`).  The board departs from it by, term by
+:func:`analogue.study.observables.exact_stationary`).  The board departs from it by, term by
 term (each an independent estimate, in the observable's units):
 
 - ``rounding``: E-series values implement another model (:attr:`BoardDesign.realised`);
@@ -14,7 +14,7 @@ term (each an independent estimate, in the observable's units):
   (measured once per report on a few replicas), |difference| + 2 standard errors.
 
 ``within_budget``: |board - theory| <= 3 stderr + the sum of the terms (as in
-:mod:`analogue.report.metrics`).
+:mod:`analogue.study.metrics`).
 """
 from __future__ import annotations
 
@@ -24,8 +24,8 @@ import numpy as np
 
 from ..ensemble import Ensemble
 from ..model import Model
-from ..report.metrics import Z_LIMIT
-from ..report.observables import (
+from ..study.metrics import Z_LIMIT
+from ..study.observables import (
     exact_stationary,
     jackknife,
     jackknife_difference,

@@ -33,7 +33,7 @@ import numpy as np
 from ..circuit import ngspice as ng
 from ..circuit.experiments import load_experiment
 from ..ensemble import Ensemble
-from ..report.metrics import validate_metrics
+from ..study.metrics import validate_metrics
 from ..study.seeds import SeedPlan
 from ..theory.exact import rate_function, sample_stationary, stationary_moments
 from . import budget, calibration, tolerance
@@ -149,7 +149,7 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
     tight = run_board(design, nominal, v0=v0[:st.integ_replicas], t_end=st.t_end,
                       sample_dt=SAMPLE_DT, seed=seed, store=store, workers=workers, reltol=1e-4,
                       vendor=vendor)
-    from ..report.observables import subset
+    from ..study.observables import subset
     integ = budget.integration_pair(fn, subset(ens, np.arange(st.integ_replicas)), tight)
     timings["nominal_s"] = _time.perf_counter() - t0
     log("board: trajectory check against the equations driven by the same DAC sequences")

@@ -30,7 +30,7 @@ What the non-ideal parameters do to the friction law of a bridge around a curren
 The bridge's exact DC law with every DC parameter (IS, N, RS and rp) is
 :func:`bridge_dc_current`; it matches ngspice DC sweeps to 6e-10 (1N4148) and 2e-8 (BAT54) of
 I0 (tests/integration/test_real_diode_element.py), and the report books exact numerics on it
-minus those on the tanh as the budget's element term (:func:`analogue.report.budget.real_diode_element`).
+minus those on the tanh as the budget's element term (:func:`analogue.study.budget.real_diode_element`).
 
 Measured with ngspice 39 (DC sweeps over +-5 eps_V, stick experiment defaults: I0 ~ 1.1 mA for
 the 1N4148, 0.6 mA for the BAT54): the ideal bridge equals ``I0 tanh(V/(2 N V_T))`` to 2e-9 of

@@ -677,7 +677,7 @@ def run_decks(decks: Sequence[Deck], times: ArrayLike, v0: ArrayLike, *,
             "store_keys": keys, "from_store": from_store, "ran": len(todo), "wall_time": wall,
             "deck_wall_times": [r["info"].get("wall_time") for r in results],
             # the decks run by this call (not from the store): their wall times, for the
-            # report's critical path (analogue.report.critical_path)
+            # report's critical path (analogue.study.critical_path)
             "ran_deck_wall_times": [results[t.index]["info"].get("wall_time") for t in todo],
             "deck_raw_points": [r["info"].get("raw_points") for r in results],
             "schema_version": SCHEMA_VERSION, "executor": where}

@@ -5,7 +5,7 @@ not be tighter than what the statistics can see.  :func:`choose_tolerances` runs
 calibration: ``CAL_REPLICAS`` replicas started from the stationary law, ``CAL_HOLDS`` noise
 holds long, once with each candidate ``(reltol, trtol, method)`` and once with a reference
 integrated 100x more tightly than the tightest candidate (reltol, abstol and vntol / 100, a
-quarter of the step: the report's integration check, :func:`analogue.report.runs._tight`).
+quarter of the step: the report's integration check, :func:`analogue.study.runs._tight`).
 All runs share the seed, hence the held noise (``trrandom`` with ``.options seed``), so the
 path-by-path differences ``d_i = O_i(candidate) - O_i(reference)`` measure the integration
 error of each path observable ``O`` with no statistical noise of their own.
@@ -113,7 +113,7 @@ CAL_SEED = 20261122
 # path is largest in small decks; the deck-size chooser does not go below 4 by default.
 CAL_DECK = 4
 # The report books a measured integration error as |mean d| + 2 SE over its check paths
-# (analogue.report.budget.SE_MULTIPLIER).
+# (analogue.study.budget.SE_MULTIPLIER).
 CHECK_SE_MULTIPLIER = 2.0
 # Reference: 100x tighter than the tightest candidate, a quarter of the step.
 REFERENCE_FACTOR = 100.0
@@ -155,7 +155,7 @@ FIXED = Tolerances(FIXED_RELTOL, FIXED_TRTOL, FIXED_METHOD)
 # x), so it is judged on those (the report does); a transition run's rows are velocities at
 # given times, but the instantaneous observables here are read at the end of paths started
 # in the stationary state, which err less than transitions from far-off v0: the report
-# judges transition runs on every observable (analogue.report.runs says what was measured).
+# judges transition runs on every observable (analogue.study.runs says what was measured).
 TRANSITION_OBSERVABLES = ("v(T)", "v(T)^2", "1[v(T)<0]")
 STATIONARY_OBSERVABLES = ("time mean v", "time mean v^2", "P(v>0)", "stick fraction",
                           "displacement x(T)")

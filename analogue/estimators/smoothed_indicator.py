@@ -1,6 +1,6 @@
 """Integration differences of indicator observables by smoothed perturbation analysis.
 
-The report's integration term (:mod:`analogue.report.runs`) is the mean path-by-path
+The report's integration term (:mod:`analogue.study.runs`) is the mean path-by-path
 difference ``d`` between the nominal circuit run and a re-run with 100x tighter tolerances on
 the same noise.  For a smooth observable (a mean, a variance, a work rate) ``d`` is a smooth
 function of the path-wise integration error ``delta`` and averages down quickly.  For an
@@ -21,7 +21,7 @@ in ``delta``.  Its mean differs from the indicator's by the kernel's bias: ``g =
 is odd about each edge, so ``int g (p_nominal - p_check) dv = -(h^2/2) Dp'(edge) + O(h^4)``
 with ``Dp`` the change of the density the integration error makes.  That bias is estimated
 from ``h`` and ``h/2`` by one Richardson step, ``(4/3) |d_h - d_{h/2}|``, and booked with the
-term (:func:`analogue.report.budget.integration_term`).
+term (:func:`analogue.study.budget.integration_term`).
 
 Measured (work experiment's model, trap reltol 3e-5 against gear 3e-7 on the same noise, 32
 stationary replicas x 48 time units after the burn-in, two noise seeds; per-path values in

@@ -18,7 +18,7 @@ References
   the same sizes, plus the stationary identities <v> = 0 and
   spring <x> = a - <Delta(v) sgn v> - cubic <v^3> (ensemble average of dv/dt = 0).
 
-Budget (absolute, the observable's units; :class:`analogue.report.metrics.Budget`):
+Budget (absolute, the observable's units; :class:`analogue.study.metrics.Budget`):
 statistics (3 jackknife SE over replicas; for Monte Carlo references the two SEs in
 quadrature), ``smoothing`` = exact(model at the circuit's epsilon) - exact(ideal model),
 ``bandwidth`` = held minus white noise Monte Carlo on common increments (Gaussian members),
@@ -46,10 +46,10 @@ from .. import checks
 from ..model import Model
 from ..study import catalogue as C
 from ..study.seeds import SeedPlan
-from .budget import SE_MULTIPLIER, held_noise_pair
-from .metrics import Budget, Comparison, compare
+from ..study.budget import SE_MULTIPLIER, held_noise_pair
+from ..study.metrics import Budget, Comparison, compare
 from ..estimators import work_rate_samples
-from .observables import jackknife_difference, subset
+from ..study.observables import jackknife_difference, subset
 
 __all__ = [
     "MEMBERS",

@@ -1,8 +1,8 @@
 """The paper's figures with circuit data on them (and the figures only a circuit can add).
 
-Each function takes the analysis of one experiment (:class:`~analogue.report.comparisons.
+Each function takes the analysis of one experiment (:class:`~analogue.study.comparisons.
 ExperimentAnalysis`), draws the theory curves computed once with it
-(:mod:`analogue.report.theory_curves`: no theory is computed here), overlays circuit estimates
+(:mod:`analogue.study.theory_curves`: no theory is computed here), overlays circuit estimates
 with their error bands, and writes one PNG; it returns ``(path, caption)``.  The paper's
 I(w) is drawn with one convention at w = 0 everywhere: the Filippov value
 ``max(|a| - Delta, 0)^2/4`` (:func:`analogue.theory.weak_noise.rate_function`).
@@ -21,9 +21,9 @@ from ..estimators import (empirical_rate_function, fluctuation_ratio, prehistory
 from ..model import Model
 from ..plots.paper_theory import FIG5_EXAMPLE_TAUS
 from ..plots.style import KIND_COLOURS, TIME, VELOCITY, new_figure, save
-from .comparisons import ExperimentAnalysis
-from .runs import ExperimentRuns
-from .theory_curves import ExperimentTheory, FigureCurves, propagator_times
+from ..study.comparisons import ExperimentAnalysis
+from ..study.runs import ExperimentRuns
+from ..study.theory_curves import ExperimentTheory, FigureCurves, propagator_times
 
 __all__ = ["fig_deterministic", "fig_prehistory", "fig_propagator", "fig_stationary",
            "fig_work_paths", "fig_rate_function", "fig_budget",
@@ -77,7 +77,7 @@ def fig_deterministic(all_runs: list, out: Path):
 
 
 def _curves(analysis: ExperimentAnalysis) -> FigureCurves:
-    """The figures' theory curves (computed by :func:`analogue.report.comparisons.analyse`)."""
+    """The figures' theory curves (computed by :func:`analogue.study.comparisons.analyse`)."""
     if analysis.curves is None:
         raise ValueError(f"{analysis.runs.exp.name}: no theory curves (analyse() was not run)")
     return analysis.curves

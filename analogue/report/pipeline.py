@@ -35,14 +35,14 @@ from ..circuit.experiments import (FIG1_EXPERIMENTS,
                                    PAPER_EXPERIMENTS, PAPER_FIGURE_TAGS, Experiment,
                                    load_experiment, standard_circuit)
 from . import figures, prose
-from .budget import terms_above_se_text
-from .critical_path import critical_path_text, report_critical_path
-from .comparisons import BandwidthTerms, ExperimentAnalysis, analyse, bandwidth_terms
-from .theory_curves import ExperimentTheory, experiment_theory, figure_curves
+from ..study.budget import terms_above_se_text
+from ..study.critical_path import critical_path_text, report_critical_path
+from ..study.comparisons import BandwidthTerms, ExperimentAnalysis, analyse, bandwidth_terms
+from ..study.theory_curves import ExperimentTheory, experiment_theory, figure_curves
 from .html import Figure, Section, Table, write_page
-from .metrics import validate_metrics
+from ..study.metrics import validate_metrics
 from .plan import RunOptions
-from .runs import ExperimentRuns, run_experiment_runs
+from ..study.runs import ExperimentRuns, run_experiment_runs
 from ..circuit.simulate import POLL_S
 
 if TYPE_CHECKING:   # beyond is imported where it is used (start-up time)
@@ -179,7 +179,7 @@ class MemberRunSummary:
 
 def run_experiment(name, opts: RunOptions) -> RunSummary | MemberRunSummary:
     """Run (or load from the store) every circuit run of one experiment: a paper-model
-    experiment's runs (:func:`analogue.report.runs.run_experiment_runs`), or a family
+    experiment's runs (:func:`analogue.study.runs.run_experiment_runs`), or a family
     member's (:func:`analogue.report.beyond.member_runs`: the runs its report reads)."""
     from . import beyond
     exp = _load(name)
@@ -351,7 +351,7 @@ class _Workers:
     - the **circuit** thread (one): every experiment's circuit runs, queued from the start
       (longest first), so that ngspice never waits for the main thread's comparisons of the
       previous experiment.  One thread: an experiment's runs keep ``workers`` ngspice
-      processes busy on their own (one deck pool for all its runs, report.runs), and the
+      processes busy on their own (one deck pool for all its runs, study.runs), and the
       theory thread fills the last deck's idle core.  With two threads the experiments
       shared the cores, so the longest one (work, queued first) ended last anyway, at 108 s
       of the quick paper, and its theory curves trailed after it;
@@ -463,7 +463,7 @@ class _Workers:
 
 # the threads of the paper's circuit runs and of the family members' analyses (see
 # _Workers): each simulate call runs up to `workers` ngspice processes.  With a Dask
-# scheduler an experiment's runs go to the cluster one after another (report.runs._run_jobs)
+# scheduler an experiment's runs go to the cluster one after another (study.runs._run_jobs)
 # and the local cores are not the limit: two experiments at once keep more of it busy.
 CIRCUIT_THREADS = 1
 SCHEDULER_CIRCUIT_THREADS = 2
@@ -526,7 +526,7 @@ def _curves_of(f: Future):
     try:
         return _result(f)
     except Exception as exc:  # figure_curves keeps its failures; this is a safety net
-        from .theory_curves import CURVE_GROUPS, FigureCurves
+        from ..study.theory_curves import CURVE_GROUPS, FigureCurves
         curves = FigureCurves()
         for g in CURVE_GROUPS:
             curves.fail(g, exc)
@@ -794,7 +794,7 @@ def _build(experiments, members, out, opts, title, fails, phases, pool, circuit,
         "wall_time_s": wall,
         # the wall time with unlimited cores: the longest chain of dependent phases, each
         # circuit run counted as its calibrations plus its longest deck (issue 22, item 1;
-        # analogue.report.critical_path), and that chain
+        # analogue.study.critical_path), and that chain
         "critical_path_s": crit["critical_path_s"],
         "critical_path": crit["chain"],
         "circuit_timing": circuit_timing,

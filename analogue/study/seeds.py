@@ -12,7 +12,7 @@ stream (a new key) leaves every other seed unchanged.  Its first 32-bit word, re
 above ``2**31 - 1``).
 
 Stream keys start at 100, clear of the spawn keys that :mod:`analogue.circuit.simulate`
-(0, 1, 2), :mod:`analogue.report.budget` (7) and the board (13, 17) apply to the seeds they
+(0, 1, 2), :mod:`analogue.study.budget` (7) and the board (13, 17) apply to the seeds they
 are given.  The plan replaced fixed offsets from ``1000 * seed`` (which :func:`SeedPlan.all`
 no longer produces): every noise realisation of the report changed with it, and the quick
 reports were re-run and checked against their budgets (commit message).
@@ -31,7 +31,7 @@ SEED_MAX = 2**31 - 1          # ngspice's `.options seed` is a C int
 
 # stream name -> spawn key (never renumber: stored runs are keyed by the seeds)
 STREAMS = {
-    # the paper's experiments (report.runs, report.comparisons)
+    # the paper's experiments (study.runs, study.comparisons)
     "transition": 100,          # circuit transition run from the i-th v0 (+ its check)
     "mc_transition": 101,       # held/white Monte Carlo pair of the i-th transition run
     "stationary": 102,          # stationary circuit run (+ its starting velocities, check)

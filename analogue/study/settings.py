@@ -52,7 +52,7 @@ QUICK_DIVISOR = 4
 MIN_QUICK_REPLICAS = 32
 MIN_QUICK_CHECK_REPLICAS = 8
 # The stationary estimators' errors are delete-a-group jackknives over replicas with
-# g = min(32, n // 2) groups (report.observables): at least 4 groups.
+# g = min(32, n // 2) groups (study.observables): at least 4 groups.
 MIN_STATIONARY_REPLICAS = 8
 # The integration check's paired jackknife needs at least 2 groups of 2.
 MIN_CHECK_REPLICAS = 4

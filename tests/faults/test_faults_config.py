@@ -169,7 +169,7 @@ def test_time_grid_is_checked_at_load():
 
 
 def test_check_replicas_sets_the_size_of_the_integration_check():
-    from analogue.report.runs import check_plan
+    from analogue.study.runs import check_plan
     exp = experiment_from_dict(doc(report={"check_replicas": 40}))
     decks, per_deck = check_plan(1000, exp.report.check_replicas)
     assert decks * per_deck >= 40

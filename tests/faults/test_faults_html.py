@@ -88,7 +88,7 @@ def test_failing_experiments_keep_finished_work_and_are_recorded(tmp_path, monke
     failed = {f["section"]: f for f in metrics["failures"]}
     assert any("stick" in k for k in failed) and any("slip" in k for k in failed)
     assert all("ngspice failed" in f["error"] for f in failed.values())
-    from analogue.report.metrics import validate_metrics
+    from analogue.study.metrics import validate_metrics
     validate_metrics(metrics)
     # the job's critical path (issue 22 item 1) is recorded for a failed report too: a chain
     # of its recorded phases (here all of them about 0 s), no longer than the job

@@ -3,7 +3,7 @@
 
 The signal tests of ``test_faults_signals.py`` signal once the first deck is stored, which
 is during the tolerance and deck-size calibrations (plain ``simulate`` calls from the main
-thread); they never reached the report's deck pool (:func:`analogue.report.runs._run_jobs`),
+thread); they never reached the report's deck pool (:func:`analogue.study.runs._run_jobs`),
 where a run's waiting thread hung for ever on decks the pool had cancelled (a
 ``ThreadPoolExecutor.shutdown(cancel_futures=True)`` does not wake ``as_completed``).  Here
 the signal goes once a run of the pool has printed its line (``--progress`` on a pipe: one

@@ -143,10 +143,10 @@ def test_a_poisoned_entry_already_in_the_store_is_never_returned(tmp_path, refer
 
 # --------------------------------------------- the routes that run decks without simulate()
 def test_the_reports_noise_free_run_refuses_huge_values(tmp_path, monkeypatch):
-    """Paper Fig. 1's noise-free run (report.runs._noise_free_run) goes through run_decks
+    """Paper Fig. 1's noise-free run (study.runs._noise_free_run) goes through run_decks
     directly: it gets the same physical limits."""
     from analogue.circuit.experiments import load_experiment
-    from analogue.report.runs import _noise_free_run
+    from analogue.study.runs import _noise_free_run
     exp = load_experiment("stick")
     bindir = tmp_path / "bin"
     wrapped_ngspice.install(bindir, "huge")

@@ -12,7 +12,7 @@ from click.testing import CliRunner
 from scipy.stats import norm
 
 from analogue.cli import main
-from analogue.report.metrics import validate_metrics
+from analogue.study.metrics import validate_metrics
 
 pytestmark = pytest.mark.slow
 

@@ -15,7 +15,7 @@ import pytest
 from click.testing import CliRunner
 
 from analogue.cli import main
-from analogue.report.metrics import validate_metrics
+from analogue.study.metrics import validate_metrics
 from conftest import toml_text
 
 pytestmark = pytest.mark.slow

@@ -15,7 +15,7 @@ from analogue.board.runner import run_board
 from analogue.board.tolerance import Tolerances, draw_board, effective_model
 from analogue.circuit import ngspice as ng
 from analogue.cli import main
-from analogue.report.metrics import validate_metrics
+from analogue.study.metrics import validate_metrics
 
 pytestmark = pytest.mark.slow
 STICK = Model(tau_m=1.0, delta=0.7, a=0.2, gamma=10.0)

@@ -31,7 +31,7 @@ from analogue.circuit import CircuitSpec, map_model
 from analogue.circuit.netlist import bridge_dc_deck
 from analogue.circuit.parts import get_part
 from analogue.circuit.rawfile import read_raw
-from analogue.report.budget import real_diode_element
+from analogue.study.budget import real_diode_element
 from analogue.theory.friction_law import stationary_law_with_friction
 
 pytestmark = pytest.mark.requires_ngspice

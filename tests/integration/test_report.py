@@ -11,7 +11,7 @@ import pytest
 from scipy import stats
 
 from analogue.report.html import Figure, Section, Table, write_page
-from analogue.report.metrics import Budget, compare, validate_metrics
+from analogue.study.metrics import Budget, compare, validate_metrics
 from analogue.report.plan import ReportSettings, RunOptions
 from conftest import chromium
 
@@ -154,8 +154,8 @@ def test_quick_paper_comparisons_are_within_budget_or_flagged(paper_report):
         assert c["within_budget"] == (abs(c["circuit"] - c["theory"])
                                       <= 3 * c["circuit_stderr"] + c["budget"]["total"] + 1e-15)
     # every circuit bias term of at least one SE is named in the summary with its reason
-    # (issue 18; report.budget.terms_above_se_text)
-    from analogue.report.budget import CIRCUIT_BIAS_TERMS
+    # (issue 18; study.budget.terms_above_se_text)
+    from analogue.study.budget import CIRCUIT_BIAS_TERMS
     for c in exact:
         for name in CIRCUIT_BIAS_TERMS:
             if c["circuit_stderr"] and abs(c["budget"][name]) >= c["circuit_stderr"]:

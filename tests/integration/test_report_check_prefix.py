@@ -12,7 +12,7 @@ from analogue.circuit.experiments import experiment_from_dict
 from analogue.circuit.mapping import CircuitSpec
 from analogue.estimators.resampling import jackknife_difference
 from analogue.report.plan import RunOptions
-from analogue.report.runs import head, run_experiment_runs
+from analogue.study.runs import head, run_experiment_runs
 from analogue.study.catalogue import stationary_values
 
 pytestmark = pytest.mark.slow

@@ -2,7 +2,7 @@
 answers are worked out by hand, and the report's dependencies."""
 import pytest
 
-from analogue.report.critical_path import (critical_path_text, longest_chain,
+from analogue.study.critical_path import (critical_path_text, longest_chain,
                                            report_critical_path)
 
 

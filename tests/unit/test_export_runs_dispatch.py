@@ -1,5 +1,5 @@
 """Every shipped experiment's export reads the runs from the function its report runs them
-with (issue 20 item 4): the paper's model through report.runs.run_experiment_runs, a family
+with (issue 20 item 4): the paper's model through study.runs.run_experiment_runs, a family
 member through report.beyond.member_runs (which analyse_member calls), with the same size;
 and the line export prints before it starts names that size's replica counts.  No ngspice:
 the two runners are replaced by recorders."""

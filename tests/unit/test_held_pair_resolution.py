@@ -8,7 +8,7 @@ import numpy as np
 
 from analogue import Model
 from analogue.montecarlo import default_dt
-from analogue.report.budget import MIN_STEPS_PER_HOLD, held_noise_pair
+from analogue.study.budget import MIN_STEPS_PER_HOLD, held_noise_pair
 
 STICK = Model(tau_m=1.0, delta=0.7, a=0.2, gamma=10.0, epsilon=0.02 * np.sqrt(0.1))
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from analogue import Model, ShotNoise
-from analogue.report.budget import held_noise_pair
+from analogue.study.budget import held_noise_pair
 
 
 def test_pair_runs_and_shares_the_kicks():

@@ -1,4 +1,4 @@
-"""The bandwidth term computed without circuit data (report.comparisons.bandwidth_terms): the
+"""The bandwidth term computed without circuit data (study.comparisons.bandwidth_terms): the
 report computes it in the theory thread while ngspice runs, and analyse() takes it.  It must
 be, bit for bit, the held/white Monte Carlo pairs on the experiment's seeds that analyse()
 computed itself before (no ngspice: the "circuit" runs are SDE ensembles)."""
@@ -14,12 +14,12 @@ from analogue.circuit.experiments import experiment_from_dict
 from analogue.circuit.mapping import map_model
 from analogue.estimators.resampling import jackknife_difference
 from analogue.montecarlo import simulate_sde
-from analogue.report.budget import SE_MULTIPLIER, held_noise_pair
-from analogue.report.comparisons import (MC_REPLICAS, MC_STATIONARY_REPLICAS, analyse,
+from analogue.study.budget import SE_MULTIPLIER, held_noise_pair
+from analogue.study.comparisons import (MC_REPLICAS, MC_STATIONARY_REPLICAS, analyse,
                                          bandwidth_terms)
 from analogue.report.plan import RunOptions
-from analogue.report.runs import ExperimentRuns
-from analogue.report.theory_curves import experiment_theory
+from analogue.study.runs import ExperimentRuns
+from analogue.study.theory_curves import experiment_theory
 from analogue.study.catalogue import StationaryValues, transition_values
 from analogue.study.seeds import SeedPlan
 from analogue.theory.exact import sample_stationary

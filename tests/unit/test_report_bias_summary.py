@@ -3,8 +3,8 @@ its reason (issue 18: the comparisons with every bias term below one SE, or the 
 not named in the summary with the reason)."""
 from __future__ import annotations
 
-from analogue.report.budget import CIRCUIT_BIAS_TERMS, terms_above_se, terms_above_se_text
-from analogue.report.metrics import Budget, compare
+from analogue.study.budget import CIRCUIT_BIAS_TERMS, terms_above_se, terms_above_se_text
+from analogue.study.metrics import Budget, compare
 
 
 def _comps():

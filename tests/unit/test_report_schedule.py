@@ -14,10 +14,10 @@ import pytest
 from analogue.circuit.experiments import experiment_from_dict, load_experiment, standard_circuit
 from analogue.montecarlo import simulate_sde
 from analogue.report import pipeline as P
-from analogue.report.comparisons import analyse
+from analogue.study.comparisons import analyse
 from analogue.report.html import Section
 from analogue.report.plan import RunOptions
-from analogue.report.runs import ExperimentRuns
+from analogue.study.runs import ExperimentRuns
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -7,7 +7,7 @@ import threading
 import pytest
 
 from analogue.report import pipeline as P
-from analogue.report.theory_curves import FigureCurves
+from analogue.study.theory_curves import FigureCurves
 
 
 def test_theory_thread_runs_in_order_off_the_main_thread_and_records_phases():

@@ -1,4 +1,4 @@
-"""The stationary integration check's prefix window (analogue.report.runs, issue 10): the
+"""The stationary integration check's prefix window (analogue.study.runs, issue 10): the
 plan's rule, the nominal counterpart on matched rows and times, and the coupling test."""
 from types import SimpleNamespace
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from analogue.ensemble import Ensemble
-from analogue.report.runs import (
+from analogue.study.runs import (
     ExperimentRuns,
     _check_coupled,
     check_plan,

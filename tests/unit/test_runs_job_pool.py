@@ -1,4 +1,4 @@
-"""The report's deck pool (analogue.report.runs._run_jobs): every job's decks on one pool, queued
+"""The report's deck pool (analogue.study.runs._run_jobs): every job's decks on one pool, queued
 in the jobs' order, the caller's context (store-key collectors) seen by every job, and a failing
 job raising in the caller without hanging the others (no ngspice: plain functions as decks)."""
 import threading
@@ -7,7 +7,7 @@ import time
 import pytest
 
 from analogue.circuit.store_index import collecting_keys, note_keys
-from analogue.report.runs import _run_jobs
+from analogue.study.runs import _run_jobs
 
 
 def _job(name, log, n=2, sleep=0.01, fail=False):

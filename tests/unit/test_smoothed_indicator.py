@@ -1,5 +1,5 @@
 """The integration difference of indicator observables by smoothed perturbation analysis
-(:mod:`analogue.estimators.smoothed_indicator`, :func:`analogue.report.budget.integration_term`):
+(:mod:`analogue.estimators.smoothed_indicator`, :func:`analogue.study.budget.integration_term`):
 the smoothed difference estimates the indicator's mean change under a small path-wise
 perturbation (checked against the closed form of a Gaussian law), with far less noise than
 counting flips, and its Richardson term measures the kernel's bias."""
@@ -14,7 +14,7 @@ from scipy.special import ndtr
 from analogue.ensemble import Ensemble
 from analogue.estimators.resampling import jackknife_difference, subset
 from analogue.estimators.smoothed_indicator import kernel_width, window
-from analogue.report.budget import SE_MULTIPLIER, integration_term
+from analogue.study.budget import SE_MULTIPLIER, integration_term
 from analogue.study import catalogue as C
 
 

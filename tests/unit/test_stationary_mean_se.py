@@ -20,10 +20,10 @@ import pytest
 from analogue.circuit.experiments import experiment_from_dict
 from analogue.model import Model
 from analogue.montecarlo import simulate_sde
-from analogue.report.comparisons import analyse
+from analogue.study.comparisons import analyse
 from analogue.report.plan import RunOptions
-from analogue.report.runs import ExperimentRuns
-from analogue.report.theory_curves import experiment_theory
+from analogue.study.runs import ExperimentRuns
+from analogue.study.theory_curves import experiment_theory
 from analogue.study.catalogue import (StationaryValues, record_span, stationary_exact_se,
                                       stationary_mean_se)
 from analogue.theory.stationary import stationary_moments

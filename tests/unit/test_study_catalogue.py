@@ -15,7 +15,7 @@ from analogue import Model
 from analogue.circuit.experiments import PAPER_EXPERIMENTS, load_experiment, standard_circuit
 from analogue.ensemble import Ensemble
 from analogue.report.plan import RunOptions
-from analogue.report.theory_curves import stationary_taus
+from analogue.study.theory_curves import stationary_taus
 from analogue.study import catalogue as C
 
 # (experiment, observable, theory_kind) of every comparison of `analogue paper --quick` on
@@ -114,7 +114,7 @@ def test_exact_stationary_work_variance_matches_the_green_kubo_route():
     """exact_stationary takes Var(w) of all windows from one autocorrelation
     (theory.work_statistics.work_variance); the report's former per-window Green-Kubo
     integral (observables.work_variance_exact) is an independent implementation."""
-    from analogue.report.observables import exact_stationary, work_variance_exact
+    from analogue.study.observables import exact_stationary, work_variance_exact
     m = Model(tau_m=1.0, delta=0.5, a=0.6, gamma=4.0)
     out = exact_stationary(m, threshold=0.1, taus=[0.5, 2.0], cache=False)
     for tau in (0.5, 2.0):

@@ -24,7 +24,7 @@ from analogue.montecarlo import simulate_sde
 from analogue.plots.paper_theory import fig5_layout
 from analogue.report import figures
 from analogue.report.plan import ReportSettings
-from analogue.report.theory_curves import FigureCurves, _prehistory_curves
+from analogue.study.theory_curves import FigureCurves, _prehistory_curves
 from analogue.theory import weak_noise
 from conftest import toml_text
 

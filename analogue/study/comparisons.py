@@ -1,7 +1,7 @@
 """Every circuit-versus-theory comparison of one experiment, with its error budget.
 
 Theory values are those of the *ideal* model (sgn friction, white noise); the circuit's
-departures from it are budgeted term by term (:mod:`analogue.report.budget`), so a reader can
+departures from it are budgeted term by term (:mod:`analogue.study.budget`), so a reader can
 see which one dominates.  Circuit standard errors come from a jackknife over replicas, which
 are independent (errors hold however correlated the samples along one path are).
 """
@@ -18,11 +18,11 @@ from .budget import (SE_MULTIPLIER, held_noise_pair, integration_term, real_diod
 from .metrics import Budget, compare
 from ..estimators.resampling import jackknife, jackknife_difference
 from ..estimators.smoothed_indicator import kernel_width
-from ..study.seeds import SeedPlan
-from ..study.catalogue import (Kind, StationaryValues, record_span, stationary_exact_se,
+from .seeds import SeedPlan
+from .catalogue import (Kind, StationaryValues, record_span, stationary_exact_se,
                                stationary_null_se, stationary_observables, transition_observables,
                                transition_theory_se, transition_values)
-from .plan import ReportSettings, stationary_noise_dt
+from .settings import ReportSettings, stationary_noise_dt
 from .runs import ExperimentRuns
 from .theory_curves import ExperimentTheory, FigureCurves, experiment_theory, stationary_taus
 
@@ -47,7 +47,7 @@ class ExperimentAnalysis:
     circuit: dict = field(default_factory=dict)   # observable -> (value, se)
     exact: dict = field(default_factory=dict)     # observable -> exact value (ideal model)
     exact_eff: dict = field(default_factory=dict)  # ... at the circuit's epsilon
-    # every theory value and curve, computed once (report.theory_curves): the figures draw them
+    # every theory value and curve, computed once (study.theory_curves): the figures draw them
     theory: ExperimentTheory | None = None
     curves: FigureCurves | None = None
 
@@ -105,7 +105,7 @@ class BandwidthTerms:
 
 def bandwidth_terms(exp: Experiment, settings: ReportSettings, *,
                     progress=None) -> BandwidthTerms:
-    """Held/white Monte Carlo pairs (:func:`~analogue.report.budget.held_noise_pair`) of one
+    """Held/white Monte Carlo pairs (:func:`~analogue.study.budget.held_noise_pair`) of one
     experiment, on the seeds of its :class:`~analogue.study.seeds.SeedPlan`, and their paired
     jackknife differences: the budget's bandwidth term, bit for bit what :func:`analyse`
     computes when not given it.  ``settings``: the report settings the runs use
@@ -147,7 +147,7 @@ def analyse(runs: ExperimentRuns, *, theory: ExperimentTheory | None = None,
             bandwidth: BandwidthTerms | None = None, progress=None,
             cache=None) -> ExperimentAnalysis:
     """Every comparison of one experiment.  ``theory``: its circuit-free theory
-    (:func:`~analogue.report.theory_curves.experiment_theory`, computed here if not given;
+    (:func:`~analogue.study.theory_curves.experiment_theory`, computed here if not given;
     the pipeline computes it while ngspice runs).  ``bandwidth``: its bandwidth terms
     (:func:`bandwidth_terms`, likewise: computed here if not given)."""
     exp, settings = runs.exp, runs.settings

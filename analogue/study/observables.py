@@ -14,7 +14,7 @@ from scipy import integrate
 from ..estimators.goodness_of_fit import histogram_chi2
 from ..estimators.resampling import jackknife, jackknife_difference, subset
 from ..model import Model
-from ..study.catalogue import (stationary_label, stationary_theory, stationary_values, transition_label,
+from .catalogue import (stationary_label, stationary_theory, stationary_values, transition_label,
                                transition_theory, transition_values)
 
 __all__ = ["histogram_chi2", "transition_values", "stationary_values", "jackknife", "subset", "jackknife_difference",

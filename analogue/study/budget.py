@@ -7,7 +7,7 @@
   gets the mean of its fine increments, i.e. the same integrated noise spread evenly) -
   isolates the effect with little statistical noise (common random numbers).
 - **integration**: the circuit re-run with 100x tighter tolerances on the same noise
-  (see :mod:`analogue.report.runs`); the path-by-path difference, indicator observables
+  (see :mod:`analogue.study.runs`); the path-by-path difference, indicator observables
   through their smoothed indicator (:func:`integration_term`).
 - **finite noise** (weak-noise comparisons only): exact finite-gamma minus the paper's
   gamma -> infinity formula.
@@ -24,7 +24,7 @@ import numpy as np
 from ..circuit.mapping import CircuitMapping
 from ..ensemble import Ensemble
 from ..model import Model
-from ..study.catalogue import (stationary_label, stationary_observables, stationary_theory,
+from .catalogue import (stationary_label, stationary_observables, stationary_theory,
                                transition_label)
 from ..theory.friction_law import stationary_law_with_friction, transition_moments_with_friction
 
@@ -65,7 +65,7 @@ def integration_term(values, check: Ensemble, nominal: Ensemble, h: float) -> di
     return out
 
 
-# The budget's circuit bias terms (report.metrics.Budget), with what each is (finite_noise is
+# The budget's circuit bias terms (study.metrics.Budget), with what each is (finite_noise is
 # the paper's weak-noise formula against the exact theory, not a property of the circuit).
 CIRCUIT_BIAS_TERMS = {
     "smoothing": "the diode bridge's tanh width (smoothing)",
@@ -79,7 +79,7 @@ CIRCUIT_BIAS_TERMS = {
 
 def terms_above_se(comps, limit: float = 1.0) -> dict:
     """``{experiment: [(observable, term, ratio), ...]}``: every circuit bias term
-    (:data:`CIRCUIT_BIAS_TERMS`) of the comparisons ``comps`` (report.metrics.Comparison) that
+    (:data:`CIRCUIT_BIAS_TERMS`) of the comparisons ``comps`` (study.metrics.Comparison) that
     is at least ``limit`` statistical errors, once per experiment and observable (an
     observable compared with the exact and the weak-noise theory has the same circuit terms),
     largest first within an observable."""

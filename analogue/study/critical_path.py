@@ -19,7 +19,7 @@ pipeline._build` waits on its futures):
 The ``waiting for ...`` phases are not work and are left out.  With unlimited cores an
 experiment's circuit runs take their work before the decks (tolerance and deck-size
 calibrations) plus their longest single deck (``circuit`` timing recorded by
-:func:`analogue.report.runs.run_experiment_runs`); without that record, or where it exceeds
+:func:`analogue.study.runs.run_experiment_runs`); without that record, or where it exceeds
 the phase, the phase's own duration.  A family member's phase counts whole (its decks are
 not recorded apart): an upper bound for its share.  Every duration is a measured one on the
 machine that ran the job, so the result is that machine's per-core speed with unlimited

@@ -46,8 +46,8 @@ from ..circuit.tolerances import STATIONARY_OBSERVABLES
 from ..circuit.store_index import indexing_runs
 from ..ensemble import Ensemble
 from ..model import Model
-from ..study.seeds import SeedPlan
-from .plan import ReportSettings, RunOptions, stationary_noise_dt
+from .seeds import SeedPlan
+from .settings import ReportSettings, RunOptions, stationary_noise_dt
 
 __all__ = ["ExperimentRuns", "run_experiment_runs", "first_deck_size", "check_plan",
            "stationary_check_plan", "head"]
@@ -137,7 +137,7 @@ class ExperimentRuns:
     seeds: dict = field(default_factory=dict)
     # seconds before the decks (tolerance and deck-size calibrations) and the longest deck
     # run here (0.0 when all came from the store): the runs' time with unlimited cores
-    # (analogue.report.critical_path)
+    # (analogue.study.critical_path)
     timing: dict = field(default_factory=dict)
 
     def check_pair(self, kind: str) -> tuple[Ensemble, Ensemble]:
@@ -347,7 +347,7 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
     # Each run gets its own seed, derived from the experiment's: distinct experiments (whose
     # seeds differ) never share a noise realisation, so their comparisons are independent.
     plan = SeedPlan(exp.seed)       # every seed of the report (analogue.study.seeds)
-    # (the Monte Carlo pairs' seeds of report.comparisons are the plan's too: recorded here)
+    # (the Monte Carlo pairs' seeds of study.comparisons are the plan's too: recorded here)
     seeds: dict = {"stationary": plan.stationary, "noise_free": plan.noise_free,
                    "mc_stationary": plan.mc_stationary, "mc_stationary_v0": plan.mc_stationary_v0,
                    **{f"mc_transition v0={v0:g}": plan.mc_transition(i)
@@ -424,7 +424,7 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
     check_stationary.meta["check_window"] = {
         "t_end": s_window, "decks": s_decks, "replicas": n1,
         "rule": "replica-time after burn-in and the longest work window >= check_replicas "
-                "whole paths', over >= NOTIONAL_WORKERS decks (analogue.report.runs."
+                "whole paths', over >= NOTIONAL_WORKERS decks (analogue.study.runs."
                 "stationary_check_plan)"}
     _check_coupled(transition[v00], check_transition, "transition check")
     _check_coupled(stationary, check_stationary, "stationary check")

@@ -15,7 +15,7 @@ Two stages, because only part of the theory depends on the circuit's data:
   then fails, not the experiment).
 
 The figures (:mod:`analogue.report.figures`) only draw what is here; the comparisons
-(:mod:`analogue.report.comparisons`) read their theory values from here, so the exact
+(:mod:`analogue.study.comparisons`) read their theory values from here, so the exact
 propagator of a comparison is the one drawn in Fig. 6.  Exact results (propagators,
 stationary moments, work variances, work densities, rate functions) go through the on-disk
 theory cache (:mod:`analogue.theory.cache`): a repeated report recomputes nothing.
@@ -31,7 +31,7 @@ from ..circuit.experiments import Experiment
 from ..model import Model
 from ..theory.cache import cached_call
 from .observables import exact_stationary, exact_transition, weak_noise_transition
-from .plan import ReportSettings
+from .settings import ReportSettings
 
 __all__ = ["TransitionTheory", "ExperimentTheory", "FigureCurves", "experiment_theory",
            "figure_curves", "stationary_taus", "propagator_times", "CURVE_GROUPS"]
