@@ -3,7 +3,7 @@
 
 The runs are exactly those behind the experiment's report, from the one function that makes
 them for the report (:func:`experiment_runs`: :func:`analogue.study.runs.run_experiment_runs`
-for the paper's model, :func:`analogue.report.beyond.member_runs` for a family member; same
+for the paper's model, :func:`analogue.study.members.member_runs` for a family member; same
 seeds, same sizes, same decks), so they come from the run store when the report or
 ``analogue run`` made them, and are simulated (and stored, and indexed under the experiment:
 ``analogue store ls``) otherwise.  Each is named by its role:
@@ -35,7 +35,7 @@ from . import checks
 from .circuit.experiments import Experiment, load_experiment
 from .ensemble import Ensemble
 from .files import write_text
-from .report.beyond import is_member_experiment, member_runs, member_sizes
+from .study.members import is_member_experiment, member_runs, member_sizes
 from .report.plan import RunOptions
 from .study.runs import run_experiment_runs
 
@@ -55,7 +55,7 @@ def _options(quick, store, workers, scheduler, progress, timeout):
 def experiment_runs(exp: Experiment, opts):
     """The runs behind ``exp``'s report at ``opts``' size: the paper's model's
     :class:`~analogue.study.runs.ExperimentRuns` or a member's
-    :class:`~analogue.report.beyond.MemberRuns` (both name their runs, ``.by_role()``).  The
+    :class:`~analogue.study.members.MemberRuns` (both name their runs, ``.by_role()``).  The
     report calls the same two functions, so the runs (seeds, sizes, decks) are the same."""
     if is_member_experiment(exp):
         return member_runs(exp, opts)
@@ -114,7 +114,7 @@ def _named(exp: Experiment, runs, quick: bool) -> dict[str, Ensemble]:
 
 def runs_by_role(runs) -> dict[str, Ensemble]:
     """The ensembles of an :class:`~analogue.study.runs.ExperimentRuns` or a
-    :class:`~analogue.report.beyond.MemberRuns`, named by role."""
+    :class:`~analogue.study.members.MemberRuns`, named by role."""
     return runs.by_role()
 
 

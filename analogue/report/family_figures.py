@@ -1,6 +1,6 @@
 """Figures of the model family's members ("Beyond the paper").
 
-Every function draws data already computed by :func:`analogue.report.beyond.analyse_member`
+Every function draws data already computed by :func:`analogue.study.members.analyse_member`
 (``MemberAnalysis.figures``): no theory is evaluated here.  Each returns ``(path, caption)`` or
 None when the member has no such figure.
 """

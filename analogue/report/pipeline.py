@@ -161,7 +161,7 @@ def _load(name_or_exp) -> Experiment:
 
 @dataclass
 class MemberRunSummary:
-    """The circuit runs of a family member (:func:`analogue.report.beyond.member_runs`): the
+    """The circuit runs of a family member (:func:`analogue.study.members.member_runs`): the
     very runs ``analogue report`` reads for it (same decks and seeds, from the store)."""
 
     runs: MemberRuns
@@ -180,7 +180,7 @@ class MemberRunSummary:
 def run_experiment(name, opts: RunOptions) -> RunSummary | MemberRunSummary:
     """Run (or load from the store) every circuit run of one experiment: a paper-model
     experiment's runs (:func:`analogue.study.runs.run_experiment_runs`), or a family
-    member's (:func:`analogue.report.beyond.member_runs`: the runs its report reads)."""
+    member's (:func:`analogue.study.members.member_runs`: the runs its report reads)."""
     from . import beyond
     exp = _load(name)
     _log(f"{exp.name}: running the circuit (stored runs are reused)")

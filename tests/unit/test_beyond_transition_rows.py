@@ -23,6 +23,7 @@ from analogue.circuit.experiments import experiment_from_dict
 from analogue.ensemble import Ensemble
 from analogue.montecarlo import simulate_sde
 from analogue.report import beyond
+from analogue.study import members
 from analogue.study import catalogue as C
 
 
@@ -56,7 +57,7 @@ def test_pure_shot_transition_theory_includes_the_unkicked_mass(model, v0, times
     obs = [o for o in C.member_observables(m, v0=v0, times=times) if o.run == C.TRANSITION]
     assert len(obs) == 3 * len(times)
     thr = beyond.stick_window(exp)
-    theory = beyond._transition_theory(exp, m, v0, times, obs, thr)
+    theory = members._transition_theory(exp, m, v0, times, obs, thr)
     for o in obs:
         x = ens.at(o.t)
         got = C.estimate(o, ens, burn_in=0.0, threshold=thr, force=m.force)
@@ -81,7 +82,7 @@ def test_transition_rows_carry_the_laws_standard_error():
     obs = [o for o in C.member_observables(m, v0=0.0, times=[0.5])
            if o.kind in ("mean v", "var v") and o.run == C.TRANSITION]
     assert len(obs) == 2
-    law = beyond._transition_laws(exp, m, 0.0, [0.5], beyond.stick_window(exp))[0]
+    law = members._transition_laws(exp, m, 0.0, [0.5], beyond.stick_window(exp))[0]
     for o in obs:
         want = o.entry.exact(law)
         fn = lambda e, o=o: C.estimate(o, e, burn_in=0.0, threshold=0.05, force=m.force)
@@ -89,8 +90,8 @@ def test_transition_rows_carry_the_laws_standard_error():
         for g in range(groups):
             rows = slice(g * n, (g + 1) * n)
             sub = Ensemble(big.t, big.v[rows], big.x[rows], dict(big.meta))
-            c, se_jk = beyond._jk(fn, sub)
-            se = max(se_jk, beyond._null_se(o, law, n))
+            c, se_jk = members._jk(fn, sub)
+            se = max(se_jk, members._null_se(o, law, n))
             bad_jk += abs(c - want) > 3 * se_jk
             bad += abs(c - want) > 3 * se
         # normal: P(|z| > 3) = 0.27 %, 0.8 of 300 expected; 6 is P < 1e-3 under that rate
@@ -149,8 +150,8 @@ def test_spring_force_balance_counts_the_mean_kick_force():
     obs = [o for o in C.member_observables(m) if o.kind.startswith("identity spring")]
     assert [o.kind for o in obs] == [
         "identity spring <x> - a - rate <z> + <Delta(v) sgn v> + cubic <v^3> = 0"]
-    fn = beyond._estimators(exp, obs, beyond.stick_window(exp))[obs[0].label]
-    res, se = beyond._jk(fn, ens)
+    fn = members._estimators(exp, obs, beyond.stick_window(exp))[obs[0].label]
+    res, se = members._jk(fn, ens)
     assert abs(res) < 4 * se, (res, se)
 
 
@@ -186,7 +187,7 @@ def test_paper_law_of_the_figure_keeps_the_members_noise(shot):
     else:
         m = Model(1.0, 0.5, -0.2, math.inf, cubic=0.5, shot=ShotNoise(**shot))
     v = np.linspace(-3.0, 4.0, 7001)
-    dens, atom = beyond._paper_law(m, v)
+    dens, atom = members._paper_law(m, v)
     assert np.all(np.isfinite(dens)) and np.all(dens >= 0)
     # total probability of the base law: its density on the window plus its atom
     assert np.trapezoid(dens, v) + atom == pytest.approx(1.0, abs=2e-3)
@@ -217,7 +218,7 @@ def test_pure_shot_window_rows_are_converged_in_the_grid():
     assert m == Model(1.0, 0.5, 0.2, math.inf, shot=ShotNoise(1.0, 0.5))
     obs = [o for o in C.member_observables(m) if o.kind in ("P(v=0)", C.ABOVE_WINDOW)]
     assert len(obs) == 2
-    theory = beyond._stationary_theory(exp, m, obs, 0.05)
+    theory = members._stationary_theory(exp, m, obs, 0.05)
     n = 600_000
     ens = simulate_sde(m, v0=0.0, t_end=15.0, replicas=n, seed=12, sample_dt=15.0)
     v = ens.v[:, -1]
@@ -266,7 +267,7 @@ def test_gaussian_stick_fraction_row_matches_quadrature(member):
     exp = load_experiment(standard_circuit(member))
     m = exp.model
     obs = [o for o in C.member_observables(m) if o.kind == "stick fraction"]
-    got = beyond._stationary_theory(exp, m, obs, 0.05)[obs[0].label]
+    got = members._stationary_theory(exp, m, obs, 0.05)[obs[0].label]
     assert got == pytest.approx(_quad_window(m, 0.05), rel=1e-3)
 
 
@@ -278,7 +279,7 @@ def test_pure_shot_window_rows_with_the_density_jumping_at_zero():
     exp = _experiment(SLIP, 0.0)
     m = exp.model
     obs = [o for o in C.member_observables(m) if o.kind in ("P(v=0)", C.ABOVE_WINDOW)]
-    theory = beyond._stationary_theory(exp, m, obs, 0.05)
+    theory = members._stationary_theory(exp, m, obs, 0.05)
     n = 400_000
     v = simulate_sde(m, v0=0.0, t_end=30.0, replicas=n, seed=22, sample_dt=30.0).v[:, -1]
     for o, got in zip(obs, (np.mean(np.abs(v) < 0.05), np.mean(v >= 0.05))):

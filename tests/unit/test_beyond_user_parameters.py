@@ -24,7 +24,7 @@ import pytest
 
 from analogue.circuit.experiments import load_experiment
 from analogue.montecarlo import simulate_sde
-from analogue.report import beyond
+from analogue.study import members as beyond
 from analogue.study import catalogue as C
 from conftest import toml_text
 

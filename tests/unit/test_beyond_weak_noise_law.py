@@ -10,6 +10,7 @@ from scipy.optimize import brentq
 
 from analogue.circuit.experiments import load_experiment
 from analogue.report import beyond
+from analogue.study import members
 from analogue.report.family_figures import fig_member_stationary
 from analogue.theory import family
 
@@ -17,7 +18,7 @@ from analogue.theory import family
 def _member(name):
     exp = load_experiment(f"circuits/{name}.toml")
     m = exp.model
-    v, dens, atom = family.stationary_law(m, h=beyond._h(exp) / 2)
+    v, dens, atom = family.stationary_law(m, h=members._h(exp) / 2)
     assert atom == 0.0
     return exp, m, v, dens, beyond.weak_noise_law(m, v, dens)
 

@@ -1,13 +1,13 @@
 """Every shipped experiment's export reads the runs from the function its report runs them
 with (issue 20 item 4): the paper's model through study.runs.run_experiment_runs, a family
-member through report.beyond.member_runs (which analyse_member calls), with the same size;
+member through study.members.member_runs (which analyse_member calls), with the same size;
 and the line export prints before it starts names that size's replica counts.  No ngspice:
 the two runners are replaced by recorders."""
 import pytest
 
 from analogue import export
 from analogue.circuit.experiments import PAPER_EXPERIMENTS, load_experiment, standard_circuit
-from analogue.report import beyond
+from analogue.study import members as beyond
 from analogue.report.plan import RunOptions
 
 SHIPPED = (*PAPER_EXPERIMENTS, *beyond.MEMBERS)
