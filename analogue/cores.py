@@ -10,6 +10,13 @@ on 2 cores.  :func:`usable_cpus` takes the smallest of
 * ``os.cpu_count()``,
 
 and is at least 1.
+
+Processes that run beside ngspice workers (a Dask worker running decks, the report's
+Monte Carlo chunk processes) keep OpenMP/BLAS to one thread each (:data:`ONE_THREAD_ENV`,
+:func:`limit_worker_threads`): a numpy BLAS call would otherwise start one thread per core
+next to the ``workers`` ngspice processes that already fill them.  ngspice itself is linked
+against libgomp (Debian/Ubuntu builds); its children get the same variables (measured: the
+project's decks start one thread either way, so this only guards models that use OpenMP).
 """
 from __future__ import annotations
 
@@ -17,7 +24,11 @@ import math
 import os
 from pathlib import Path
 
-__all__ = ["cgroup_cpu_limit", "usable_cpus"]
+__all__ = ["ONE_THREAD_ENV", "cgroup_cpu_limit", "limit_worker_threads", "one_thread_env",
+           "usable_cpus"]
+
+#: OpenMP, OpenBLAS and MKL thread pools capped at one thread (read when a library starts)
+ONE_THREAD_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
 
 _CGROUP_ROOT = Path("/sys/fs/cgroup")
 
@@ -90,3 +101,18 @@ def usable_cpus() -> int:
     if quota is not None:
         counts.append(math.ceil(quota))
     return max(1, min(counts))
+
+
+def one_thread_env(env=None) -> dict:
+    """``env`` (default: this process's environment) with :data:`ONE_THREAD_ENV` set: the
+    environment of a child process that runs beside other workers (ngspice)."""
+    return {**(os.environ if env is None else env), **ONE_THREAD_ENV}
+
+
+def limit_worker_threads() -> None:
+    """Initialiser of a worker process that runs beside ngspice workers: OpenMP/BLAS limited
+    to one thread, for the libraries already loaded (threadpoolctl, process-wide and kept)
+    and, through the environment, for those loaded later and for the process's children."""
+    os.environ.update(ONE_THREAD_ENV)
+    from threadpoolctl import threadpool_limits
+    threadpool_limits(limits=1)

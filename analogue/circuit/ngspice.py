@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import checks
+from ..cores import one_thread_env
 from ..files import utf8 as _utf8
 from .rawfile import RawPlot, read_raw
 
@@ -192,7 +193,9 @@ def _spawn(argv, cwd, stdout, stderr):
     # HOME is the run's own directory: ngspice 39 segfaults without one (issue 19: HOME unset
     # gave a bare SIGSEGV) and reads ~/.spiceinit from it, which could change any deck's
     # numbers on one machine only; the deck is the whole circuit.
-    env = {**os.environ, "HOME": str(cwd)}
+    # OpenMP/BLAS capped at one thread (analogue.cores.ONE_THREAD_ENV): ngspice is linked
+    # against libgomp and runs beside `workers` other processes.
+    env = {**one_thread_env(), "HOME": str(cwd)}
     return subprocess.Popen(argv, cwd=cwd, stdin=subprocess.DEVNULL, stdout=stdout,
                             stderr=stderr, start_new_session=True, env=env)
 

@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any, Literal, Protocol, overload, runtime_chec
 
 import numpy as np
 
-from ..cores import usable_cpus
+from ..cores import limit_worker_threads, usable_cpus
 from .. import checks
 from ..checks import ArgumentTypeError
 from ..ensemble import Ensemble
@@ -221,6 +221,28 @@ def held_values(t_raw, rows, t_end, hold) -> np.ndarray:
     return rows[:, idx]
 
 
+_WORKER_LIMITED = False
+
+
+def _limit_dask_worker_threads() -> None:
+    """On a Dask worker process (once per process): OpenMP/BLAS to one thread
+    (:func:`analogue.cores.limit_worker_threads`), since the worker runs decks beside the
+    other workers' ngspice processes on the same machine.  Nothing in the caller's own
+    process (local runs use threads there, and its theory thread sets its own limit)."""
+    global _WORKER_LIMITED
+    if _WORKER_LIMITED:
+        return
+    dist = sys.modules.get("distributed")
+    if dist is None:
+        return
+    try:
+        dist.get_worker()
+    except ValueError:            # not in a Dask worker
+        return
+    limit_worker_threads()
+    _WORKER_LIMITED = True
+
+
 def run_batch(task: BatchTask) -> dict:
     """Run one deck; return ``{"v": (r, n_t), "x": (r, n_t), "info": {...}}`` in model units,
     plus ``"noise"``: (r, n_hold) the held velocity noise (model units) on each hold interval
@@ -229,6 +251,7 @@ def run_batch(task: BatchTask) -> dict:
     The raw file of a ``uic`` run starts after t = 0: the known initial values (v0, x = 0) are
     prepended before the linear resampling (see :func:`analogue.circuit.ngspice.resample`).
     """
+    _limit_dask_worker_threads()
     t_s = task.times * task.time_scale
     res = _ng.run_deck(task.text, timeout=task.timeout, t_stop=float(t_s[-1]), group=task.group,
                        files=task.files)
