@@ -28,7 +28,7 @@ from .catalogue import (stationary_label, stationary_observables, stationary_the
                                transition_label)
 from ..theory.friction_law import stationary_law_with_friction, transition_moments_with_friction
 
-__all__ = ["held_noise_pair", "integration_term", "real_diode_element",
+__all__ = ["held_noise_pair", "held_noise_pair_chunks", "PAIR_CHUNK", "integration_term", "real_diode_element",
            "real_diode_transition_element", "SE_MULTIPLIER", "RICHARDSON",
            "MIN_STEPS_PER_HOLD", "CIRCUIT_BIAS_TERMS", "terms_above_se", "terms_above_se_text"]
 
@@ -112,18 +112,43 @@ def terms_above_se_text(comps, limit: float = 1.0) -> list[str]:
     return lines
 
 
-def held_noise_pair(model: Model, *, v0, t_end: float, replicas: int, seed: int,
-                    noise_dt: float, sample_dt: float) -> tuple[Ensemble, Ensemble]:
-    """(held, white) SDE ensembles driven by common Wiener increments.
+# Replicas per chunk of a held/white pair (held_noise_pair_chunks): the rows of the noise are
+# drawn chunk after chunk from the pair's one stream (the same numbers as one draw of all
+# rows), and each chunk is integrated on its own, so that a process pool runs them on as many
+# cores as it has, with results bit for bit those of one loop over every row (the loop is
+# row-wise).  Fixed, not derived from the core count: the result never depends on it.
+# 1024 keeps the per-step numpy overhead small against the arithmetic (2048 rows per loop):
+# the quick work experiment's transition pairs (4096 replicas, 19 200 steps) are 4 chunks each.
+PAIR_CHUNK = 1024
 
-    ``noise_dt`` is the circuit's hold time (model units); the fine step divides it into at
-    least :data:`MIN_STEPS_PER_HOLD` steps (and is at most the model's ``default_dt``).  The
-    "white" run is itself noise held over one fine step, so the pair measures ``b(noise_dt) -
-    b(noise_dt / per_hold)`` of a bias ``b`` about linear in the hold (measured on the work
-    experiment's stick fraction: 25.7, 11.2, 4.7, 1.7 statistical errors at holds 0.01, 0.005,
-    0.0025, 0.00125): it falls short by about ``1/per_hold`` of the term.
-    """
-    from ..montecarlo import default_dt, simulate_sde_held_pair
+
+def _pair_chunk(model: Model, v0, z: np.ndarray, per_hold: int, dt: float, sample_dt: float,
+                t_end: float) -> tuple:
+    """One chunk of a held/white pair (a worker process's task): ``simulate_sde_held_pair``
+    on the rows ``z``, returned without the white run's noise (``z`` itself, which the caller
+    holds: not sent back), with this process's CPU seconds."""
+    import time
+
+    from ..montecarlo import simulate_sde_held_pair
+    c0 = time.process_time()
+    held, white = simulate_sde_held_pair(model, v0=v0, t_end=t_end, replicas=z.shape[0],
+                                         noise=z, noise_hold=per_hold, dt=dt,
+                                         sample_dt=sample_dt)
+    white = Ensemble(white.t, white.v, white.x, white.meta, None)
+    return held, white, time.process_time() - c0
+
+
+def held_noise_pair_chunks(model: Model, *, v0, t_end: float, replicas: int, seed: int,
+                           noise_dt: float, sample_dt: float, executor=None, timing=None):
+    """:func:`held_noise_pair` in chunks of :data:`PAIR_CHUNK` replicas, each submitted to
+    ``executor`` (a ``concurrent.futures`` executor, e.g. a process pool; None: run here) as
+    soon as its noise is drawn.  Returns a function that waits for the chunks and returns
+    ``(held, white)``, bit for bit :func:`held_noise_pair`'s.  ``timing``: a list that gets
+    ``(seconds drawing the noise in this thread, [CPU seconds of each chunk])`` when they are
+    collected (the report's critical path: the draw, then the longest chunk)."""
+    import time
+
+    from ..montecarlo import _given_v0, default_dt
 
     per_hold = max(MIN_STEPS_PER_HOLD, math.ceil(noise_dt / default_dt(model) - 1e-9))
     dt = noise_dt / per_hold
@@ -132,22 +157,72 @@ def held_noise_pair(model: Model, *, v0, t_end: float, replicas: int, seed: int,
         raise ValueError(f"t_end={t_end!r} must be a whole number of noise hold times {noise_dt!r}")
     sample_dt = noise_dt * max(1, round(sample_dt / noise_dt))
     rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(7,)))
-    z = rng.standard_normal((replicas, n_hold * per_hold))
     if model.shot is not None:
-        # shot + Gaussian noise (the fused loop is Gaussian-only): two runs whose kicks come
-        # from one seed, so that the pair differs by the hold alone (a shot + Gaussian member's
-        # report failed on the fused loop's refusal)
-        from ..montecarlo import simulate_sde
-        kicks = int(np.random.SeedSequence(seed, spawn_key=(8,)).generate_state(1)[0])
-        kw = dict(v0=v0, t_end=t_end, replicas=replicas, dt=dt, sample_dt=sample_dt, seed=kicks)
-        held = z.reshape(replicas, n_hold, per_hold).mean(axis=2)
-        return (simulate_sde(model, noise=held, noise_hold=per_hold, **kw),
-                simulate_sde(model, noise=z, **kw))
-    # both in one loop, each hold's mean driving its per_hold fine steps (the repeated array
-    # is never built: 256 x 160000 steps, 330 MB, for the quick work experiment's stationary
-    # pair); bit for bit the two simulate_sde runs
-    return simulate_sde_held_pair(model, v0=v0, t_end=t_end, replicas=replicas, noise=z,
-                                  noise_hold=per_hold, dt=dt, sample_dt=sample_dt)
+        z = rng.standard_normal((replicas, n_hold * per_hold))
+        pair = _held_pair_with_kicks(model, v0=v0, t_end=t_end, replicas=replicas, seed=seed,
+                                     z=z, per_hold=per_hold, dt=dt, sample_dt=sample_dt)
+        return lambda: pair
+    v_all, v0_meta = _given_v0(v0, replicas, f"a number or an array of shape ({replicas},)")
+    t_draw = time.thread_time()
+    parts = []
+    for lo in range(0, replicas, PAIR_CHUNK):
+        hi = min(replicas, lo + PAIR_CHUNK)
+        # row after row from the one stream: the numbers of rng.standard_normal((replicas, n))
+        z = rng.standard_normal((hi - lo, n_hold * per_hold))
+        v0_c = v0 if np.ndim(v0) == 0 else v_all[lo:hi]
+        args = (model, v0_c, z, per_hold, dt, sample_dt, t_end)
+        parts.append((z, executor.submit(_pair_chunk, *args) if executor is not None
+                      else _pair_chunk(*args)))
+    t_draw = time.thread_time() - t_draw
+
+    def collect() -> tuple[Ensemble, Ensemble]:
+        done = [(z, f.result() if executor is not None else f) for z, f in parts]
+        if timing is not None:
+            timing.append((t_draw, [r[2] for _, r in done]))
+        h0, w0 = done[0][1][0], done[0][1][1]
+        if len(done) == 1:
+            return h0, Ensemble(w0.t, w0.v, w0.x, w0.meta, done[0][0])
+        meta = {"replicas": replicas, "v0": v0_meta}
+        held = Ensemble(h0.t, np.vstack([r[0].v for _, r in done]),
+                        np.vstack([r[0].x for _, r in done]), {**h0.meta, **meta},
+                        np.vstack([r[0].noise for _, r in done]))
+        white = Ensemble(w0.t, np.vstack([r[1].v for _, r in done]),
+                         np.vstack([r[1].x for _, r in done]), {**w0.meta, **meta},
+                         np.vstack([z for z, _ in done]))
+        return held, white
+    return collect
+
+
+def held_noise_pair(model: Model, *, v0, t_end: float, replicas: int, seed: int,
+                    noise_dt: float, sample_dt: float, executor=None) -> tuple[Ensemble, Ensemble]:
+    """(held, white) SDE ensembles driven by common Wiener increments.
+
+    ``noise_dt`` is the circuit's hold time (model units); the fine step divides it into at
+    least :data:`MIN_STEPS_PER_HOLD` steps (and is at most the model's ``default_dt``).  The
+    "white" run is itself noise held over one fine step, so the pair measures ``b(noise_dt) -
+    b(noise_dt / per_hold)`` of a bias ``b`` about linear in the hold (measured on the work
+    experiment's stick fraction: 25.7, 11.2, 4.7, 1.7 statistical errors at holds 0.01, 0.005,
+    0.0025, 0.00125): it falls short by about ``1/per_hold`` of the term.
+
+    Integrated in chunks of :data:`PAIR_CHUNK` replicas (on ``executor`` when given:
+    :func:`held_noise_pair_chunks`), bit for bit one loop over all replicas.
+    """
+    return held_noise_pair_chunks(model, v0=v0, t_end=t_end, replicas=replicas, seed=seed,
+                                  noise_dt=noise_dt, sample_dt=sample_dt, executor=executor)()
+
+
+def _held_pair_with_kicks(model: Model, *, v0, t_end, replicas, seed, z, per_hold, dt,
+                          sample_dt) -> tuple[Ensemble, Ensemble]:
+    """Shot + Gaussian noise (the fused loop is Gaussian-only): two runs whose kicks come from
+    one seed, so that the pair differs by the hold alone (a shot + Gaussian member's report
+    failed on the fused loop's refusal)."""
+    from ..montecarlo import simulate_sde
+    n_hold = z.shape[1] // per_hold
+    kicks = int(np.random.SeedSequence(seed, spawn_key=(8,)).generate_state(1)[0])
+    kw = dict(v0=v0, t_end=t_end, replicas=replicas, dt=dt, sample_dt=sample_dt, seed=kicks)
+    held = z.reshape(replicas, n_hold, per_hold).mean(axis=2)
+    return (simulate_sde(model, noise=held, noise_hold=per_hold, **kw),
+            simulate_sde(model, noise=z, **kw))
 
 
 def real_diode_element(mapping: CircuitMapping, *, threshold: float, taus,

@@ -13,8 +13,8 @@ from dataclasses import dataclass, field, replace
 from ..circuit.experiments import Experiment
 from ..circuit.mapping import map_model
 from ..theory.exact import sample_stationary
-from .budget import (SE_MULTIPLIER, held_noise_pair, integration_term, real_diode_element,
-                     real_diode_transition_element)
+from .budget import (SE_MULTIPLIER, held_noise_pair_chunks, integration_term,
+                     real_diode_element, real_diode_transition_element)
 from .metrics import Budget, compare
 from ..estimators.resampling import jackknife, jackknife_difference
 from ..estimators.smoothed_indicator import kernel_width
@@ -101,15 +101,24 @@ class BandwidthTerms:
     transition: dict                   # v0 -> {label: (difference, se)}
     stationary: dict                   # label -> (difference, se)
     wall_time_s: float = 0.0
+    # how the Monte Carlo chunks ran (study.budget.held_noise_pair_chunks), for the report's
+    # critical path: seconds drawing the noise and computing the jackknives in the calling
+    # thread, and the CPU seconds of the longest chunk
+    timing: dict = field(default_factory=dict)
 
 
 def bandwidth_terms(exp: Experiment, settings: ReportSettings, *,
-                    progress=None) -> BandwidthTerms:
+                    progress=None, executor=None) -> BandwidthTerms:
     """Held/white Monte Carlo pairs (:func:`~analogue.study.budget.held_noise_pair`) of one
     experiment, on the seeds of its :class:`~analogue.study.seeds.SeedPlan`, and their paired
     jackknife differences: the budget's bandwidth term, bit for bit what :func:`analyse`
     computes when not given it.  ``settings``: the report settings the runs use
-    (``exp.report.for_options(opts)``)."""
+    (``exp.report.for_options(opts)``).  ``executor``: where the pairs' chunks of replicas
+    run (:func:`~analogue.study.budget.held_noise_pair_chunks`; the report passes a process
+    pool of the usable cores), each pair's chunks queued before the previous pair is waited
+    for; the numbers do not depend on it (bit for bit the same with any executor or none).
+    ``timing`` of the result: seconds drawing the noise and computing the jackknives in this
+    thread, the chunks' count, total and longest CPU seconds (the report's critical path)."""
     import time
     t0 = time.perf_counter()
     tick = progress or (lambda *_: None)
@@ -118,29 +127,56 @@ def bandwidth_terms(exp: Experiment, settings: ReportSettings, *,
     model_eff, noise_dt = mapping.model_effective, mapping.noise_dt
     seeds = SeedPlan(exp.seed)
     times = list(exp.histogram_times)
-    transition = {}
-    for i, v0 in enumerate(exp.v0):
-        tick(f"{exp.name}: held-noise Monte Carlo pair from v0={v0:g}")
-        held, white = held_noise_pair(model_eff, v0=v0, t_end=max(times), replicas=MC_REPLICAS,
-                                      seed=seeds.mc_transition(i), noise_dt=noise_dt,
-                                      sample_dt=exp.sample_dt)
-        def fn(e, v0=v0):
-            return transition_values(e, v0, times)
-        transition[v0] = jackknife_difference(fn, held, white)
     thr = settings.stick_threshold * model.velocity_scale
     taus = stationary_taus(exp, settings)
     stationary_fn = StationaryValues(burn_in=settings.stationary_burn_in, threshold=thr,
                                      force=model.force, taus=tuple(taus))
-    v0_mc = sample_stationary(model_eff, MC_STATIONARY_REPLICAS, seeds.mc_stationary_v0)
-    tick(f"{exp.name}: held-noise Monte Carlo pair (stationary)")
-    # the stationary runs' own (finer) hold: plan.stationary_noise_dt
-    held, white = held_noise_pair(model_eff, v0=v0_mc, t_end=settings.stationary_t_end,
-                                  replicas=v0_mc.size, seed=seeds.mc_stationary,
-                                  noise_dt=stationary_noise_dt(noise_dt, settings),
-                                  sample_dt=exp.sample_dt)
-    stationary = jackknife_difference(stationary_fn, held, white)
+    chunks: list = []
+    common = dict(sample_dt=exp.sample_dt, executor=executor, timing=chunks)
+
+    def transition_pair(i, v0):
+        tick(f"{exp.name}: held-noise Monte Carlo pair from v0={v0:g}")
+        return held_noise_pair_chunks(model_eff, v0=v0, t_end=max(times), replicas=MC_REPLICAS,
+                                      seed=seeds.mc_transition(i), noise_dt=noise_dt, **common)
+
+    def stationary_pair():
+        v0_mc = sample_stationary(model_eff, MC_STATIONARY_REPLICAS, seeds.mc_stationary_v0)
+        tick(f"{exp.name}: held-noise Monte Carlo pair (stationary)")
+        # the stationary runs' own (finer) hold: plan.stationary_noise_dt
+        return held_noise_pair_chunks(model_eff, v0=v0_mc, t_end=settings.stationary_t_end,
+                                      replicas=v0_mc.size, seed=seeds.mc_stationary,
+                                      noise_dt=stationary_noise_dt(noise_dt, settings),
+                                      **common)
+
+    jobs = [(v0, lambda i=i, v0=v0: transition_pair(i, v0)) for i, v0 in enumerate(exp.v0)]
+    jobs.append((None, stationary_pair))
+    values = {v0: (lambda e, v0=v0: transition_values(e, v0, times)) for v0 in exp.v0}
+    values[None] = stationary_fn
+    # each pair's chunks are queued before the previous pair is waited for (one pair ahead:
+    # the noise of two pairs in memory at most, 1.3 GB for the quick work experiment's
+    # 4096 x 19 200 transition pairs, instead of every pair's at once)
+    out: dict = {}
+    after = 0.0
+    queued: list = []
+    for key, start in [*jobs, (None, None)]:
+        if start is not None:
+            queued.append((key, start()))
+        if len(queued) == 2 or (start is None and queued):
+            k, collect = queued.pop(0)
+            held, white = collect()
+            c0 = time.thread_time()
+            out[k] = jackknife_difference(values[k], held, white)
+            after += time.thread_time() - c0
+            del held, white
+    stationary = out.pop(None)
+    transition = {v0: out[v0] for v0 in exp.v0}
+    timing = {"draw_s": round(sum(c[0] for c in chunks), 3), "jackknife_s": round(after, 3),
+              "chunks": sum(len(c[1]) for c in chunks),
+              "longest_chunk_s": round(max((x for c in chunks for x in c[1]), default=0.0), 3),
+              "chunks_cpu_s": round(sum(x for c in chunks for x in c[1]), 3)}
     return BandwidthTerms(threshold=thr, taus=tuple(taus), transition=transition,
-                          stationary=stationary, wall_time_s=time.perf_counter() - t0)
+                          stationary=stationary, wall_time_s=time.perf_counter() - t0,
+                          timing=timing)
 
 
 def analyse(runs: ExperimentRuns, *, theory: ExperimentTheory | None = None,
