@@ -51,6 +51,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import checks, noise_free
+from .variants import (FrictionLaw, Noise, Restoring, build_friction, build_noise,
+                       build_restoring, noise_from_mapping)
 
 __all__ = ["LIMIT", "VELOCITY_LIMIT", "MechanicalParameters", "Model", "ShotNoise"]
 
@@ -119,21 +121,6 @@ class ShotNoise:
         return {"rate": self.rate, "mean": self.mean, "two_sided": self.two_sided}
 
 
-def _logcosh(x: ArrayLike) -> np.ndarray:
-    """ln cosh(x) without overflow."""
-    ax = np.abs(x)
-    return ax + np.log1p(np.exp(-2.0 * ax)) - math.log(2.0)
-
-
-# Composite Gauss-Legendre rule on [0, 1] for the Stribeck-tanh integral (20 panels x 16
-# nodes over 40 epsilon: tanh's poles sit 1.57 epsilon off the axis, panel half-width is
-# epsilon, so the error is ~3.4^-32, below double precision).
-_GL_X, _GL_W = np.polynomial.legendre.leggauss(16)
-_PANELS = 20
-_GL_NODES = ((np.arange(_PANELS)[:, None] + 0.5 * (_GL_X[None, :] + 1.0)) / _PANELS).ravel()
-_GL_WEIGHTS = np.tile(0.5 * _GL_W / _PANELS, _PANELS)
-
-
 @dataclass(frozen=True)
 class Model:
     """Parameters of the reduced stick-slip model (paper, eqs. (4) and (5)) and its family.
@@ -157,7 +144,15 @@ class Model:
 
     Keyword-only (the extensions; see the module docstring):
     cubic >= 0, stribeck = None or (delta_s >= 0, v_s > 0), spring >= 0, x0 (initial
-    position), shot = None or :class:`ShotNoise` (a mapping with its fields is accepted).
+    position), shot = None or :class:`ShotNoise` (a mapping with its fields is accepted),
+    noise = None or a registered noise kind (:data:`analogue.variants.NOISE_KINDS`, e.g.
+    ``analogue.variants.OrnsteinUhlenbeck(tau_c)``, or its ``as_dict`` mapping).
+
+    The variants (issue 20) are built here, once, and validated here: ``model.friction``
+    (:mod:`analogue.variants.friction`: Coulomb, Stribeck, Cubic), ``model.restoring``
+    (:mod:`analogue.variants.spring`: Free, Spring) and ``model.noise``
+    (:mod:`analogue.variants.noise`: Silent, Gaussian, Shot, or the kind given); what differs
+    between the members is found on them by dispatch.
     """
 
     tau_m: float
@@ -172,6 +167,7 @@ class Model:
     spring: float = 0.0
     x0: float = 0.0
     shot: ShotNoise | None = field(default=None)
+    noise: Noise | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         s = object.__setattr__
@@ -207,29 +203,62 @@ class Model:
         if self.shot is not None and max(self.shot.rate * tau, 1.0) * self.shot.mean > VELOCITY_LIMIT:
             raise ValueError(f"shot.mean * max(1, shot.rate tau_m) exceeds {VELOCITY_LIMIT:g}; "
                              f"reduce shot.mean or shot.rate")
+        # The variants, chosen once (analogue.variants): a given noise kind is bound to gamma
+        # and shot (and refuses what it cannot take); otherwise both choose the built-in kind.
+        spec = self.noise
+        if isinstance(spec, Mapping):
+            spec = noise_from_mapping(spec)
+        elif spec is not None and not isinstance(spec, Noise):
+            raise TypeError(f"noise must be None or a noise kind of analogue.variants, got {spec!r}")
+        s(self, "noise", (spec.bind(self.gamma, self.shot) if spec is not None
+                          else build_noise(self.gamma, self.shot)))
+        s(self, "_friction", build_friction(self.delta, self.epsilon, self.cubic, self.stribeck))
+        s(self, "_restoring", build_restoring(self.spring, self.x0))
 
     # ------------------------------------------------------------------ family flags
     @property
+    def friction(self) -> FrictionLaw:
+        """The friction law (:mod:`analogue.variants.friction`); ``model.friction(v)`` is the
+        dry-friction acceleration, as :meth:`coulomb`."""
+        return self.__dict__["_friction"]
+
+    @property
+    def restoring(self) -> Restoring:
+        """The restoring force (:mod:`analogue.variants.spring`): Free or Spring."""
+        return self.__dict__["_restoring"]
+
+    @property
     def dimension(self) -> int:
         """1 for the velocity-only members, 2 with a spring (state (x, v))."""
-        return 2 if self.spring > 0 else 1
+        return self.restoring.dimension
 
     @property
     def is_paper(self) -> bool:
         """True for the paper's model (no extension field set; Gaussian noise on)."""
-        return (self.cubic == 0 and self.stribeck is None and self.spring == 0
-                and self.shot is None and math.isfinite(self.gamma))
+        return self.friction.closed_form and self.dimension == 1 and self.noise_kind.paper
+
+    @property
+    def noise_kind(self) -> Noise:
+        """``self.noise``, typed (always a variant after construction)."""
+        assert self.noise is not None
+        return self.noise
 
     @property
     def is_noisy(self) -> bool:
-        return math.isfinite(self.gamma) or self.shot is not None
+        return self.noise_kind.is_noisy
 
     @property
     def is_gradient(self) -> bool:
         """Drift ``-U'(v)`` in one dimension with (only) Gaussian additive noise, so that
         ``p_s ~ exp(-gamma U)`` is the exact stationary law and the weak-noise theory of
         the paper (optimal paths of a 1-D gradient system) applies."""
-        return self.dimension == 1 and self.shot is None and math.isfinite(self.gamma)
+        return self.dimension == 1 and self.noise_kind.paper
+
+    @property
+    def closed_form(self) -> bool:
+        """The paper's law without a spring: the noise-free flow has the closed form of
+        :meth:`deterministic` (epsilon = 0) and needs no numerical integration."""
+        return self.friction.closed_form and self.restoring.closed_form
 
     # ------------------------------------------------------------------ units
     @classmethod
@@ -259,16 +288,9 @@ class Model:
         only when they differ from their defaults, so the paper's model keeps its keys."""
         d: dict[str, Any] = {"tau_m": self.tau_m, "delta": self.delta, "a": self.a,
                              "gamma": self.gamma, "mass": self.mass, "epsilon": self.epsilon}
-        if self.cubic != 0:
-            d["cubic"] = self.cubic
-        if self.stribeck is not None:
-            d["stribeck"] = list(self.stribeck)
-        if self.spring != 0:
-            d["spring"] = self.spring
-        if self.x0 != 0:
-            d["x0"] = self.x0
-        if self.shot is not None:
-            d["shot"] = self.shot.as_dict()
+        d.update(self.friction.entries())
+        d.update(self.restoring.entries())
+        d.update(self.noise_kind.entries())
         return d
 
     # ------------------------------------------------------------- derived
@@ -287,13 +309,12 @@ class Model:
         """Thermal-like velocity scale ``sqrt(tau_m/gamma)`` (the Delta = 0 stationary std);
         with shot noise the scale ``sqrt(tau_m rate mean^2)`` of its diffusion limit is added
         in quadrature."""
-        d = self.noise_intensity + (self.shot.intensity if self.shot is not None else 0.0)
-        return math.sqrt(self.tau_m * d)
+        return math.sqrt(self.tau_m * self.noise_kind.velocity_intensity)
 
     @property
     def static_friction(self) -> float:
         """``Delta(0)``: the threshold |force| that keeps a resting object stuck."""
-        return self.stribeck[0] if self.stribeck is not None else self.delta
+        return self.friction.static
 
     @property
     def regime(self) -> str:
@@ -305,73 +326,27 @@ class Model:
         """Deterministic attractor: 0 if |a| <= Delta(0), else ``v_ss = (a - Delta sgn a) tau_m``
         (eq. (14), and its mirror for a < -Delta); for the family, the zero of the drift
         reached from rest.  With a spring every motion ends at rest: 0."""
-        if abs(self.a) <= self.static_friction or self.spring > 0:
-            return 0.0
-        if self.cubic == 0 and self.stribeck is None:
-            return (self.a - math.copysign(self.delta, self.a)) * self.tau_m
-        sgn = math.copysign(1.0, self.a)
-        # outward speed g(u) = sgn * drift(sgn u): > 0 at u = 0 (|a| > Delta(0)) and <= 0 at
-        # u = |a| tau_m (there the drift is -Delta(v) - cubic v^3 <= 0); take the first zero.
-        def g(u: float) -> float:
-            return sgn * float(self.drift(sgn * u))
-        grid = np.linspace(0.0, abs(self.a) * self.tau_m, 2049)
-        vals = sgn * self.drift(sgn * grid[1:])
-        idx = int(np.flatnonzero(vals <= 0)[0]) + 1
-        if vals[idx - 1] == 0:
-            return sgn * float(grid[idx])
-        from scipy import optimize  # scipy on first use: `import analogue` starts fast
-        return sgn * optimize.brentq(g, grid[idx - 1], grid[idx], xtol=1e-15, rtol=1e-15)
+        return self.restoring.attractor(self)
 
     # ---------------------------------------------------------- friction law
     def friction_magnitude(self, v: ArrayLike) -> np.ndarray:
         """``Delta(v)``: Delta, or the Stribeck curve ``Delta + (delta_s - Delta) e^{-|v|/v_s}``."""
-        v = np.asarray(v, dtype=float)
-        if self.stribeck is None:
-            return np.full_like(v, self.delta)
-        ds, vs = self.stribeck
-        return self.delta + (ds - self.delta) * np.exp(-np.abs(v) / vs)
+        return self.friction.magnitude(v)
 
     def coulomb(self, v: ArrayLike) -> np.ndarray:
         """Dry-friction acceleration ``Delta(v) sgn(v)`` (or ``Delta(v) tanh(v/epsilon)``)."""
-        v = np.asarray(v, dtype=float)
-        shape = np.tanh(v / self.epsilon) if self.epsilon > 0 else np.sign(v)
-        return self.friction_magnitude(v) * shape
-
-    friction = coulomb
+        return self.friction.dry(v)
 
     def drift(self, v: ArrayLike, x: ArrayLike = 0.0) -> np.ndarray:
         """The force law ``-v/tau_m - cubic v^3 - Delta(v) sgn(v) - spring x + a`` (eq. (13)
         for the paper's model, where it is ``-U'(v)``)."""
         v = np.asarray(v, dtype=float)
         out = -v / self.tau_m - self.coulomb(v) + self.a
-        if self.cubic:
-            out = out - self.cubic * v**3
-        if self.spring:
-            out = out - self.spring * np.asarray(x, dtype=float)
-        return out
+        return self.restoring.add_force(self.friction.add_drift(out, v), x)
 
     def _dry_potential(self, v: ArrayLike) -> np.ndarray:
         """``integral_0^v Delta(u) sgn(u) du`` (or with tanh)."""
-        av = np.abs(np.asarray(v, dtype=float))
-        d, eps = self.delta, self.epsilon
-        base = d * eps * _logcosh(av / eps) if eps > 0 else d * av
-        if self.stribeck is None:
-            return base
-        ds, vs = self.stribeck
-        if eps == 0:
-            return base + (ds - d) * vs * -np.expm1(-av / vs)
-        # integral_0^|v| e^{-u/v_s} tanh(u/eps) du: quadrature up to min(|v|, 40 eps), where
-        # tanh = 1 to double precision, then the closed form of the exponential.
-        cut = np.minimum(av, 40.0 * eps)
-        flat = cut.ravel()
-        head = np.empty_like(flat)
-        for i in range(0, flat.size, 4096):  # chunks: 4096 x 320 nodes (10 MB) at a time
-            u = flat[i:i + 4096, None] * _GL_NODES
-            head[i:i + 4096] = flat[i:i + 4096] * np.sum(_GL_WEIGHTS * np.exp(-u / vs)
-                                                        * np.tanh(u / eps), axis=-1)
-        head = head.reshape(cut.shape)
-        tail = vs * (np.exp(-cut / vs) - np.exp(-av / vs))
-        return base + (ds - d) * (head + tail)
+        return self.friction.dry_potential(v)
 
     def potential(self, v: ArrayLike) -> np.ndarray:
         """Effective potential U(v) (eq. (5)) of the velocity equation; with epsilon > 0 the
@@ -380,9 +355,7 @@ class Model:
         a function of v: for spring > 0 this is U at x = 0 and the motion is not gradient)."""
         v = np.asarray(v, dtype=float)
         u = v * v / (2.0 * self.tau_m) + self._dry_potential(v) - self.a * v
-        if self.cubic:
-            u = u + 0.25 * self.cubic * v**4
-        return u
+        return self.friction.add_potential(u, v)
 
     def _support_bound(self, level: float = 800.0) -> float:
         """R with ``gamma (U(v) - min U) > level`` for |v| > R: U >= v^2/(2 tau_m) - |a||v|
@@ -393,41 +366,12 @@ class Model:
     def potential_minimum(self) -> float:
         """Location of the (global) minimum of U.  For the paper's model U is strictly convex
         (U'' >= 1/tau_m); Stribeck's velocity weakening can make it double-welled."""
-        if self.is_paper or (self.cubic == 0 and self.stribeck is None):
-            if self.epsilon == 0:
-                return self.attractor
-            from scipy import optimize
-            lo = (self.a - self.delta) * self.tau_m - 1.0
-            hi = (self.a + self.delta) * self.tau_m + 1.0
-            return optimize.brentq(lambda v: -float(self.drift(v)), lo, hi, xtol=1e-15, rtol=1e-15)
-        # U(0) = 0 and U >= v^2/(2 tau_m) - |a||v|, so the minimum lies in |v| <= 2 tau_m |a|.
-        r = 2.0 * self.tau_m * abs(self.a)
-        if r == 0:
-            return 0.0
-        # Candidates: the kink v = 0 and every zero of the drift -U' (bracketed on a grid
-        # that has 0 as a node, so no bracket straddles the jump of the sgn law).
-        from scipy import optimize
-        grid = np.linspace(-r, r, 8001)
-        f = self.drift(grid)
-        cands = [0.0]
-        for i in np.flatnonzero(np.sign(f[:-1]) * np.sign(f[1:]) <= 0):
-            lo, hi = grid[i], grid[i + 1]
-            if self.epsilon == 0 and (lo == 0.0 or hi == 0.0):
-                continue
-            if f[i] == 0:
-                cands.append(float(lo))
-            elif f[i + 1] == 0:
-                cands.append(float(hi))
-            else:
-                cands.append(optimize.brentq(lambda v: float(self.drift(v)), lo, hi,
-                                             xtol=1e-15, rtol=1e-15))
-        u = [float(self.potential(c)) for c in cands]
-        return cands[int(np.argmin(u))]
+        return self.friction.potential_minimum(self)
 
     def _require_gradient(self, what: str) -> None:
-        if self.shot is not None or self.spring > 0:
+        if not (self.dimension == 1 and self.noise_kind.white_gaussian_only):
             raise ValueError(f"{what} = exp(-gamma U)/Z holds only for one-dimensional members "
-                             f"with Gaussian noise (spring=0, shot=None); use "
+                             f"with white Gaussian noise (spring=0, shot=None, noise=None); use "
                              f"analogue.theory.exact for this model")
         if not math.isfinite(self.gamma):
             raise ValueError(f"{what} needs noise: gamma must be finite, got {self.gamma!r}")
@@ -444,31 +388,7 @@ class Model:
         return cached
 
     def _log_normaliser(self) -> float:
-        g, tau = self.gamma, self.tau_m
-        if self.epsilon == 0 and self.cubic == 0 and self.stribeck is None:
-            # integral_0^inf exp(-v^2/(2 s^2) - b v) dv = s sqrt(2 pi) exp(b^2 s^2/2) Phi(-b s)
-            from scipy import special
-            s = math.sqrt(tau / g)
-            def half(b: float) -> float:
-                return (math.log(s * math.sqrt(2 * math.pi)) + 0.5 * (b * s) ** 2
-                        + float(special.log_ndtr(-b * s)))
-            return float(np.logaddexp(half(g * (self.delta - self.a)), half(g * (self.delta + self.a))))
-        v_star = self.potential_minimum()
-        u_star = float(self.potential(v_star))
-        if self.cubic == 0 and self.stribeck is None:
-            # Smooth law: U'' >= 1/tau_m, so the density is log-concave with width <=
-            # sqrt(tau/g); integrating 40 widths either side of the mode captures everything.
-            w = 40.0 * math.sqrt(tau / g)
-            lo, hi = v_star - w, v_star + w
-        else:
-            r = self._support_bound()
-            lo, hi = -r, r
-        pts = sorted({v_star, 0.0, -self.epsilon, self.epsilon})
-        pts = [p for p in pts if lo < p < hi]
-        from scipy import integrate
-        val, _ = integrate.quad(lambda v: math.exp(-g * (float(self.potential(v)) - u_star)),
-                                lo, hi, points=pts or None, limit=400, epsabs=0, epsrel=1e-12)
-        return math.log(val) - g * u_star
+        return self.friction.log_normaliser(self)
 
     def stationary_pdf(self, v: ArrayLike) -> np.ndarray:
         """Normalised stationary density ``p_s = exp(-gamma U)/Z`` (eq. (6)); exact at every
@@ -485,7 +405,7 @@ class Model:
         if v0 == 0:
             return 0.0
         s = 1.0 if v0 > 0 else -1.0
-        if self.cubic or self.stribeck is not None or self.spring:
+        if not self.closed_form:
             return noise_free.stick_time(self, v0)
         b = (self.delta - s * self.a) * self.tau_m  # relaxation offset on v0's half line
         if b <= 0:
@@ -506,7 +426,7 @@ class Model:
         t = np.asarray(t, dtype=float)
         if np.any(t < 0) or not np.all(np.isfinite(t)):
             raise ValueError("t must be finite and >= 0")
-        if self.cubic or self.stribeck is not None or self.spring:
+        if not self.closed_form:
             return noise_free.flow(self, v0, self.x0, t)[0]
         if self.epsilon > 0:
             return self._deterministic_smooth(v0, t)

@@ -64,20 +64,14 @@ def default_dt(model: Model) -> float:
         dt = min(dt, t_kink / 50.0)
     if d0 > 0 and model.epsilon > 0:
         dt = min(dt, 0.1 * model.epsilon / d0)
-    # Family members: resolve the spring period, the Stribeck length crossed at the typical
-    # speed, and keep the explicit cubic term stable (dt * 3 cubic v^2 <= 1/50 at 6 speeds).
+    # Family members (each variant's own limit, analogue.variants): the spring period, the
+    # Stribeck length crossed at the typical speed, the explicit cubic term's stability
+    # (dt * 3 cubic v^2 <= 1/50 at 6 speeds), 1/20 of the mean time between kicks.
     v_typ = max(model.velocity_scale, abs(model.attractor), 1e-300)
-    if model.shot is not None:
-        v_typ = max(v_typ, model.shot.mean)
-    if model.spring > 0:
-        dt = min(dt, 2.0 * math.pi / math.sqrt(model.spring) / 500.0)
-    if model.stribeck is not None:
-        dt = min(dt, model.stribeck[1] / (50.0 * 6.0 * v_typ))
-    if model.cubic > 0:
-        dt = min(dt, 1.0 / (50.0 * 3.0 * model.cubic * (6.0 * v_typ) ** 2))
-    if model.shot is not None:
-        dt = min(dt, 0.05 / model.shot.rate)
-    return dt
+    v_typ = model.noise_kind.typical_speed(v_typ)
+    dt = model.restoring.dt_limit(dt)
+    dt = model.friction.dt_limit(dt, v_typ)
+    return model.noise_kind.dt_limit(dt)
 
 
 def _streams(seed):
@@ -234,8 +228,8 @@ def simulate_sde(model: Model, *, v0, t_end: float, replicas: int, seed=None, dt
         v_out, x_out, n_kicks = _event_driven(model, v, n_out, per * dt, dt, kick_rng)
     else:
         parts = None if noise is None else ((noise, noise_hold),)
-        v_out, x_out, n_kicks = _stepped(model, v, n_steps, per, dt, scheme, parts, noise_rng,
-                                         kick_rng)
+        v_out, x_out, n_kicks = model.noise_kind.stepped(model, v, n_steps, per, dt, scheme,
+                                                         parts, noise_rng, kick_rng, _stepped)
 
     t = np.arange(n_out) * (per * dt)
     meta = _meta(model, seed, dt, per, scheme, noise is not None, v0_meta, replicas, t,
@@ -264,14 +258,9 @@ def _meta(model, seed, dt, per, scheme, given, v0_meta, replicas, t, noise_hold,
     if given:
         # Ensemble.noise: one standard normal per step (per hold), as for simulate
         meta["noise_dt"] = dt * noise_hold
-    if model.shot is not None:
-        meta["kicks"] = int(n_kicks)
-        meta["shot_scheme"] = ("compound Poisson sum per step" if math.isfinite(g)
-                               else "event-driven, exact between kicks" if _closed_form_flow(model)
-                               else "event-driven, tabulated flow between kicks"
-                               if model.spring == 0 else "event-driven, RK4 between kicks")
-    if model.spring > 0:
-        meta["position"] = "model.x0 + x (x = integral of v, x[:, 0] = 0)"
+    meta.update(model.noise_kind.mc_meta(n_kicks, "compound Poisson sum per step"
+                                         if math.isfinite(g) else _FLOW_ROUTES[_flow_route(model)]))
+    meta.update(model.restoring.mc_meta())
     return meta
 
 
@@ -299,9 +288,9 @@ def simulate_sde_held_pair(model: Model, *, v0, t_end: float, replicas: int, noi
     ``noise``: standard normals (replicas, n_steps), ``n_steps = t_end / dt`` a whole number
     of holds of ``noise_hold`` steps."""
     checks.instance("model", model, Model, description="an analogue.Model")
-    if not math.isfinite(model.gamma) or model.shot is not None:
-        raise ValueError("simulate_sde_held_pair needs Gaussian noise only (finite gamma, "
-                         "shot = None)")
+    if not model.noise_kind.paper:
+        raise ValueError("simulate_sde_held_pair needs white Gaussian noise only (finite "
+                         "gamma, shot = None, noise = None)")
     scheme = _ALIASES.get(scheme, scheme) if isinstance(scheme, str) else scheme
     if scheme not in SCHEMES:
         raise ValueError(f"scheme must be one of {SCHEMES} (or an alias), got {scheme!r}")
@@ -336,12 +325,7 @@ def _coulomb_fn(model):
     """``model.coulomb`` as a closure: the same floating-point operations (``Delta * sgn(v)``,
     ``Delta * tanh(v/epsilon)``) without its per-call conversions (``asarray``, ``full_like``),
     which cost about as much as the step itself (measured: 400 000 calls, 8 s of 20 s)."""
-    if model.stribeck is not None:
-        return model.coulomb
-    delta, eps = model.delta, model.epsilon
-    if eps > 0:
-        return lambda v: delta * np.tanh(v / eps)
-    return lambda v: delta * np.sign(v)
+    return model.friction.fast_dry()
 
 
 def _coefficients(scheme, dt, tau, g):
@@ -373,7 +357,7 @@ def _stepped(model, v, n_steps, per, dt, scheme, parts, noise_rng, kick_rng):
     per step (added in the same order: a cumulative sum along the step axis would be as
     exact but is 10x slower on a C-ordered block).  A spring feeds the position back into
     the force at every step: that member keeps the reference loop."""
-    if model.spring:
+    if model.dimension == 2:
         return _stepped_reference(model, v, n_steps, per, dt, scheme, parts, noise_rng,
                                   kick_rng)
     lin, push, amp = _coefficients(scheme, dt, model.tau_m, model.gamma)
@@ -395,13 +379,14 @@ def _stepped(model, v, n_steps, per, dt, scheme, parts, noise_rng, kick_rng):
     row_views = list(buf)
     buf[0] = v
     x = np.zeros(rows)
-    eps, delta, a, lin_a, push_a = (np.full(rows, c) for c in (model.epsilon, model.delta,
-                                                               model.a, lin, push))
-    force, scaled = np.empty(rows), np.empty(rows)
-    cubic, shot, stribeck, smooth = model.cubic, model.shot, model.stribeck, model.epsilon > 0
+    a, lin_a, push_a = (np.full(rows, c) for c in (model.a, lin, push))
+    force = np.empty(rows)
+    # the friction law's force a - Delta(v) sgn v (- cubic v^3) and the noise's kicks, chosen
+    # once by the variants (analogue.variants)
+    force_into = model.friction.force_into(a, rows)
+    kicks = model.noise_kind.kicker()
     half_dt = 0.5 * dt
-    multiply, add, subtract, divide, tanh, sign = (np.multiply, np.add, np.subtract, np.divide,
-                                                   np.tanh, np.sign)
+    multiply, add = np.multiply, np.add
     n_kicks = 0
     for start in range(0, n_steps, block):
         m = min(n_steps, start + block) - start
@@ -413,29 +398,15 @@ def _stepped(model, v, n_steps, per, dt, scheme, parts, noise_rng, kick_rng):
             _fill_given(xi, parts, start, amp)
         v = row_views[0]
         for new, noise_j in zip(row_views[1:m + 1], xi):   # (7 % cheaper than indexing)
-            # force = a - Delta tanh(v / eps)  (or sgn v, or the Stribeck law), - cubic v^3;
-            # ufuncs with a positional output: the cheapest call (keywords cost ~10 %)
-            if stribeck is not None:
-                subtract(a, model.coulomb(v), force)
-            else:
-                if smooth:
-                    # tanh out of place, as np.tanh(v / eps) was (its SIMD loop is chosen
-                    # by the operands' overlap: no reliance on in-place taking the same one)
-                    divide(v, eps, scaled)
-                    tanh(scaled, force)
-                else:
-                    sign(v, force)
-                multiply(delta, force, force)
-                subtract(a, force, force)
-            if cubic:
-                subtract(force, cubic * v**3, force)
+            # force = a - Delta tanh(v / eps)  (or sgn v, or the Stribeck law), - cubic v^3
+            force_into(v, force)
             # v' = (lin v + push force) + amp xi (+ kick)
             multiply(lin_a, v, new)
             multiply(push_a, force, force)
             add(new, force, new)
             add(new, noise_j, new)
-            if shot is not None:
-                kick = _compound_poisson(shot, dt, rows, kick_rng)
+            if kicks is not None:
+                kick = kicks(dt, rows, kick_rng)
                 n_kicks += int(np.count_nonzero(kick))
                 add(new, kick, new)
             v = new
@@ -497,8 +468,9 @@ def _stepped_reference(model, v, n_steps, per, dt, scheme, parts, noise_rng, kic
     # blocks of whole holds (a given noise's columns each drive `hold` steps)
     hold = max((h for _, h in parts), default=1) if parts else 1
     block = hold * max(1, _BLOCK_NUMBERS // (replicas * hold))
-    a, cubic, spring, shot = model.a, model.cubic, model.spring, model.shot
+    a, law, restoring = model.a, model.friction, model.restoring
     coulomb = _coulomb_fn(model)
+    kicks = model.noise_kind.kicker()
     n_kicks = 0
     for start in range(0, n_steps, block):
         stop = min(n_steps, start + block)
@@ -507,14 +479,10 @@ def _stepped_reference(model, v, n_steps, per, dt, scheme, parts, noise_rng, kic
         else:
             xi = np.concatenate([_given_blocks(n, h)(start, stop) for n, h in parts], axis=1)
         for j, k in enumerate(range(start, stop)):
-            force = a - coulomb(v)
-            if cubic:
-                force = force - cubic * v**3
-            if spring:
-                force = force - spring * (model.x0 + x)
+            force = restoring.add_force(law.add_drift(a - coulomb(v), v), model.x0 + x)
             v_new = lin * v + push * force + amp * xi[j]
-            if shot is not None:
-                kick = _compound_poisson(shot, dt, replicas, kick_rng)
+            if kicks is not None:
+                kick = kicks(dt, replicas, kick_rng)
                 n_kicks += int(np.count_nonzero(kick))
                 v_new = v_new + kick
             x += 0.5 * dt * (v + v_new)
@@ -526,27 +494,24 @@ def _stepped_reference(model, v, n_steps, per, dt, scheme, parts, noise_rng, kic
     return v_out, x_out, n_kicks
 
 
-def _compound_poisson(shot, dt, replicas, rng):
-    counts = rng.poisson(shot.rate * dt, replicas)
-    if not shot.two_sided:
-        return rng.gamma(counts, shot.mean) if counts.any() else np.zeros(replicas)
-    up = rng.binomial(counts, 0.5)
-    return rng.gamma(up, shot.mean) - rng.gamma(counts - up, shot.mean)
-
-
-def _kick(shot, size, rng):
-    z = rng.exponential(shot.mean, size)
-    if shot.two_sided:
-        z = np.where(rng.random(size) < 0.5, z, -z)
-    return z
-
-
 # ------------------------------------------------------------ event-driven (pure shot noise)
 def _closed_form_flow(model) -> bool:
     """True when the flow between kicks is the paper's closed form (linear viscous friction and
     a constant sgn friction, no spring): the event-driven scheme is then exact."""
-    return (model.cubic == 0 and model.stribeck is None and model.spring == 0
-            and model.epsilon == 0)
+    return model.closed_form and model.epsilon == 0
+
+
+_FLOW_ROUTES = {"exact": "event-driven, exact between kicks",
+                "table": "event-driven, tabulated flow between kicks",
+                "rk4": "event-driven, RK4 between kicks"}
+
+
+def _flow_route(model, tabulate: bool = True) -> str:
+    """How the event-driven scheme moves between kicks: the closed form, a table of the
+    one-dimensional flow, or RK4 (with a spring: the position feeds back)."""
+    if _closed_form_flow(model):
+        return "exact"
+    return "table" if model.dimension == 1 and tabulate else "rk4"
 
 
 def _flow_exact(model, v, s):
@@ -586,11 +551,7 @@ def _rhs(model, v, pos, sgn):
     """dv/dt with the friction sign fixed to ``sgn`` (0: the smooth tanh law)."""
     fr = model.coulomb(v) if model.epsilon > 0 else sgn * model.friction_magnitude(v)
     out = model.a - v / model.tau_m - fr
-    if model.cubic:
-        out = out - model.cubic * v**3
-    if model.spring:
-        out = out - model.spring * pos
-    return out
+    return model.restoring.add_force(model.friction.add_drift(out, v), pos)
 
 
 def _flow_rk4(model, v, x, s, dt):
@@ -666,7 +627,7 @@ def _event_driven(model, v, n_out, sample_dt, dt, rng, tabulate=True):
     tabulated once (:mod:`analogue.theory.flow_table`, ~1e-9 of the velocity scale) for the
     other one-dimensional members, RK4 (:func:`_flow_rk4`) with a spring.  Vectorised over replicas: each round
     moves every replica to its next kick or the next output time, whichever is first."""
-    shot = model.shot
+    noise = model.noise_kind
     replicas = v.size
     v = v.astype(float).copy()
     x = np.zeros(replicas)
@@ -674,9 +635,10 @@ def _event_driven(model, v, n_out, sample_dt, dt, rng, tabulate=True):
     x_out = np.empty((replicas, n_out))
     v_out[:, 0], x_out[:, 0] = v, 0.0
     t_now = np.zeros(replicas)
-    t_kick = rng.exponential(1.0 / shot.rate, replicas)
-    exact = _closed_form_flow(model)
-    table = None if exact or model.spring > 0 or not tabulate else _table_for(model, v)
+    t_kick = rng.exponential(1.0 / noise.shot.rate, replicas)
+    route = _flow_route(model, tabulate)
+    exact = route == "exact"
+    table = _table_for(model, v) if route == "table" else None
     n_kicks = 0
     for i in range(1, n_out):
         t_stop = i * sample_dt
@@ -696,8 +658,8 @@ def _event_driven(model, v, n_out, sample_dt, dt, rng, tabulate=True):
                 break
             m = int(kicked.sum())
             n_kicks += m
-            v[kicked] += _kick(shot, m, rng)
-            t_kick[kicked] += rng.exponential(1.0 / shot.rate, m)
+            v[kicked] += noise.kick(m, rng)
+            t_kick[kicked] += rng.exponential(1.0 / noise.shot.rate, m)
         t_now[:] = t_stop
         v_out[:, i], x_out[:, i] = v, x
     return v_out, x_out, n_kicks

@@ -24,7 +24,10 @@ Model family (issue 9; see :mod:`analogue.circuit.nonlinear` and :mod:`analogue.
   ``vectors["x_spring"]``; the integrator node ``x<i>`` stays (it carries the work);
 - shot noise: a top-level ``pwl`` current source ``Ishot<i>`` into ``v<i>`` (seeded kicks drawn
   in numpy; ``Deck.kicks`` holds them);
-- gamma = inf: no ``trrandom`` source, no ``nz<i>`` node.
+- gamma = inf: no ``trrandom`` source, no ``nz<i>`` node;
+- coloured noise (:class:`analogue.variants.OrnsteinUhlenbeck`): the ``trrandom`` source
+  low-pass filtered by ``R_ou``/``C_ou`` into node ``ou`` inside the replica, which drives the
+  noise current.  Each noise kind adds its own elements (``Noise.replica_elements``).
 
 Initial conditions by ``.ic`` with ``.tran ... uic`` (no operating point is needed, so the
 integrator node needs no leak resistor and has no bias); the bridge's inner nodes get
@@ -171,11 +174,8 @@ def replica_subcircuit(mapping: CircuitMapping) -> SubCircuit:
     sub.C("m", "v", sub.gnd, _spice_value("C", m.capacitance))
     sub.R("visc", "v", sub.gnd, _spice_value("R", m.resistance))
     sub.I("force", sub.gnd, "v", _spice_value("I_F", m.i_force))  # current flows 0 -> source -> v
-    if m.gaussian_noise:
-        sub.VCCS("noise", sub.gnd, "v", "nz", sub.gnd, _spice_value("noise_gain", m.noise_gain))
-        sub.V("noise", "nz", sub.gnd,
-              f"dc 0 trrandom(2 {_spice_value('noise_ts', m.noise_ts)} 0 "
-              f"{_spice_value('noise_stddev', m.noise_stddev)} 0)")
+    # the noise's own element (analogue.variants: white trrandom source, none, or filtered)
+    m.model.noise_kind.replica_elements(sub, m, _spice_value)
     element = m.coulomb_element
     if element == "diode-bridge":
         sub.X("coulomb", "bridge", "v")

@@ -29,7 +29,7 @@ PKG = ROOT.name
 # Lowest first.  A module belongs to the layer of the longest prefix listed for it.
 LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("foundations", ("checks", "cores", "files", "paper", "noise_free", "netcdf_layout")),
-    ("model", ("model", "ensemble")),
+    ("model", ("model", "ensemble", "variants")),
     ("theory", ("theory",)),
     ("estimators", ("estimators",)),
     ("runs", ("montecarlo", "circuit", "data")),

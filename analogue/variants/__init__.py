@@ -1,0 +1,41 @@
+"""Model variants as types (issue 20): what differs between the members of the model family,
+chosen once, by type, where :class:`analogue.Model` is built, and found downstream by dispatch
+(a method on the variant object) instead of attribute tests.
+
+- :mod:`.friction`: the friction law, ``model.friction`` -- :class:`Coulomb` (the paper's),
+  :class:`Stribeck`, :class:`Cubic` (added to either);
+- :mod:`.spring`: the restoring force, ``model.restoring`` -- :class:`Free`, :class:`Spring`;
+- :mod:`.noise`: the noise, ``model.noise`` -- :class:`Silent`, :class:`Gaussian`, :class:`Shot`;
+- :mod:`.coloured`: :class:`OrnsteinUhlenbeck`, coloured noise (an Ornstein-Uhlenbeck force of
+  correlation time ``tau_c``), the first member added as one module plus its line in
+  :data:`NOISE_KINDS` (``Model(..., noise=OrnsteinUhlenbeck(tau_c))``).
+
+:data:`NOISE_KINDS` is the registration: the name a noise kind has in ``Model.as_dict`` and
+in an experiment's TOML (``noise = {kind = "ornstein-uhlenbeck", tau_c = 0.2}``).
+"""
+from __future__ import annotations
+
+from typing import Any
+
+from .coloured import OrnsteinUhlenbeck
+from .friction import Coulomb, Cubic, FrictionLaw, Stribeck, build_friction
+from .noise import Gaussian, Noise, Shot, Silent, build_noise
+from .spring import Free, Restoring, Spring, build_restoring
+
+__all__ = ["NOISE_KINDS", "Coulomb", "Cubic", "Free", "FrictionLaw", "Gaussian", "Noise",
+           "OrnsteinUhlenbeck", "Restoring", "Shot", "Silent", "Spring", "Stribeck",
+           "build_friction", "build_noise", "build_restoring", "noise_from_mapping"]
+
+#: Noise kinds given as ``Model(noise=...)``, by their ``as_dict``/TOML name.
+NOISE_KINDS: dict[str, type[Noise]] = {
+    OrnsteinUhlenbeck.kind: OrnsteinUhlenbeck,  # type: ignore[dict-item]
+}
+
+
+def noise_from_mapping(spec: Any) -> Noise:
+    """A registered noise kind from its ``as_dict`` form ``{"kind": name, **parameters}``."""
+    fields = dict(spec)
+    kind = fields.pop("kind", None)
+    if kind not in NOISE_KINDS:
+        raise ValueError(f"noise kind must be one of {sorted(NOISE_KINDS)}, got {kind!r}")
+    return NOISE_KINDS[kind](**fields)

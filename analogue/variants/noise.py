@@ -1,0 +1,177 @@
+"""The noise of the model family as types (issue 20, "model variants as types").
+
+:class:`analogue.Model` builds one of these once (``model.noise``) from its parameters:
+
+* :class:`Silent`: ``gamma = inf`` and no shot noise (the noise-free model);
+* :class:`Gaussian`: white Gaussian velocity noise of intensity ``1/gamma`` (the paper's);
+* :class:`Shot`: Poissonian kicks (:class:`analogue.ShotNoise`), with or without white
+  Gaussian noise (``gamma`` finite or ``inf``);
+* further kinds passed as ``Model(..., noise=...)`` and registered by name in
+  :data:`analogue.variants.NOISE_KINDS` (the TOML and ``as_dict`` form is
+  ``noise = {kind = "...", ...}``), e.g. :class:`analogue.variants.coloured.OrnsteinUhlenbeck`.
+
+Each kind gives what differs downstream, found by dispatch: its diffusion-limit intensity, its
+Monte Carlo step limit and kicks, its Monte Carlo integrator (:meth:`Noise.stepped`, the
+Gaussian default injected by :mod:`analogue.montecarlo`), its circuit element
+(:meth:`Noise.replica_elements`, the netlist fragment of one replica) and its ``as_dict``
+entries.  The arithmetic is the one :mod:`analogue.montecarlo` and
+:mod:`analogue.circuit.netlist` had before the split, call for call, so every number and
+every committed netlist is bit-identical.
+"""
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+__all__ = ["Noise", "Silent", "Gaussian", "Shot", "build_noise"]
+
+
+class Noise:
+    """What every noise kind gives (the defaults are those of white Gaussian noise of
+    intensity ``1/gamma``, none when gamma = inf)."""
+
+    #: the paper's noise (white Gaussian only)
+    paper: ClassVar[bool] = False
+    #: additive white Gaussian noise or none: exp(-gamma U) is the stationary law (1-D)
+    white_gaussian_only: ClassVar[bool] = False
+    #: the kind's name in ``as_dict``/TOML (None: built from gamma and shot, no entry)
+    kind: ClassVar[str | None] = None
+    gamma: float
+    #: the shot-noise parameters (analogue.ShotNoise) or None
+    shot: Any = None
+
+    @property
+    def is_noisy(self) -> bool:
+        return True
+
+    @property
+    def gaussian(self) -> bool:
+        """Whether a white Gaussian source drives the velocity (gamma finite)."""
+        return math.isfinite(self.gamma)
+
+    @property
+    def velocity_intensity(self) -> float:
+        """Gaussian velocity-noise intensity of the diffusion limit (``1/gamma`` plus the
+        kicks' ``rate mean^2``)."""
+        return 1.0 / self.gamma
+
+    def bind(self, gamma: float, shot: Any) -> Noise:
+        """This kind for a model with these parameters (a built-in kind is rebuilt from them,
+        so that ``Model.replace(gamma=..., shot=...)`` chooses the kind anew)."""
+        return build_noise(gamma, shot)
+
+    def typical_speed(self, v_typ: float) -> float:
+        return v_typ
+
+    def dt_limit(self, dt: float) -> float:
+        return dt
+
+    def kicker(self) -> Callable[[float, int, np.random.Generator], np.ndarray] | None:
+        """``kicks(dt, rows, rng)``: the velocity kicks of one Monte Carlo step, or None when
+        this noise has none."""
+        return None
+
+    def stepped(self, model: Any, v: np.ndarray, n_steps: int, per: int, dt: float,
+                scheme: str, parts: Any, noise_rng: Any, kick_rng: Any,
+                default: Callable[..., tuple[np.ndarray, np.ndarray, int]]
+                ) -> tuple[np.ndarray, np.ndarray, int]:
+        """The time-stepped Monte Carlo: ``default`` (analogue.montecarlo's white-noise
+        schemes) unless the kind has its own state to integrate."""
+        return default(model, v, n_steps, per, dt, scheme, parts, noise_rng, kick_rng)
+
+    def replica_elements(self, sub: Any, mapping: Any, value: Callable[[str, float], str]) -> None:
+        """Add this noise's elements to one replica's subcircuit ``sub`` (PySpice): a
+        ``trrandom`` Gaussian voltage on node ``nz`` (the velocity noise in model units, held
+        for ``noise_ts``) turned into the current ``noise_gain V(nz)`` into ``v``.  ``value``
+        formats a deck number (analogue.checks.spice_number)."""
+        if not mapping.gaussian_noise:  # gamma = inf, or a noise-free copy of the mapping
+            return
+        sub.VCCS("noise", sub.gnd, "v", "nz", sub.gnd, value("noise_gain", mapping.noise_gain))
+        sub.V("noise", "nz", sub.gnd,
+              f"dc 0 trrandom(2 {value('noise_ts', mapping.noise_ts)} 0 "
+              f"{value('noise_stddev', mapping.noise_stddev)} 0)")
+
+    def entries(self) -> dict[str, Any]:
+        """This kind's keys of ``Model.as_dict``."""
+        return {}
+
+    def mc_meta(self, n_kicks: int, scheme: str) -> dict[str, Any]:
+        """This kind's entries of a Monte Carlo ensemble's meta (``scheme``: the route)."""
+        return {}
+
+
+@dataclass(frozen=True)
+class Silent(Noise):
+    """No noise at all (gamma = inf, no kicks)."""
+
+    gamma: float = math.inf
+    white_gaussian_only: ClassVar[bool] = True
+
+    @property
+    def is_noisy(self) -> bool:
+        return False
+
+
+@dataclass(frozen=True)
+class Gaussian(Noise):
+    """White Gaussian velocity noise of intensity ``1/gamma`` (paper, eq. (4))."""
+
+    gamma: float
+    paper: ClassVar[bool] = True
+    white_gaussian_only: ClassVar[bool] = True
+
+
+@dataclass(frozen=True)
+class Shot(Noise):
+    """Poissonian kicks (``shot``: an :class:`analogue.ShotNoise`), plus white Gaussian noise
+    of intensity ``1/gamma`` when gamma is finite."""
+
+    shot: Any
+    gamma: float = math.inf
+
+    @property
+    def velocity_intensity(self) -> float:
+        return 1.0 / self.gamma + self.shot.intensity
+
+    def typical_speed(self, v_typ: float) -> float:
+        return max(v_typ, self.shot.mean)
+
+    def dt_limit(self, dt: float) -> float:
+        return min(dt, 0.05 / self.shot.rate)
+
+    def kicker(self) -> Callable[[float, int, np.random.Generator], np.ndarray]:
+        return self.step_kicks
+
+    def step_kicks(self, dt: float, rows: int, rng: np.random.Generator) -> np.ndarray:
+        """The exact compound-Poisson sum of one step: count ~ Poisson(rate dt), the sum of
+        that many exponentials a Gamma variable (two-sided: a Binomial split of the count)."""
+        shot = self.shot
+        counts = rng.poisson(shot.rate * dt, rows)
+        if not shot.two_sided:
+            return rng.gamma(counts, shot.mean) if counts.any() else np.zeros(rows)
+        up = rng.binomial(counts, 0.5)
+        return rng.gamma(up, shot.mean) - rng.gamma(counts - up, shot.mean)
+
+    def kick(self, size: int, rng: np.random.Generator) -> np.ndarray:
+        """``size`` single kicks (the event-driven scheme)."""
+        z = rng.exponential(self.shot.mean, size)
+        if self.shot.two_sided:
+            z = np.where(rng.random(size) < 0.5, z, -z)
+        return z
+
+    def entries(self) -> dict[str, Any]:
+        return {"shot": self.shot.as_dict()}
+
+    def mc_meta(self, n_kicks: int, scheme: str) -> dict[str, Any]:
+        return {"kicks": int(n_kicks), "shot_scheme": scheme}
+
+
+def build_noise(gamma: float, shot: Any) -> Noise:
+    """The noise of a model's (validated) ``gamma`` and ``shot``: chosen here, once."""
+    if shot is not None:
+        return Shot(shot, gamma)
+    return Gaussian(gamma) if math.isfinite(gamma) else Silent()

@@ -1,0 +1,79 @@
+"""The optional spring of the model family as a type (issue 20): :class:`Free` (the
+one-dimensional members, state v) or :class:`Spring` (``-spring x`` with ``dx/dt = v``, state
+(x, v)), built once by :class:`analogue.Model` (``model.restoring``)."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+__all__ = ["Restoring", "Free", "Spring", "build_restoring"]
+
+
+class Restoring:
+    """What a restoring force gives: dimension, drift term, step limit, attractor."""
+
+    dimension: ClassVar[int] = 1
+    #: the noise-free flow is the closed form of the paper's law (no position feedback)
+    closed_form: ClassVar[bool] = True
+    spring: float = 0.0
+    x0: float
+
+    def add_force(self, out: np.ndarray, x: Any) -> np.ndarray:
+        return out
+
+    def dt_limit(self, dt: float) -> float:
+        return dt
+
+    def attractor(self, model: Any) -> float:
+        """Deterministic attractor from rest: 0 if |a| <= Delta(0), else the friction law's."""
+        if abs(model.a) <= model.static_friction:
+            return 0.0
+        return float(model.friction.attractor(model))
+
+    def entries(self) -> dict[str, Any]:
+        return {"x0": self.x0} if self.x0 != 0 else {}
+
+    def mc_meta(self) -> dict[str, Any]:
+        """This force's entries of a Monte Carlo ensemble's meta."""
+        return {}
+
+
+@dataclass(frozen=True)
+class Free(Restoring):
+    """No spring (``x0`` only offsets the reported position)."""
+
+    x0: float = 0.0
+
+
+@dataclass(frozen=True)
+class Spring(Restoring):
+    """``-spring x``, position from ``x(0) = x0``."""
+
+    spring: float
+    x0: float = 0.0
+    dimension: ClassVar[int] = 2
+    closed_form: ClassVar[bool] = False
+
+    def add_force(self, out: np.ndarray, x: Any) -> np.ndarray:
+        return out - self.spring * np.asarray(x, dtype=float)
+
+    def dt_limit(self, dt: float) -> float:
+        # resolve the spring period
+        return min(dt, 2.0 * math.pi / math.sqrt(self.spring) / 500.0)
+
+    def attractor(self, model: Any) -> float:
+        """With a spring every motion ends at rest."""
+        return 0.0
+
+    def entries(self) -> dict[str, Any]:
+        return {"spring": self.spring, **super().entries()}
+
+    def mc_meta(self) -> dict[str, Any]:
+        return {"position": "model.x0 + x (x = integral of v, x[:, 0] = 0)"}
+
+
+def build_restoring(spring: float, x0: float) -> Restoring:
+    return Spring(spring, x0) if spring > 0 else Free(x0)
