@@ -97,7 +97,7 @@ def board_comparisons(experiment: str, design: BoardDesign, board_ens: Ensemble,
                      "within_budget": bool(abs(diff) <= stat + total),
                      "budget": {**{t: float(v) for t, v in terms.items()}, "total": float(total),
                                 "statistical": float(stat), "dominant": dominant},
-                     "note": "nominal board (E-series values, TL072-class macromodels, noise "
+                     "note": "nominal board (E-series values, op-amp macromodels, noise "
                              "chain) against exact theory of the requested ideal model"})
     return rows, circ
 

@@ -48,7 +48,7 @@ DG41X_PINS = ("IN1", "D1", "S1", "V-", "GND", "S4", "D4", "IN4", "IN3", "D3", "S
 # what "tighten" means per kind of part, when the tolerance analysis flags its class
 MATCH_ADVICE = {"R": "0.1 %, 25 ppm/K",
                 "C": "0.5 % C0G, or measured and entered in the calibration",
-                "U": "offset below 120 uV (OPA2140-class, or trimmed)",
+                "U": "guaranteed offset below the limit on the board page (precision part, or trimmed)",
                 "VR": "0.05 % (LM4040A25 is 0.1 %: select or use an ADR4525)",
                 "D": "matched quad (IS within 2 %)"}
 

@@ -67,7 +67,10 @@ class BoardSpec:
     target stationary standard deviation of the velocity node (V); kappa: volts per unit
     velocity (None: from sigma_volts and machine_unit); time_scale: seconds per model time unit;
     capacitance: mass capacitor (F, an E12 value); opamp: macromodel name of the integrator and
-    the Bessel buffer (``TL072``, ``OPA2140``, ``OPA2197`` or their ``_worst`` sets);
+    the Bessel buffer (``OPA2140``, the default: its guaranteed 120 uV offset is inside the
+    limit the observables set, 327 uV on the stick design,
+    :func:`analogue.board.tolerance.offset_limit`; ``OPA2197``; ``TL072``, whose 10 mV is
+    not; or their ``_worst`` sets);
     servo_opamp: the current sources' servos, whose inputs sit ``v_set`` from a rail (a
     rail-to-rail-input part: ``OPA2197``; a TL072's guaranteed range ends 4 V from the rails);
     diode: bridge diode (``1N4148``, ``BAT54``);
@@ -87,7 +90,8 @@ class BoardSpec:
     needs 0.8 s after power-up) and it still removes 0.6 % of the variance (factor 0.9931
     against 0.9995 for the DAC hold and Bessel alone).  What it blocked, the DC offsets of the
     Bessel buffer and the integrator across R_N, is a constant force (vos_int - vos_bf)/R_N:
-    0.019 in a per 3 mV (TL072 typical), 1e-4/K of drift; calibration step 1 measures it with
+    0.019 in a per 3 mV (TL072 typical; 2e-4 per 30 uV, OPA2140 typical); calibration step 1
+    measures it with
     the noise DAC at mid-scale (:mod:`analogue.board.calibration`), and the tolerance
     analysis carries it (:func:`analogue.board.tolerance.effective_model`).
 
@@ -109,7 +113,7 @@ class BoardSpec:
     kappa: float | None = None
     time_scale: float = 1e-3
     capacitance: float = 10e-9
-    opamp: str = "TL072"
+    opamp: str = "OPA2140"
     servo_opamp: str = "OPA2197"
     diode: str = "1N4148"
     v_set: float = 2.5

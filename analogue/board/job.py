@@ -231,6 +231,7 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
     draw_schematic(design, out / "schematic.svg")
     se_ref = reference_stderr(design, fn, seed=plan.board_pair)
     matched = recommend_matching(sens, se_ref)
+    matched["offset_limit"] = tolerance.offset_limit(design, grads, se_ref, MATCH_FRACTION, tol)
     write_bom(design, out / "bom.csv", matched=tuple(matched["bom_refs"]))
     write_kicad_netlist(design, out / "board.net", matched=tuple(matched["bom_refs"]))
     deck = build_board_deck(design, nominal, v0=[float(exp.v0[0])], t_end=exp.t_end,

@@ -110,7 +110,8 @@ _n = checks.spice_number  # a deck number: _n(name, value)
 # The bench start (issue 21): R_IC across C through the reset switch and from the IC voltage
 # into the virtual ground through the IC switch.  R_IC C = 100 us; the switches stay closed
 # for RESET_TIME = 20 R_IC C (settled to e^-20) with the friction disabled.  10 kOhm keeps the
-# integrator's output current at 1 mA for a 10 V start (a TL072's guaranteed 10 mA limit).
+# integrator's output current at 1 mA for a 10 V start (OPA2140: 20 mA guaranteed limit in
+# the macromodel's worst set).
 R_IC = 10e3
 RESET_TIME = 2e-3
 

@@ -14,6 +14,21 @@ from .netlist import R_IC, RESET_TIME
 __all__ = ["write_report"]
 
 
+def _offset_paragraph(lim) -> str:
+    """The integrator op-amp's offset requirement (:func:`analogue.board.tolerance.offset_limit`)."""
+    if not lim:
+        return ""
+    per = ", ".join(f"{k} {v * 1e6:.0f} uV" for k, v in lim["per_observable_V"].items())
+    return (f"Offset of U1 (integrator and Bessel buffer, one part): with both halves at their "
+            f"guaranteed offset and opposite signs, the force offset and the read-out shift move "
+            f"every observable by less than {lim['fraction_of_se']:g} standard error if the offset "
+            f"stays below {lim['limit_V'] * 1e6:.0f} uV (set by {lim['binding']}; per observable: "
+            f"{per}). The {lim['part']} guarantees {lim['guaranteed_V'] * 1e6:.0f} uV (offset plus "
+            f"drift at the warmest bench temperature): "
+            + ("inside the limit." if lim["meets"] else "outside it: use a precision part or the "
+               "calibrated force."))
+
+
 def _schematic_png(design, out: Path) -> Path | None:
     """The same drawing rasterised (the page embeds PNG); the SVG is the deliverable."""
     from .schematic import draw_schematic
@@ -69,7 +84,8 @@ def write_report(out: Path, exp, design, metrics: dict) -> Path:
         ("Op-amps are our own macromodels (gain, GBW, slew rate, offset, bias current, output "
         "swing against load, short-circuit current, input common-mode range with the TL07x's "
         "phase reversal) with typical and worst-case sets for TL072-, OPA2140- and "
-        "OPA2197-class parts; no vendor model is shipped (analogue.board.opamp.vendor_model_path "
+        f"OPA2197-class parts (U1 is an {design.spec.opamp}: see the tolerance section for the "
+        "offset limit the observables set); no vendor model is shipped (analogue.board.opamp.vendor_model_path "
         "validates a file the user downloads and refuses .control/.exec/shell/.include lines). "
         f"The current sources' servos are {design.spec.servo_opamp}-class (rail-to-rail input): "
         f"their inputs sit {design.spec.v_set:g} V from a rail, outside a TL072's guaranteed "
@@ -192,7 +208,8 @@ def write_report(out: Path, exp, design, metrics: dict) -> Path:
          f"{metrics['matching']['fraction_of_se']:g} of the full job's statistical standard "
          "error of some compared observable (from a seeded SDE ensemble of the realised model "
          "at the full job's size, the same in --quick and full runs, so the BOM is too): "
-         + (", ".join(must) if must else "none") + ". The BOM marks their parts.")],
+         + (", ".join(must) if must else "none") + ". The BOM marks their parts."),
+        _offset_paragraph(metrics["matching"].get("offset_limit"))],
         tables=[Table("Spread per tolerance class", ["class"] + obs_names, rows),
                 Table("Spread per model parameter (all tolerances): which part to trim - tau_m: R "
                       "and C; Delta: the sense resistors R_S and references; a: R_F, the force "
@@ -286,9 +303,12 @@ def _bench_section(design, metrics) -> Section:
         f"Reset start: released after {rs['reset_time_s'] * 1e3:g} ms the board starts at "
         f"v = {rs['initial'][0]:.5f} / {rs['initial'][1]:.5f} (target +-2) and follows the .ic start "
         f"on the same noise to {rs['rms_vs_ic_start']:.2g} rms over 1 tau_m.",
-        "Latch: if the output ever leaves the current sources' compliance (|V(out)| above about "
-        "11.8 V, e.g. at power-up) friction turns one-sided and the integrator stays at a rail; "
-        "the reset switch recovers it, so every run starts with step 4's reset.",
+        "Over-range: an output at its rail (power-up, an overdriven input) does not latch: the "
+        "bridge's top node sits a diode drop above the lower of V(sj) and V(out) and its bottom "
+        "node a drop below the higher, so with the virtual ground held both sources stay in "
+        "regulation and friction stays two-sided; from +-14.8 V the board is back inside the "
+        "machine unit within one tau_m (test_an_output_at_its_rail_does_not_latch). Every run "
+        "still starts with step 4's reset, which sets v0.",
     ]
     return Section("Bench procedure and bench checks", paragraphs=steps + checks,
                    tables=[Table("Op-amp inputs against their guaranteed common-mode range (V)",

@@ -41,6 +41,7 @@ __all__ = [
     "draw_board",
     "effective_model",
     "gradients",
+    "offset_limit",
     "readout_offset",
     "sensitivities",
 ]
@@ -220,3 +221,41 @@ def sensitivities(design: BoardDesign, tol: Tolerances, *, boards: int, seed: in
                                           for j, p in enumerate(PARAMS)}
                                       for k, g in grads.items()}
     return out
+
+
+def offset_limit(design: BoardDesign, grads: dict, se_ref: dict, fraction: float,
+                 tol: Tolerances | None = None) -> dict:
+    """The largest guaranteed input offset the integrator's op-amp (U1: A the integrator, B the
+    Bessel buffer, one part) may have, and whether ``design.spec.opamp`` meets it.
+
+    Offsets enter as a force ``theta (vos_int (1/R_F + 1/R_N) - vos_bf/R_N)/(C kappa)`` and a
+    read-out shift ``vos_int/kappa`` (:func:`effective_model`, :func:`readout_offset`); with
+    both halves at the datasheet maximum ``V`` and opposite signs, observable ``k`` moves by
+    ``V (s_int + s_bf)`` (``s``: its linear sensitivity per volt through ``grads``).  The limit
+    is the ``V`` that keeps every shift below ``fraction`` of the full job's standard error
+    ``se_ref[k]`` (the matching rule of :func:`analogue.board.job.recommend_matching`,
+    applied to the worst case instead of the spread).  ``guaranteed_V``: the part's
+    guaranteed offset plus its guaranteed drift over the warmest bench temperature of
+    ``tol`` (measured on the stick design: limit 327 uV, set by P(v>0); OPA2140 127 uV,
+    TL072 10.2 mV)."""
+    tol = Tolerances() if tol is None else tol
+    nom = nominal_instance(design)
+    x0 = _vector(design, design.realised, 0.0)
+    step = 1e-4
+
+    def slope(role: str, g: np.ndarray) -> float:
+        b = nom.replace(opamps={**nom.opamps, role: nom.opamps[role].replace(vos=step)})
+        dx = _vector(design, effective_model(design, b), readout_offset(design, b)) - x0
+        return abs(float(dx @ g)) / step
+
+    per = {}
+    for k, g in grads.items():
+        if se_ref.get(k):
+            per[k] = fraction * se_ref[k] / (slope("int", g) + slope("bf", g))
+    binding = min(per, key=lambda k: per[k])
+    worst = opamp.get_opamp(design.spec.opamp).guaranteed
+    hottest = tol.temperature + tol.temp_range
+    guaranteed = abs(worst.vos) + abs(worst.vos_drift) * abs(hottest - 25.0)
+    return {"limit_V": per[binding], "binding": binding, "per_observable_V": per,
+            "part": worst.name, "guaranteed_V": guaranteed, "meets": guaranteed < per[binding],
+            "fraction_of_se": fraction}

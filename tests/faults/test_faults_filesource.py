@@ -9,19 +9,16 @@ fails with one clear line instead of running without its input.
 """
 from __future__ import annotations
 
-import json
 import os
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
 from analogue import Model
 from analogue.board.design import design_board
 from analogue.board.netlist import build_board_deck, nominal_instance
 from analogue.board.runner import run_board
 from analogue.circuit import ngspice as ng
-from analogue.cli import main
 import wrapped_ngspice
 
 pytestmark = pytest.mark.requires_ngspice
@@ -118,23 +115,9 @@ def test_load_failure_messages_and_ngspice_chatter(said, refused, tmp_path, monk
         assert ng.run_deck(_filesource_deck("dac_one.txt"), t_stop=2e-3, files=[f]).plot.n_points
 
 
-@pytest.mark.slow
-def test_board_quick_under_a_directory_with_capitals(tmp_path, monkeypatch):
-    """The README's main command's first step with the store and --out under capitals."""
-    root = tmp_path / "Capital Dir"
-    monkeypatch.setenv("ANALOGUE_STORE", str(root / "Store"))
-    out = root / "Board"
-    res = CliRunner().invoke(main, ["board", "stick", "--quick", "--out", str(out),
-                                    "--workers", "2"])
-    assert res.exit_code == 0, res.output
-    metrics = json.loads((out / "metrics.json").read_text())
-    # every calibrated board's gamma is the board's own, within its tolerances (the noise
-    # vanished before: 1e11-1e15)
-    gammas = [b["calibrated"]["gamma"] for b in metrics["boards"]]
-    assert gammas and all(5.0 < g < 20.0 for g in gammas), gammas
-    assert (out / "board.cir").exists()
-    deck = (out / "board.cir").read_text()
-    assert "Capital" not in deck and "capital" not in deck
+# The whole board job under a directory with capitals is checked by
+# tests/integration/test_board_montecarlo.py::test_board_job_writes_every_output (one board
+# job fewer in CI).
 
 
 @pytest.mark.slow

@@ -78,7 +78,11 @@ TINY = JobSettings(replicas=4, t_end=4.0, burn_in=1.0, pair_replicas=16, integ_r
 
 
 def test_board_job_writes_every_output(tmp_path):
-    index = run_board_job("stick", tmp_path / "out", store=tmp_path / "store", workers=2,
+    # under a directory with capitals and a space, store and output both (ngspice lower-cases
+    # the paths it opens: the DAC files must still reach every deck; this was a second whole
+    # board job in tests/faults/test_faults_filesource.py)
+    root = tmp_path / "Capital Dir"
+    index = run_board_job("stick", root / "Board", store=root / "Store", workers=2,
                           settings=TINY, log=lambda *_: None)
     out = index.parent
     for name in ("schematic.svg", "bom.csv", "board.net", "board.cir", "metrics.json", "index.html"):
@@ -96,7 +100,13 @@ def test_board_job_writes_every_output(tmp_path):
     assert bench["residual_friction"]["relative_to_I0"] < 1e-3
     assert bench["reset_start"]["rms_vs_ic_start"] < 5e-3
     assert "Bench procedure" in (out / "index.html").read_text()
-    assert ".control" not in (out / "board.cir").read_text()
+    deck = (out / "board.cir").read_text()
+    assert ".control" not in deck
+    assert "Capital" not in deck and "capital" not in deck
+    # every calibrated board's gamma is the board's own, within its tolerances (the noise
+    # vanished before, when a DAC file under capitals was not found: 1e11-1e15)
+    gammas = [b["calibrated"]["gamma"] for b in metrics["boards"]]
+    assert gammas and all(5.0 < g < 20.0 for g in gammas), gammas
 
 
 def test_board_cli_refuses_unknown_experiment(tmp_path):

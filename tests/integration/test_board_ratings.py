@@ -72,3 +72,33 @@ def test_macromodel_swing_against_load_and_short_circuit(name):
     assert rows[0] == pytest.approx(opamp.output_swing(p, 15.0, 10e3), abs=0.05)
     # short circuit: the current stays at the limit
     assert rows[2] / 20.0 == pytest.approx(p.i_sc, rel=1e-3)
+
+
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_an_output_at_its_rail_does_not_latch(tmp_path, sign):
+    # the output at the integrator's swing limit (power-up, an overdriven input): the bridge's
+    # top node sits a diode drop above min(V(sj), V(out)) and its bottom node a drop below
+    # max(...), so with the virtual ground held both sources stay in compliance and friction
+    # stays two-sided; the board returns (the former page said friction turned one-sided
+    # above 11.8 V and the integrator latched at the rail)
+    import re
+    d = design_board(STICK, v0=[2.0, -2.0])
+    nom = nominal_instance(d)
+    swing = 15.0 - nom.opamps["int"].headroom
+    deck = build_board_deck(d, nom, v0=[2.0 * sign], t_end=2.0, sample_dt=0.01, seed=3,
+                            noise_dir=tmp_path, save_all=True)
+    v = f"{sign * swing:.6g}"
+    text, n = re.subn(r"v\(o0\)=\S+ v\(xu0\.g\)=\S+", f"v(o0)={v} v(xu0.g)={v}", deck.text)
+    assert n == 1
+    plot = ng.run_deck(text, t_stop=2.0 * d.theta, files=deck.noise_files).plot
+    t, out = plot["time"], plot["v(o0)"]
+    assert abs(out[0]) > 14.0
+    # back inside the machine unit within one tau_m, and it stays there
+    late = t > 1.0 * d.theta
+    assert np.max(np.abs(out[late])) < d.spec.machine_unit
+    # both sources regulate throughout: v_set across each sense resistor to 1 mV
+    assert np.max(np.abs(15.0 - plot["v(b0st)"] - d.spec.v_set)) < 1e-3
+    assert np.max(np.abs(plot["v(b0sb)"] + 15.0 - d.spec.v_set)) < 1e-3
+    # and the bridge nodes stay volts inside the sources' compliance (+-12.5 V less the
+    # MOSFETs' saturation voltage)
+    assert np.max(plot["v(b0top)"]) < 1.0 and np.min(plot["v(b0bot)"]) > -1.0
