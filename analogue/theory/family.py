@@ -70,9 +70,13 @@ def is_member(model: Model) -> bool:
 
 def check_one_dimensional(model: Model) -> None:
     checks.instance("model", model, Model, description="an analogue.Model")
-    if model.spring > 0:
+    if model.dimension == 2:
         raise ValueError("spring > 0: the state (x, v) is two-dimensional and has no exact solver "
                          "here; use analogue.montecarlo.simulate_sde as the reference")
+    if model.noise_kind.exact_solver is None:
+        raise ValueError(f"noise kind {model.noise_kind.kind!r} has no exact solver here (the "
+                         "Fokker-Planck and Kolmogorov-Feller solvers take white Gaussian noise "
+                         "and kicks); use analogue.montecarlo.simulate_sde as the reference")
     if not model.is_noisy:
         raise ValueError("the model is noise-free (gamma = inf and shot = None): no stationary law "
                          "or propagator; set a finite gamma or shot noise")

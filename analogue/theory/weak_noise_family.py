@@ -62,9 +62,10 @@ __all__ = ["quasi_potential", "direct_path", "direct_action", "indirect_action",
 
 def _check(model: object) -> Model:
     model = checks.instance("model", model, Model, description="an analogue.Model")
-    if not (model.dimension == 1 and model.shot is None):
+    if not (model.dimension == 1 and model.noise_kind.white_gaussian_only):
         raise ValueError("the weak-noise theory applies to one-dimensional members with Gaussian "
-                         "noise only (spring = 0, shot = None); see the module docstring")
+                         "noise only, white (spring = 0, shot = None, noise = None); see the "
+                         "module docstring")
     return model
 
 
@@ -83,10 +84,7 @@ def _u1(model: Model, v: np.ndarray, s: float) -> np.ndarray:
 def _u2(model: Model, v: np.ndarray, s: float) -> np.ndarray:
     """U''(v) on the half line of sign s (no delta at 0)."""
     out = 1.0 / model.tau_m + 3.0 * model.cubic * v**2
-    if model.stribeck is not None:
-        ds, vs = model.stribeck
-        out = out - (ds - model.delta) / vs * np.exp(-np.abs(v) / vs)
-    return out
+    return model.friction.add_magnitude_curvature(out, v)
 
 
 class DirectPath(NamedTuple):

@@ -82,6 +82,7 @@ class OrnsteinUhlenbeck(Noise):
     tau_c: float
     gamma: float = math.inf
     kind: ClassVar[str | None] = "ornstein-uhlenbeck"
+    exact_solver: ClassVar[str | None] = None  # exact theory may follow (issue 20)
 
     def __post_init__(self) -> None:
         tau_c = checks.positive("noise.tau_c", self.tau_c)

@@ -89,6 +89,11 @@ class FrictionLaw:
         """``out`` plus the law's drift beyond ``-v/tau_m - dry(v)`` (the cubic term)."""
         return out
 
+    def add_magnitude_curvature(self, out: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """``out + d Delta(v)/d|v|`` (the dry law's part of U'' on a half line; 0 for a
+        constant Delta)."""
+        return out
+
     def add_potential(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
         """``u`` plus the law's potential beyond ``v^2/(2 tau_m) + dry_potential``."""
         return u
@@ -298,6 +303,10 @@ class Stribeck(FrictionLaw):
         tail = vs * (np.exp(-cut / vs) - np.exp(-av / vs))
         return base + (ds - d) * (head + tail)
 
+    def add_magnitude_curvature(self, out: np.ndarray, v: np.ndarray) -> np.ndarray:
+        ds, vs = self.delta_s, self.v_s
+        return out - (ds - self.delta) / vs * np.exp(-np.abs(v) / vs)
+
     def dt_limit(self, dt: float, v_typ: float) -> float:
         # resolve the Stribeck length crossed at the typical speed (6 of them)
         return min(dt, self.v_s / (50.0 * 6.0 * v_typ))
@@ -343,6 +352,9 @@ class Cubic(FrictionLaw):
 
     def add_potential(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
         return self.inner.add_potential(u, v) + 0.25 * self.cubic * v**4
+
+    def add_magnitude_curvature(self, out: np.ndarray, v: np.ndarray) -> np.ndarray:
+        return self.inner.add_magnitude_curvature(out, v)
 
     def fast_dry(self) -> Callable[[np.ndarray], np.ndarray]:
         return self.inner.fast_dry()

@@ -40,6 +40,9 @@ class Noise:
     white_gaussian_only: ClassVar[bool] = False
     #: the kind's name in ``as_dict``/TOML (None: built from gamma and shot, no entry)
     kind: ClassVar[str | None] = None
+    #: the exact solver of analogue.theory for this noise: "fokker-planck" (white Gaussian),
+    #: "kolmogorov-feller" (kicks), or None (none yet: the theory refuses the model)
+    exact_solver: ClassVar[str | None] = "fokker-planck"
     gamma: float
     #: the shot-noise parameters (analogue.ShotNoise) or None
     shot: Any = None
@@ -132,6 +135,7 @@ class Shot(Noise):
 
     shot: Any
     gamma: float = math.inf
+    exact_solver: ClassVar[str | None] = "kolmogorov-feller"
 
     @property
     def velocity_intensity(self) -> float:

@@ -105,3 +105,15 @@ def test_short_correlation_time_recovers_the_white_stationary_law_with_dry_frict
     mean, se_mean, var, se_var = _stationary(e, 1.5)
     assert abs(mean - m1) < 4 * se_mean
     assert abs(var - var_white) < 4 * se_var
+
+
+def test_exact_theory_refuses_coloured_noise_instead_of_answering_for_white_noise():
+    """The family's exact solvers (Fokker-Planck, Kolmogorov-Feller) have no OU force: before
+    the guard, stationary_law and sample_stationary silently returned the white-noise law."""
+    from analogue.theory import exact, family, stationary
+    m = Model(1.0, 0.7, 0.2, 10.0, noise=OrnsteinUhlenbeck(0.2))
+    for call in (lambda: family.stationary_law(m), lambda: family.stationary_moments(m),
+                 lambda: stationary.sample_stationary(m, 3, seed=1),
+                 lambda: exact.stationary_moments(m), lambda: family.scgf(m, [0.1])):
+        with pytest.raises(ValueError, match="ornstein-uhlenbeck"):
+            call()
