@@ -15,7 +15,7 @@ from pathlib import Path
 
 from ..circuit.experiments import standard_circuit
 from ..model import Model
-from ..study.members import (CHECK_REPLICAS, MEMBERS, MemberAnalysis, MemberRuns,  # noqa: F401
+from ..study.members import (CHAPTER_TITLE, CHECK_REPLICAS, MEMBERS, MemberAnalysis, MemberRuns,  # noqa: F401
                              MemberSizes, analyse_member, is_member_experiment, member_runs,
                              member_sizes, rate_function_data, stick_window, weak_noise_law,
                              work_tau)
@@ -44,7 +44,6 @@ __all__ = [
 ]
 
 
-CHAPTER_TITLE = "Beyond the paper"
 
 def _num(x: float) -> str:
     return f"{x:.4g}"

@@ -93,6 +93,9 @@ def stick_window(exp: Experiment) -> float:
     ``[report] stick_threshold`` and its circuit's smoothing."""
     return C.member_stick_window(exp.model, stick_threshold=exp.report.stick_threshold,
                                  epsilon=exp.mapping().model_effective.epsilon)
+# the chapter's title (and the name its members' failures are recorded under)
+CHAPTER_TITLE = "Beyond the paper"
+
 # replicas of the integration check (the first deck of the nominal run, re-run with 100x
 # tighter tolerances on the same noise: Experiment.check_spec)
 CHECK_REPLICAS = 8
@@ -145,6 +148,7 @@ class MemberAnalysis:
     facts: dict = field(default_factory=dict)      # numbers quoted in the text
     provenance: dict = field(default_factory=dict)
     wall_time: float = 0.0
+    runs: MemberRuns | None = None                 # the circuit runs it read (by_role())
 
     def summary(self) -> dict:
         n = len(self.comparisons)
@@ -458,6 +462,7 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
 
     thr = stick_window(exp)
     runs = member_runs(exp, opts, quick=quick, progress=progress)
+    res.runs = runs
 
     if m.spring > 0:
         assert runs.transition is not None   # the spring's release run

@@ -74,7 +74,8 @@ def test_failing_experiments_keep_finished_work_and_are_recorded(tmp_path, monke
 
     def boom(exp, opts, settings=None):
         raise RuntimeError(f"ngspice failed for {exp.name} <b>")
-    monkeypatch.setattr(P, "run_experiment_runs", boom)
+    import analogue.study.run as S
+    monkeypatch.setattr(S, "run_experiment_runs", boom)
     monkeypatch.setattr(P, "_open_question_section",
                         lambda out, opts, data=None: Section("The paper's open question", ["kept"]))
     with pytest.raises(P.ReportIncomplete) as exc:
@@ -113,7 +114,8 @@ def test_a_failing_figure_keeps_the_other_figures(tmp_path, monkeypatch):
         raise ValueError("no circuit window of work rate 0.2 <here>")
     monkeypatch.setattr(P.figures, "fig_work_paths", broken)
     runs = types.SimpleNamespace(exp=types.SimpleNamespace(name="work", v0=(0.0,)))
-    fails = P._Failures()
+    from analogue.study.schedule import Failures
+    fails = Failures()
     figs, errors = P._figures_for(runs, None, tmp_path, fails, "Experiment 'work'")
     assert len(figs) == 6 and not any("work_paths" in f.caption for f in figs)
     assert errors == ["figure 'work paths': ValueError: no circuit window of work rate 0.2 <here>"]

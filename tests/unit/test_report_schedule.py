@@ -14,6 +14,8 @@ import pytest
 from analogue.circuit.experiments import experiment_from_dict, load_experiment, standard_circuit
 from analogue.montecarlo import simulate_sde
 from analogue.report import pipeline as P
+from analogue.study import run as S
+from analogue.study import schedule as SCH
 from analogue.study.comparisons import analyse
 from analogue.report.html import Section
 from analogue.report.plan import RunOptions
@@ -55,13 +57,13 @@ def test_circuit_cost_puts_the_papers_work_experiment_first():
     """At both sizes (measured at --quick: work's runs 58 s, stick's 30 s, slip's 15 s)."""
     exps = [load_experiment(standard_circuit(n)) for n in ("stick", "slip", "work")]
     for quick in (True, False):
-        costs = [P._circuit_cost(e, RunOptions(quick=quick)) for e in exps]
+        costs = [SCH.circuit_cost(e, RunOptions(quick=quick)) for e in exps]
         assert costs[2] > max(costs[:2])
 
 
 def test_gated_task_waits_for_every_gate_and_is_cancelled_by_close():
     from concurrent.futures import Future
-    pool = P._Workers(P._Phases(), "circuit", 2)
+    pool = SCH.Workers(SCH.Phases(), "circuit", 2)
     try:
         g1, g2 = Future(), Future()
         f = pool.submit_after([g1, g2], "family member", "m", lambda: 7)
@@ -83,7 +85,7 @@ def schedule(request, tmp_path, monkeypatch):
     one family member.  With two circuit threads, big's runs wait (up to 120 s) until small's
     comparisons have started: the main thread must take small's runs first."""
     threads = request.param
-    monkeypatch.setattr(P, "CIRCUIT_THREADS", threads)
+    monkeypatch.setattr(S, "CIRCUIT_THREADS", threads)
     monkeypatch.setenv("ANALOGUE_THEORY_CACHE", str(tmp_path / "theory"))
     big, small = _exp("big", 12.0, 21), _exp("small", 6.0, 22)
     events: list = []
@@ -126,9 +128,9 @@ def schedule(request, tmp_path, monkeypatch):
     for name in ("fig_prehistory", "fig_boundaries", "fig_propagator", "fig_stationary",
                  "fig_work_paths", "fig_rate_function", "fig_budget", "fig_deterministic"):
         monkeypatch.setattr(P.figures, name, lambda *a, n=name, **k: drawn(n))
-    monkeypatch.setattr(P, "run_experiment_runs", runs)
-    monkeypatch.setattr(P, "analyse", analyse_)
-    monkeypatch.setattr(P, "_member_task", member)
+    monkeypatch.setattr(S, "run_experiment_runs", runs)
+    monkeypatch.setattr(S, "analyse", analyse_)
+    monkeypatch.setattr(S, "member_task", member)
     monkeypatch.setattr(P, "_open_question_data", lambda opts: None)
     monkeypatch.setattr(P, "_open_question_section",
                         lambda out, opts, data=None: Section("The paper's open question", ["q"]))
@@ -190,10 +192,8 @@ def test_one_local_circuit_thread_two_with_a_scheduler(tmp_path, monkeypatch, sc
     take an experiment's runs one after another) two experiments run at once."""
     seen = {}
 
-    def build(experiments, members, out, opts, title, fails, phases, pool, circuit, family,
-              t0, load0):
+    def schedule_(result, opts, hooks, pool, circuit, family):
         seen.update(circuit=len(circuit.threads), family=len(family.threads))
-        return out / "index.html"
-    monkeypatch.setattr(P, "_build", build)
-    P.build_report([], tmp_path, RunOptions(scheduler=scheduler, progress=False), title="t")
-    assert seen == {"circuit": threads, "family": P.MEMBER_THREADS}
+    monkeypatch.setattr(S, "_schedule", schedule_)
+    S.run_study([], opts=RunOptions(scheduler=scheduler, progress=False))
+    assert seen == {"circuit": threads, "family": SCH.MEMBER_THREADS}

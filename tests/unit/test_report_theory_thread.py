@@ -6,13 +6,13 @@ import threading
 
 import pytest
 
-from analogue.report import pipeline as P
+from analogue.study import schedule as S
 from analogue.study.theory_curves import FigureCurves
 
 
 def test_theory_thread_runs_in_order_off_the_main_thread_and_records_phases():
-    phases = P._Phases()
-    pool = P._Workers(phases, "theory", 1, blas_limit=True)
+    phases = S.Phases()
+    pool = S.Workers(phases, "theory", 1, blas_limit=True)
     try:
         names = []
         f1 = pool.submit("exact theory", "a", lambda: names.append(threading.current_thread().name) or 1)
@@ -29,7 +29,7 @@ def test_theory_thread_runs_in_order_off_the_main_thread_and_records_phases():
 
 
 def test_close_cancels_work_not_started():
-    pool = P._Workers(P._Phases(), "theory", 1, blas_limit=True)
+    pool = S.Workers(S.Phases(), "theory", 1, blas_limit=True)
     gate, started = threading.Event(), threading.Event()
     first = pool.submit("x", None, lambda: started.set() or gate.wait(30))
     second = pool.submit("y", None, lambda: 2)
@@ -43,8 +43,8 @@ def test_close_cancels_work_not_started():
 def test_circuit_threads_run_two_tasks_at_once_and_record_their_thread():
     """Two circuit threads: the second queued task starts while the first still runs (each
     waits for the other to have started), and each phase names the circuit thread."""
-    phases = P._Phases()
-    pool = P._Workers(phases, "circuit", 2)
+    phases = S.Phases()
+    pool = S.Workers(phases, "circuit", 2)
     a, b = threading.Event(), threading.Event()
     try:
         fa = pool.submit("circuit runs", "a", lambda: a.set() or b.wait(30))
@@ -62,7 +62,7 @@ def test_abort_cancels_queued_work_and_returns_while_a_task_runs(monkeypatch):
     import analogue.circuit.ngspice as ng
     kills = []
     monkeypatch.setattr(ng, "terminate_all", lambda: kills.append(1) or 0)
-    pool = P._Workers(P._Phases(), "circuit", 1)
+    pool = S.Workers(S.Phases(), "circuit", 1)
     gate, started = threading.Event(), threading.Event()
     first = pool.submit("circuit runs", "a", lambda: started.set() or gate.wait(30))
     second = pool.submit("circuit runs", "b", lambda: 2)

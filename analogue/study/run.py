@@ -1,0 +1,395 @@
+"""Run a study: every experiment's circuit runs, its circuit-free theory, its comparisons with
+their error budgets, and the family members' analyses, scheduled on background threads
+(:mod:`analogue.study.schedule`) -> a :class:`StudyResult`.
+
+:func:`run_study` is the analysis half of what ``analogue report`` and ``analogue paper`` do;
+the page half (:mod:`analogue.report.pipeline`) draws figures and writes the page from the
+:class:`StudyResult`.  The page can draw while the study runs (figures overlap the next
+experiment's circuit runs: measured, the figures and page took 17 s after everything else
+had finished when they waited): :class:`StudyHooks` are called in the calling thread as
+results come in.
+
+Every experiment is loaded (and so validated) before anything runs.  After that, a piece of
+work that fails (a circuit run, an analysis) is recorded in :attr:`StudyResult.failures` and
+never throws away the experiments that finished.
+"""
+from __future__ import annotations
+
+import json
+import os
+import platform
+import time
+from collections.abc import Callable, Iterable
+from concurrent.futures import FIRST_COMPLETED, Future, wait
+from dataclasses import dataclass, field, replace
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..circuit.experiments import Experiment, load_experiment
+from ..circuit.ngspice import interrupt_guard
+from ..circuit.simulate import POLL_S
+from ..ensemble import Ensemble
+from .comparisons import BandwidthTerms, ExperimentAnalysis, analyse, bandwidth_terms
+from .critical_path import report_critical_path
+from .members import CHAPTER_TITLE, MemberAnalysis, analyse_member, is_member_experiment
+from .metrics import Comparison, validate_metrics
+from .runs import ExperimentRuns, run_experiment_runs
+from .schedule import (CIRCUIT_THREADS, MEMBER_THREADS, SCHEDULER_CIRCUIT_THREADS, Failures,
+                       Phases, Workers, circuit_cost, result_of, say)
+from .settings import RunOptions
+from .theory_curves import (CURVE_GROUPS, ExperimentTheory, FigureCurves, experiment_theory,
+                            figure_curves)
+
+__all__ = ["StudyResult", "StudyHooks", "run_study", "load", "experiment_section_title"]
+
+
+def load(name_or_exp) -> Experiment:
+    """An experiment from a name, a TOML path or an Experiment (validated when loaded)."""
+    return name_or_exp if isinstance(name_or_exp, Experiment) else load_experiment(name_or_exp)
+
+
+def experiment_section_title(exp: Experiment) -> str:
+    """The name under which an experiment's failures are recorded (its page section)."""
+    if is_member_experiment(exp):
+        return f"{CHAPTER_TITLE}: {exp.name}"
+    return f"Experiment '{exp.name}'"
+
+
+class StudyHooks:
+    """What a page does while a study runs, in the thread that called :func:`run_study`
+    (:class:`analogue.report.pipeline` draws its figures here).  Every method is optional."""
+
+    def background(self) -> dict[str, Callable[[], Any]]:
+        """Circuit-free tasks (phase name -> function) queued on the theory thread after the
+        experiments' theory; each future is handed to :meth:`background_ready`."""
+        return {}
+
+    def experiment_ready(self, result: StudyResult, runs: ExperimentRuns,
+                         analysis: ExperimentAnalysis) -> None:
+        """An experiment is compared and its theory curves are in (``analysis.curves``)."""
+
+    def background_ready(self, result: StudyResult, phase: str, future: Future) -> None:
+        """A task of :meth:`background` is done (or, at the end, waited for)."""
+
+    def main_complete(self, result: StudyResult) -> None:
+        """Every experiment on the paper's model is compared and drawn; the family members'
+        circuit work starts after this returns."""
+
+
+@dataclass
+class StudyResult:
+    """What a study computed.  Experiments on the paper's model and family members are kept
+    apart (their analyses differ); each dict is in the order the experiments were given."""
+
+    experiments: list[Experiment]          # on the paper's model
+    members: list[Experiment]              # family members
+    quick: bool
+    phases: Phases
+    failures: Failures
+    t0: float
+    load0: tuple
+    runs: dict[str, ExperimentRuns] = field(default_factory=dict)
+    analyses: dict[str, ExperimentAnalysis] = field(default_factory=dict)
+    member_analyses: dict[str, MemberAnalysis] = field(default_factory=dict)
+    failed: dict[str, str] = field(default_factory=dict)   # experiment -> the error that ended it
+    paper_wall: float = 0.0       # seconds from the start until main_complete
+    member_wall: float = 0.0      # the members' threads' time (the page adds its drawing)
+    # filled by the page: experiment (or figure group) -> PNG paths; the page itself
+    figures: dict[str, list[Path]] = field(default_factory=dict)
+    page: Path | None = None
+
+    def __repr__(self) -> str:
+        s = self.summary()
+        return (f"StudyResult({len(self.experiments) + len(self.members)} experiments, "
+                f"{s['comparisons']} comparisons, {s['within_budget']} within budget, "
+                f"{len(self.failures.items)} failures, page={self.page})")
+
+    @property
+    def all_analyses(self) -> list:
+        """Analyses of the paper-model experiments, then of the members."""
+        return [*self.analyses.values(), *self.member_analyses.values()]
+
+    @property
+    def comparisons(self) -> list[Comparison]:
+        return [c for a in self.all_analyses for c in a.comparisons]
+
+    def by_role(self, experiment: str) -> dict[str, Ensemble]:
+        """An experiment's circuit runs by role (:data:`analogue.export.ROLES` names)."""
+        if experiment in self.runs:
+            return self.runs[experiment].by_role()
+        if experiment in self.member_analyses:
+            runs = self.member_analyses[experiment].runs
+            if runs is not None:
+                return runs.by_role()
+        raise KeyError(f"experiment {experiment!r} has no runs in this study (has: "
+                       f"{sorted([*self.runs, *self.member_analyses])})")
+
+    def summary(self) -> dict:
+        comps = self.comparisons
+        return {"comparisons": len(comps), "abs_z_below_3": sum(abs(c.z) < 3 for c in comps),
+                "within_budget": sum(c.within_budget for c in comps),
+                "failed_sections": len(self.failures.items)}
+
+    def provenance(self, wall: float) -> dict:
+        """Everything needed to reproduce the study (metrics.json's ``provenance``)."""
+        provs = {name: r.provenance() for name, r in self.runs.items()}
+        provs.update({name: a.provenance for name, a in self.member_analyses.items()})
+        software = _software()
+        circuit_timing = {k: p.get("timing") for k, p in provs.items() if p.get("timing")}
+        crit = report_critical_path(self.phases.items, circuit_timing)
+        return {
+            "parameters": {k: p["parameters"] for k, p in provs.items()},
+            "model_effective": {k: p["model_effective"] for k, p in provs.items()},
+            "circuit_spec": {k: p["circuit_spec"] for k, p in provs.items()},
+            "circuit_defaults": {k: p.get("circuit_defaults", {}) for k, p in provs.items()},
+            "seeds": {k: p["seeds"] for k, p in provs.items()},
+            "replicas": {k: p["replicas"] for k, p in provs.items()},
+            "ngspice_version": next(iter(provs.values()))["ngspice_version"] if provs else None,
+            "deck_hashes": {k: p["deck_hashes"] for k, p in provs.items()},
+            # how each run's ngspice tolerances and deck size were chosen (circuit.tolerances)
+            "tolerances": {k: p.get("tolerances") for k, p in provs.items()},
+            "deck_size": {k: p.get("deck_size") for k, p in provs.items()},
+            "wall_time_s": wall,
+            # the wall time with unlimited cores: the longest chain of dependent phases, each
+            # circuit run counted as its calibrations plus its longest deck (issue 22, item 1;
+            # analogue.study.critical_path), and that chain
+            "critical_path_s": crit["critical_path_s"],
+            "critical_path": crit["chain"],
+            "circuit_timing": circuit_timing,
+            # when the paper's chapters (its experiments, Fig. 1, the open question) were
+            # complete, from the start; the chapter "Beyond the paper" runs after their circuit
+            # runs, beside their comparisons and figures
+            "paper_wall_time_s": round(self.paper_wall, 3),
+            "beyond_wall_time_s": self.member_wall if self.members else None,
+            "quick": self.quick,
+            "created": datetime.now(UTC).isoformat(timespec="seconds"),
+            "software": software,
+            # wall time per phase (the theory thread's phases overlap the circuit runs) and the
+            # machine's load average (1, 5, 15 min) at the start and the end: times on a shared
+            # machine mean little without it
+            "phases": self.phases.items,
+            "phase_totals_s": self.phases.totals(),
+            "load_average": {"start": [round(x, 2) for x in self.load0],
+                             "end": [round(x, 2) for x in os.getloadavg()]},
+        }
+
+    def metrics(self, provenance: dict) -> dict:
+        """metrics.json's content (validated: :func:`analogue.study.metrics.validate_metrics`)."""
+        metrics = {"comparisons": [c.as_dict() for c in self.comparisons],
+                   "provenance": provenance, "summary": self.summary(),
+                   "failures": self.failures.items}
+        validate_metrics(json.loads(json.dumps(metrics, default=str)))
+        return metrics
+
+
+def _software() -> dict:
+    import matplotlib  # its version only (the study draws nothing); loaded by the page anyway
+    import scipy
+    from .. import __version__
+    return {"analogue": __version__, "python": platform.python_version(), "numpy": np.__version__,
+            "scipy": scipy.__version__, "matplotlib": matplotlib.__version__,
+            "platform": platform.platform()}
+
+
+def _curves_of(f: Future) -> FigureCurves:
+    """An experiment's theory curves from the theory thread."""
+    try:
+        return result_of(f)
+    except Exception as exc:  # figure_curves keeps its failures; this is a safety net
+        curves = FigureCurves()
+        for g in CURVE_GROUPS:
+            curves.fail(g, exc)
+        return curves
+
+
+def member_task(exp: Experiment, opts: RunOptions) -> MemberAnalysis:
+    say(f"{exp.name}: family member: circuit against theory")
+    return analyse_member(exp, opts, progress=say)
+
+
+def runs_task(exp: Experiment, opts: RunOptions) -> ExperimentRuns:
+    say(f"{exp.name}: circuit runs ({'quick' if opts.quick else 'full'} size; stored runs are "
+        "reused)")
+    return run_experiment_runs(exp, opts)
+
+
+def run_study(experiments: Iterable, *, members: Iterable = (), opts: RunOptions | None = None,
+              quick: bool | None = None, runner=None, hooks: StudyHooks | None = None
+              ) -> StudyResult:
+    """Run and analyse ``experiments`` (names, TOML paths or Experiment objects; family
+    members among them are analysed as members, and so are those of ``members``).
+
+    ``opts`` says how the circuits run (:class:`~analogue.study.settings.RunOptions`; default:
+    local, quick when ``quick``); ``quick`` overrides ``opts.quick``.  ``runner`` is accepted
+    for :class:`analogue.Runner` once the circuit layer has it, and must be None until then.
+    ``hooks`` (:class:`StudyHooks`): what the caller does while the study runs.  Failures of
+    single experiments are recorded in the result, never raised; an interrupt is raised after
+    every ngspice process was killed."""
+    if runner is not None:
+        raise TypeError("runner: not supported yet (analogue.Runner is not in this version); "
+                        "pass opts=RunOptions(...) instead")
+    opts = opts or RunOptions(quick=bool(quick))
+    if quick is not None and quick != opts.quick:
+        opts = replace(opts, quick=quick)
+    t0 = time.perf_counter()
+    load0 = os.getloadavg()
+    # every experiment is validated before anything runs (bad input: nothing started yet)
+    given = [load(n) for n in experiments]
+    result = StudyResult(experiments=[e for e in given if not is_member_experiment(e)],
+                         members=[e for e in given if is_member_experiment(e)]
+                         + [load(n) for n in members],
+                         quick=opts.quick, phases=Phases(origin=t0), failures=Failures(),
+                         t0=t0, load0=load0)
+    # ngspice runs in the circuit threads: this (main) thread's guard turns SIGINT/SIGTERM/
+    # SIGHUP into RunInterrupted here (killing every ngspice group), whoever called us
+    with interrupt_guard():
+        pool = Workers(result.phases, "theory", 1, blas_limit=True)
+        circuit = Workers(result.phases, "circuit",
+                          SCHEDULER_CIRCUIT_THREADS if opts.scheduler else CIRCUIT_THREADS)
+        family = Workers(result.phases, "members", MEMBER_THREADS)
+        try:
+            _schedule(result, opts, hooks or StudyHooks(), pool, circuit, family)
+            return result
+        except BaseException:
+            # an interrupt (failures are caught in _schedule): nothing new starts in either
+            # pool, then every ngspice process is killed until their threads end
+            family.close()
+            circuit.abort()
+            family.abort()
+            raise
+        finally:
+            circuit.close()
+            family.close()
+            pool.close()
+
+
+def _schedule(result: StudyResult, opts: RunOptions, hooks: StudyHooks, pool: Workers,
+              circuit: Workers, family: Workers) -> None:
+    """The schedule (issue 10: the paper's chapters first, every core busy):
+
+    - circuit runs longest first: the longest experiment's runs finish early, and its long
+      analysis (comparisons, the work densities of its theory curves) overlaps the other
+      experiments' runs instead of trailing after them (measured on the quick paper: work's
+      runs queued behind slip ended at 73 s, its comparisons and curves at 90 s);
+    - the theory thread takes the experiments in the same order: each experiment's exact
+      theory, then its bandwidth term (held/white Monte Carlo pairs: no circuit data), so
+      that both are ready when its runs are; the hooks' background tasks last;
+    - the family members' circuit work waits until the paper's chapters are complete
+      (every paper run compared, every figure drawn), then has both cores."""
+    experiments, phases, fails = result.experiments, result.phases, result.failures
+    order = sorted(range(len(experiments)), key=lambda i: -circuit_cost(experiments[i], opts))
+    theory_f: dict = {}
+    band_f: dict = {}
+    for i in order:
+        exp = experiments[i]
+        settings = exp.report.for_options(opts)
+        theory_f[i] = pool.submit("exact theory", exp.name,
+                                  lambda exp=exp, s=settings: experiment_theory(exp, s,
+                                                                                progress=say))
+        band_f[i] = pool.submit("bandwidth term (held/white Monte Carlo)", exp.name,
+                                lambda exp=exp, s=settings: bandwidth_terms(exp, s,
+                                                                            progress=say))
+    background = {phase: pool.submit(phase, None, fn) for phase, fn in hooks.background().items()}
+    runs_f = {i: circuit.submit("circuit runs", experiments[i].name,
+                                lambda exp=experiments[i]: runs_task(exp, opts))
+              for i in order}
+    # the members start once the paper's chapters are complete (runs compared, figures and
+    # Fig. 1 drawn), not when the paper's runs are: measured on the quick paper, two members'
+    # ngspice beside the last experiment's figures made those take 6.3 s of wall time for
+    # ~2.4 CPU-s, and the paper's chapters ended 8.5 s after its last run
+    paper_done: Future = Future()
+    members_f = [family.submit_after([*runs_f.values(), paper_done],
+                                     "family member (circuit and theory)", exp.name,
+                                     lambda exp=exp: member_task(exp, opts))
+                 for exp in result.members]
+    runs_by_index: dict = {}
+    analyses_by_index: dict = {}
+    # The hooks draw in this thread as soon as an experiment's theory curves are in, while
+    # the circuit threads run the next experiments
+    undrawn: list = []          # (runs, analysis, future of its theory curves), in order
+
+    def draw_ready(block: bool) -> None:
+        while undrawn and (block or undrawn[0][2].done()):
+            runs, a, f = undrawn.pop(0)
+            with phases("waiting for theory curves", runs.exp.name):
+                a.curves = _curves_of(f)
+            hooks.experiment_ready(result, runs, a)
+        for phase, f in list(background.items()):
+            if block or f.done():
+                del background[phase]
+                hooks.background_ready(result, phase, f)
+
+    def next_done() -> int:
+        """The next experiment whose runs are done (the runs' order among those done at
+        once), drawing what is ready while none is."""
+        while True:
+            done = [i for i in order if i in runs_f and runs_f[i].done()]
+            if done:
+                return done[0]
+            draw_ready(block=False)
+            waits = list(runs_f.values())
+            if undrawn:
+                waits.append(undrawn[0][2])
+            waits.extend(background.values())
+            with phases("waiting for circuit runs"):
+                while not wait(waits, timeout=POLL_S, return_when=FIRST_COMPLETED).done:
+                    pass  # (polled: see result_of)
+
+    # the experiments are compared in the order their runs complete (the result keeps the
+    # given order)
+    while runs_f:
+        i = next_done()
+        exp, run_f, th_f, bw_f = experiments[i], runs_f.pop(i), theory_f[i], band_f[i]
+        section = experiment_section_title(exp)
+        runs, err = fails.attempt(section, "circuit runs", lambda f=run_f: result_of(f), exp.name)
+        if runs is None:
+            th_f.cancel()
+            bw_f.cancel()
+            result.failed[exp.name] = err
+            continue
+        # the data-dependent theory curves (work densities on the circuit's bins...) run in the
+        # background while this experiment's comparisons and the next one's circuit run
+        cf = pool.submit("theory curves", exp.name,
+                         lambda runs=runs: figure_curves(runs, progress=say))
+        say(f"{exp.name}: comparing with theory")
+
+        def compare_(runs=runs, th_f=th_f, bw_f=bw_f):
+            with phases("waiting for theory", runs.exp.name):
+                theory: ExperimentTheory = result_of(th_f)
+                bandwidth: BandwidthTerms = result_of(bw_f)
+            with phases("comparisons", runs.exp.name):
+                return analyse(runs, theory=theory, bandwidth=bandwidth, progress=say)
+        analysis, err = fails.attempt(section, "comparison with theory", compare_, exp.name)
+        if analysis is None:
+            cf.cancel()
+            result.failed[exp.name] = err
+            continue
+        runs_by_index[i] = runs
+        analyses_by_index[i] = analysis
+        undrawn.append((runs, analysis, cf))
+    for i in sorted(runs_by_index):
+        result.runs[experiments[i].name] = runs_by_index[i]
+        result.analyses[experiments[i].name] = analyses_by_index[i]
+
+    # the paper's chapters are complete once their figures are drawn
+    draw_ready(block=True)
+    hooks.main_complete(result)
+    result.paper_wall = time.perf_counter() - result.t0
+    paper_done.set_result(None)
+
+    for exp, ma_f in zip(result.members, members_f):
+        with phases("waiting for family members", exp.name):
+            ma, err = fails.attempt(experiment_section_title(exp), "member analysis",
+                                    ma_f.result, exp.name)
+        if ma is None:
+            result.failed[exp.name] = err
+        else:
+            result.member_analyses[exp.name] = ma
+    # the members' own time: their analyses (in a circuit thread, beside the paper's
+    # comparisons); the page adds its figures
+    result.member_wall = sum(p["seconds"] for p in phases.items
+                             if p["phase"] == "family member (circuit and theory)")
+

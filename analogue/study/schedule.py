@@ -1,0 +1,245 @@
+"""How a study's work is scheduled: background threads, phases and recorded failures
+(issue 10: every core busy from start to end; issue 20: the schedule belongs to the study, not
+to the page).
+
+- :class:`Workers`: threads that run tasks in submission order, each as a phase;
+- :class:`Phases`: the wall time per phase (the report's provenance and critical path,
+  :mod:`analogue.study.critical_path`);
+- :class:`Failures`: a piece of work that fails is recorded (section, stage, error), not raised;
+- :func:`result_of`: a future's result, waited for in polls (signals reach the main thread).
+
+Progress goes to the ``analogue.report.pipeline`` logger, where the command line has always
+shown the report job's progress (analogue.cli).
+"""
+from __future__ import annotations
+
+import logging
+import os
+import queue
+import threading
+import time
+import traceback
+from concurrent.futures import Future
+from contextlib import contextmanager, nullcontext
+
+from threadpoolctl import threadpool_limits
+
+from ..circuit.experiments import Experiment
+from ..circuit import ngspice
+from ..circuit.simulate import POLL_S
+from .settings import RunOptions
+
+__all__ = ["Failures", "Phases", "Workers", "result_of", "say", "error_text", "circuit_cost",
+           "CIRCUIT_THREADS", "SCHEDULER_CIRCUIT_THREADS", "MEMBER_THREADS"]
+
+log = logging.getLogger("analogue.report.pipeline")
+
+def error_text(exc: BaseException) -> str:
+    msg = " | ".join(ln.strip() for ln in str(exc).splitlines() if ln.strip())
+    return f"{type(exc).__name__}: {msg}" if msg else type(exc).__name__
+
+
+class Failures:
+    """Runs one piece of a report; a failure is recorded (section, stage, error), not raised."""
+
+    def __init__(self):
+        self.items: list[dict] = []
+
+    def attempt(self, section: str, stage: str, fn, experiment: str | None = None):
+        try:
+            return fn(), None
+        except (KeyboardInterrupt, SystemExit):
+            raise
+        except Exception as exc:  # any failure of one section is reported
+            if os.environ.get("ANALOGUE_DEBUG"):
+                traceback.print_exc()
+            err = error_text(exc)
+            self.items.append({"section": section, "experiment": experiment, "stage": stage,
+                               "error": err})
+            say(f"{section}: FAILED ({stage}): {err}")
+            return None, err
+
+
+def result_of(f: Future):
+    """``f.result()``, waited for in polls of ``POLL_S``: a wait without a timeout is not
+    woken by a signal the kernel delivered to another thread, so the main thread's handler
+    (RunInterrupted) would wait for the task (issue 19: under load a SIGTERM to ``analogue
+    run`` once went unanswered for more than 10 s)."""
+    while True:
+        try:
+            return f.result(timeout=POLL_S)
+        except TimeoutError:
+            if f.done():
+                raise  # the task's own TimeoutError
+
+
+def say(msg: str) -> None:
+    """Progress of the report job, on the ``analogue.report.pipeline`` logger (the command line
+    shows it on stderr with the time since the command started: see analogue.cli).  A task
+    still running in a background thread after its report ended (a daemon thread finishing
+    its numerics) says nothing more: in one process, the next command's output (an
+    in-process ``analogue theory --json`` after a failed report) got its progress lines."""
+    if getattr(threading.current_thread(), "analogue_report_closed", False):
+        return
+    log.info(msg)
+
+
+class Phases:
+    """Wall time per phase of a report (logged, and recorded in the provenance).  Phases in
+    the theory thread overlap with the circuit runs, so the phases sum to more than the wall
+    time when the overlap works."""
+
+    def __init__(self, origin: float | None = None):
+        self.items: list[dict] = []
+        self.origin = time.perf_counter() if origin is None else origin
+
+    @contextmanager
+    def __call__(self, phase: str, experiment: str | None = None, thread: str = "main"):
+        t0 = time.perf_counter()
+        try:
+            yield
+        finally:
+            dt = time.perf_counter() - t0
+            self.items.append({"phase": phase, "experiment": experiment, "thread": thread,
+                               "start_s": round(t0 - self.origin, 3), "seconds": round(dt, 3)})
+            say(f"phase done: {phase}{f' ({experiment})' if experiment else ''} "
+                f"[{thread}]: {dt:.1f} s")
+
+    def totals(self) -> dict:
+        out: dict = {}
+        for it in self.items:
+            out[it["phase"]] = round(out.get(it["phase"], 0.0) + it["seconds"], 3)
+        return out
+
+
+class Workers:
+    """Background threads that run tasks in submission order, each as a phase of the report
+    (issue 10, item 4: keep every core busy from start to end).
+
+    - the **theory** thread (one): the theory needs no circuit data, so it runs while ngspice
+      runs; BLAS/LAPACK are limited to one thread while a task runs (threadpoolctl), so it adds
+      one runnable thread, not one per core;
+    - the **circuit** thread (one): every experiment's circuit runs, queued from the start
+      (longest first), so that ngspice never waits for the main thread's comparisons of the
+      previous experiment.  One thread: an experiment's runs keep ``workers`` ngspice
+      processes busy on their own (one deck pool for all its runs, study.runs), and the
+      theory thread fills the last deck's idle core.  With two threads the experiments
+      shared the cores, so the longest one (work, queued first) ended last anyway, at 108 s
+      of the quick paper, and its theory curves trailed after it;
+    - the **members** threads: the family members' analyses (circuit and theory), queued
+      once the paper's chapters are complete (:meth:`submit_after`).  Two threads: a member's runs are
+      few decks, which alone leave a core idle.
+
+    The threads are daemons: an interrupt does not wait for a task under way (see
+    :meth:`abort`)."""
+
+    def __init__(self, phases: Phases, name: str, threads: int = 1, blas_limit: bool = False):
+        self.phases, self.name, self.blas_limit = phases, name, blas_limit
+        self.queue: queue.Queue = queue.Queue()
+        self._lock = threading.Lock()
+        self._closed = False
+        self.threads = [threading.Thread(target=self._run, daemon=True,
+                                         name=f"analogue-{name}" + (f"-{i}" if threads > 1 else ""))
+                        for i in range(threads)]
+        for t in self.threads:
+            t.start()
+
+    def _run(self):
+        while True:
+            item = self.queue.get()
+            if item is None:
+                return
+            fut, phase, experiment, fn = item
+            if not fut.set_running_or_notify_cancel():
+                continue
+            try:
+                # the limit is process-wide (OpenBLAS has one pool): held only while a theory
+                # task runs, so the main thread's own theory (the family chapter) gets both
+                # cores once the background work is done
+                with (threadpool_limits(1) if self.blas_limit else nullcontext()), \
+                        self.phases(phase, experiment, thread=self.name):
+                    fut.set_result(fn())
+            except BaseException as exc:  # handed to whoever waits for the result
+                fut.set_exception(exc)
+
+    def submit(self, phase: str, experiment: str | None, fn) -> Future:
+        fut: Future = Future()
+        self._put((fut, phase, experiment, fn))
+        return fut
+
+    def _put(self, item) -> None:
+        with self._lock:   # nothing is queued behind close()'s end markers: cancelled instead
+            if self._closed:
+                item[0].cancel()
+            else:
+                self.queue.put(item)
+
+    def submit_after(self, after: list, phase: str, experiment: str | None, fn) -> Future:
+        """Like :meth:`submit`, but queued only once every future in ``after`` is done
+        (a result, an error or cancelled): the family members' circuit work waits for the
+        paper's circuit runs, so that they never share the cores with them."""
+        fut: Future = Future()
+        left = [len(after)]
+        lock = threading.Lock()
+
+        def one_done(_f) -> None:
+            with lock:
+                left[0] -= 1
+                go = left[0] == 0
+            if go:
+                self._put((fut, phase, experiment, fn))
+        if not after:
+            self._put((fut, phase, experiment, fn))
+        for f in after:
+            f.add_done_callback(one_done)
+        return fut
+
+    def _cancel_pending(self) -> None:
+        while True:               # whatever has not started is cancelled
+            try:
+                item = self.queue.get_nowait()
+            except queue.Empty:
+                break
+            if item is not None:
+                item[0].cancel()
+
+    def close(self) -> None:
+        for t in self.threads:
+            t.analogue_report_closed = True  # type: ignore[attr-defined]  # read by say
+        with self._lock:
+            self._closed = True
+            self._cancel_pending()
+            for _ in self.threads:
+                self.queue.put(None)
+
+    def abort(self, wait: float = 10.0) -> None:
+        """After an interrupt: nothing new starts, and the ngspice processes of the tasks under
+        way are killed (again and again: a task whose deck was killed may start its next one)
+        until their threads end or ``wait`` seconds have passed; a task in pure numerics is
+        left to the daemon thread.  Its temporary directories are removed as it unwinds."""
+        self.close()
+        deadline = time.monotonic() + wait
+        while any(t.is_alive() for t in self.threads) and time.monotonic() < deadline:
+            ngspice.terminate_all()
+            for t in self.threads:
+                t.join(0.05)
+        ngspice.terminate_all()
+
+
+# the threads of the paper's circuit runs and of the family members' analyses (see
+# Workers): each simulate call runs up to `workers` ngspice processes.  With a Dask
+# scheduler an experiment's runs go to the cluster one after another (study.runs._run_jobs)
+# and the local cores are not the limit: two experiments at once keep more of it busy.
+CIRCUIT_THREADS = 1
+SCHEDULER_CIRCUIT_THREADS = 2
+MEMBER_THREADS = 2
+
+def circuit_cost(exp: Experiment, opts: RunOptions) -> float:
+    """A proxy for an experiment's ngspice time: its replica-time (replicas x model time of
+    the transition and stationary runs; the integration checks scale with them).  Only its
+    order matters: the paper's work experiment (7600 replica-time units at --quick, against
+    5600 for stick and slip) took 58 s of circuit runs, stick 30 s, slip 15 s."""
+    settings = exp.report.for_options(opts)
+    return (len(exp.v0) * opts.scaled(exp.replicas) * exp.t_end
+            + settings.stationary_replicas * settings.stationary_t_end)
+
