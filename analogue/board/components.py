@@ -216,10 +216,23 @@ def board_components(design: BoardDesign, matched: tuple = ()) -> list[Part]:
              "SW3/SW4 spare, inputs grounded", "Vishay", "DG412DY-E3", "Analog Devices DG412DY+",
              SOIC16, tuple((i, n, net) for i, (n, net) in enumerate(zip(DG41X_PINS, (
                  "RESET", "OUT", "RST_R", "-15V", "GND", "", "", "GND", "GND", "", "", "+5V",
-                 "+15V", "IC_R", "IC_IN", "RESET")), 1)),
+                 "+15V", "SJ", "IC_R", "RESET")), 1)),
              "-", "+-15 V, R_on 35 ohm max, 5 pC charge injection", "S0r", math.nan, "U"),
         _resistor("R10", R_IC, "RST_R", "SJ", "reset resistor R_IC across C (through U4 SW1)", "R0r"),
-        _resistor("R11", R_IC, "IC_R", "SJ", "IC input resistor R_IC (through U4 SW2)", "R0i"),
+        # R11 on the connector's side of SW2: with the bench supply off it limits what the
+        # DAQ's +-10 V pushes into U4's pin to 0.93 mA (issue 21; abs max 30 mA)
+        _resistor("R11", R_IC, "IC_IN", "IC_R", "IC input resistor R_IC (J3 to U4 SW2)", "R0i"),
+        # logic lines: series resistors limit a 5 V line into an unpowered DG41x to 4.3 mA;
+        # pull-downs hold EN and RESET low (friction off, switches open) while the DAQ's lines
+        # float at power-up (the logic high still reaches 4.95 V, VINH 2.4 V)
+        _resistor("R12", 1e3, "EN_IN", "EN", "series resistor of the enable line (J5 pin 1)",
+                  tol="1 %, 50 ppm/K"),
+        _resistor("R13", 1e3, "RESET_IN", "RESET", "series resistor of the reset line (J5 pin 2)",
+                  tol="1 %, 50 ppm/K"),
+        _resistor("R14", 100e3, "EN", "GND", "pull-down of EN (friction off at power-up)",
+                  tol="1 %, 50 ppm/K"),
+        _resistor("R15", 100e3, "RESET", "GND", "pull-down of RESET (switches open at power-up)",
+                  tol="1 %, 50 ppm/K"),
         # ---------------------------------------------------------------- force and noise
         _resistor("R4", v["R_F"], "FORCE_IN", "SJ", "force resistor, I_F = V_F/R_F", "R0f",
                   tol("R4", "1 %, 50 ppm/K")),
@@ -263,7 +276,8 @@ def board_components(design: BoardDesign, matched: tuple = ()) -> list[Part]:
     parts += [
         Part("J5", "1x3 header", "logic from DAQ digital lines (hardware-timed): EN, RESET, GND",
              "Würth Elektronik", "61300311121", "Samtec TSW-103-07-G-S", HDR3,
-             ((1, "1", "EN"), (2, "2", "RESET"), (3, "3", "GND")), "-", "2.54 mm", "", math.nan, "J"),
+             ((1, "1", "EN_IN"), (2, "2", "RESET_IN"), (3, "3", "GND")), "-", "2.54 mm", "",
+             math.nan, "J"),
         Part("J6", "3-pole terminal", "power entry from the bench supply: +15 V, GND, -15 V",
              "Phoenix Contact", "1935174", "Würth Elektronik 691137710003", TB3,
              ((1, "1", "+15V"), (2, "2", "GND"), (3, "3", "-15V")), "-", "5.08 mm, 13.5 A", "",

@@ -258,7 +258,7 @@ def build_board_deck(design: BoardDesign, board: BoardInstance, *, v0, t_end: fl
             v_ic = ic_voltage(design, v0[j], b.v_force, values=val_)
             lines += [f"Vic{j} ic{j} 0 dc {_n('v_ic', v_ic)}",
                       f"S{j}r {o} {j}rr sr 0 swno", f"R{j}r {j}rr {sj} {_n('R_IC', R_IC)}",
-                      f"S{j}i ic{j} {j}ri sr 0 swno", f"R{j}i {j}ri {sj} {_n('R_IC', R_IC)}"]
+                      f"R{j}i ic{j} {j}ri {_n('R_IC', R_IC)}", f"S{j}i {j}ri {sj} sr 0 swno"]
             continue
         # the virtual ground's own equilibrium, -vos - V(out)/a0: holding it at 0 through the
         # operating point would, on a board with the optional AC-coupling capacitor, charge it

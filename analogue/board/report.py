@@ -271,6 +271,10 @@ def _bench_section(design, metrics) -> Section:
         "function generator and a scope cannot do it: the noise must be the seeded sequence "
         "(analogue.board.noise_chain.dac_sequence), replayed sample by sample and recorded on "
         "the same clock.",
+        "0. Order: the DAQ's outputs at 0 V (or its task stopped) until the supply is on. "
+        "Should it drive an unpowered board anyway, R11 (J3), R12/R13 (J5) and R6 + R7 (J1) "
+        "hold every pin's current inside its rating (table below); R14/R15 hold EN and RESET "
+        "low (friction off, switches open) while the DAQ's lines float.",
         "1. Power: supply at +-15 V with the limit set; DMM on TP5/TP6: +15 V - "
         f"{s.v_set:g} V and -15 V + {s.v_set:g} V within 5 mV (references and servos working).",
         "2. Enable low (EN = 0), RESET = 1, AO0 = 0 V: DMM on TP2 (OUT) follows -AO2 (the IC "
@@ -310,7 +314,27 @@ def _bench_section(design, metrics) -> Section:
         "machine unit within one tau_m (test_an_output_at_its_rail_does_not_latch). Every run "
         "still starts with step 4's reset, which sets v0.",
     ]
-    return Section("Bench procedure and bench checks", paragraphs=steps + checks,
-                   tables=[Table("Op-amp inputs against their guaranteed common-mode range (V)",
-                                 ["instance", "part", "role", "guaranteed range", "min", "max",
-                                  "margin"], rows)])
+    tables = [Table("Op-amp inputs against their guaranteed common-mode range (V)",
+                    ["instance", "part", "role", "guaranteed range", "min", "max", "margin"], rows)]
+    if "stresses" in b:
+        st = b["stresses"]
+        checks.append(
+            "Ratings: over the bench modes simulated here (" + "; ".join(st["modes"]) + ") "
+            + ("every part stayed inside its absolute maximum ratings" if st["all_ok"]
+               else "SOME PART LEFT ITS ABSOLUTE MAXIMUM RATINGS") + " (worst case per part "
+            "below; an output at its rail is checked in test_board_ratings.py).")
+        tables.append(Table("Worst stress per part over the bench modes, against its absolute "
+                            "maximum rating", ["part", "quantity", "worst", "limit", "unit",
+                                               "mode", "inside"],
+                            [[r["part"], r["quantity"], r["worst"], r["limit"], r["unit"],
+                              r["mode"], "yes" if r["ok"] else "NO"] for r in st["rows"]]))
+    if "unpowered_inputs" in b:
+        tables.append(Table("DAQ outputs into an unpowered board: the first IC pin each reaches, "
+                            "the series resistance on the board and the current into that pin "
+                            "(a diode drop from its unpowered rails)",
+                            ["connector", "pin", "net", "DAQ V", "first IC pin", "series ohm",
+                             "current A", "pin limit A", "inside"],
+                            [[r["connector"], r["pin"], r["net"], r["volts"], r["first_pin"],
+                              r["series_ohm"], r["current_A"], r["limit_A"],
+                              "yes" if r["ok"] else "NO"] for r in b["unpowered_inputs"]]))
+    return Section("Bench procedure and bench checks", paragraphs=steps + checks, tables=tables)

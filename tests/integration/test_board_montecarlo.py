@@ -99,6 +99,11 @@ def test_board_job_writes_every_output(tmp_path):
     assert bench["common_mode"]["min_margin"] > 0.5
     assert bench["residual_friction"]["relative_to_I0"] < 1e-3
     assert bench["reset_start"]["rms_vs_ic_start"] < 5e-3
+    # every part inside its absolute maximum ratings in every bench mode simulated, and every
+    # DAQ input current-limited on the board with the supply off
+    assert bench["stresses"]["all_ok"], [r for r in bench["stresses"]["rows"] if not r["ok"]]
+    assert len(bench["stresses"]["modes"]) == 4
+    assert bench["unpowered_inputs"] and all(r["ok"] for r in bench["unpowered_inputs"])
     assert "Bench procedure" in (out / "index.html").read_text()
     deck = (out / "board.cir").read_text()
     assert ".control" not in deck

@@ -7,7 +7,7 @@ from analogue import Model
 from analogue.board import opamp
 from analogue.board.design import BoardSpec, design_board
 from analogue.board.netlist import build_board_deck, nominal_instance
-from analogue.board.ratings import common_mode_margins
+from analogue.board.ratings import common_mode_margins, part_stresses
 from analogue.circuit import ngspice as ng
 
 pytestmark = pytest.mark.requires_ngspice
@@ -102,3 +102,20 @@ def test_an_output_at_its_rail_does_not_latch(tmp_path, sign):
     # and the bridge nodes stay volts inside the sources' compliance (+-12.5 V less the
     # MOSFETs' saturation voltage)
     assert np.max(plot["v(b0top)"]) < 1.0 and np.min(plot["v(b0bot)"]) > -1.0
+    # every part inside its absolute maximum ratings on the way back
+    bad = [r for r in part_stresses(d, nom, text, plot) if not r["ok"]]
+    assert not bad, bad
+
+
+def test_the_stress_audit_sees_an_overloaded_part(tmp_path):
+    # teeth: a 100 Ohm sense resistor makes the sourcing source 25 mA, 0.3 W in the BSS84
+    # (rated 0.25 W), and the 25 mA leave through U1A's output (20 mA guaranteed); the audit
+    # flags those two and nothing else of that board
+    d = design_board(STICK, v0=[2.0, -2.0])
+    nom = nominal_instance(d)
+    hot = nom.replace(values={**nom.values, "R_S_top": 100.0})
+    deck = build_board_deck(d, hot, v0=[0.0], t_end=0.2, sample_dt=0.01, seed=3,
+                            noise_dir=tmp_path, save_all=True, noise_off=True)
+    plot = ng.run_deck(deck.text, t_stop=0.2 * d.theta, files=deck.noise_files).plot
+    bad = [(r["part"], r["quantity"]) for r in part_stresses(d, hot, deck.text, plot) if not r["ok"]]
+    assert sorted(bad) == [("Q1 BSS84", "dissipation"), ("U1A OPA2140_worst", "output current")]
