@@ -2,7 +2,9 @@
 
 Public entry points: :class:`Model`, :class:`Ensemble`, :func:`simulate` (the circuit in
 ngspice), :func:`open_ensemble` (netCDF files of ``Ensemble.to_netcdf`` / ``analogue export``),
-:func:`load_runs` (an experiment's circuit runs by role), the theory packages :mod:`analogue.theory.weak_noise` and
+:func:`load_runs` (an experiment's circuit runs by role), ``report(experiment, out=...,
+quick=...)`` (what ``analogue report`` does, returning an :class:`analogue.study.run.StudyResult`;
+``analogue.report`` is also the package of the page's modules), the theory packages :mod:`analogue.theory.weak_noise` and
 :mod:`analogue.theory.exact`, and the estimators in :mod:`analogue.estimators`.
 
 Where things live (layers, lowest first; an import only points down,
@@ -24,10 +26,15 @@ estimators                  ``estimators.*``: densities, stationary moments, wor
                             first passage, jackknife/resampling, with standard errors
 runs                        ``montecarlo`` (SDE reference), ``circuit.*`` (mapping, decks,
                             ngspice, the run store, :func:`simulate`), ``data`` (netCDF)
-study                       ``study.*`` (settings, seeds, the observable catalogue, figure
-                            layout), ``circuit.experiments`` (TOML experiments)
-pages                       ``report.*`` (runs, comparisons, budgets, figures, the page),
-                            ``plots.*``, ``board.*`` (a buildable board), ``export``
+study                       ``study.*``: settings, seeds, the observable catalogue, the runs
+                            by role (``runs``), circuit-free theory (``theory_curves``),
+                            ``comparisons``, ``budget``, ``metrics``, the family members'
+                            analysis (``members``), the schedule (``schedule``) and
+                            ``run.run_study`` -> ``StudyResult``; ``circuit.experiments``
+                            (TOML experiments)
+pages                       ``report.*`` (figures, prose, the page from a ``StudyResult``;
+                            ``analogue.report(...)`` itself), ``plots.*``, ``board.*`` (a
+                            buildable board), ``export``
 command line                ``cli``
 ==========================  ============================================================
 """
@@ -35,7 +42,7 @@ from .model import Model, MechanicalParameters, ShotNoise
 from .ensemble import Ensemble
 
 __all__ = ["Model", "MechanicalParameters", "ShotNoise", "Ensemble", "simulate", "open_ensemble",
-           "load_runs"]
+           "load_runs", "report"]
 __version__ = "0.1.0"
 
 

@@ -45,3 +45,17 @@ class _MovedFinder(importlib.abc.MetaPathFinder):
 
 if not any(isinstance(f, _MovedFinder) for f in sys.meta_path):
     sys.meta_path.append(_MovedFinder())
+
+
+class _CallableModule(type(sys)):  # type: ignore[misc]
+    """``analogue.report`` is this package and the Python entry point at once:
+    ``analogue.report("stick", quick=True)`` is :func:`analogue.report.pipeline.report`, and
+    ``from analogue.report import figures`` still imports the module (a package's attribute
+    is set by the import system, so a function could not take the name)."""
+
+    def __call__(self, experiment, out=None, **kwargs):
+        from .pipeline import report  # the page's modules load only when a report is made
+        return report(experiment, out, **kwargs)
+
+
+sys.modules[__name__].__class__ = _CallableModule
