@@ -44,7 +44,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import KW_ONLY, dataclass, field, replace
+from dataclasses import KW_ONLY, dataclass, field, fields, replace
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -214,6 +214,15 @@ class Model:
                           else build_noise(self.gamma, self.shot)))
         s(self, "_friction", build_friction(self.delta, self.epsilon, self.cubic, self.stribeck))
         s(self, "_restoring", build_restoring(self.spring, self.x0))
+
+    def __repr__(self) -> str:
+        # the dataclass fields, and the noise kind only where one was given (a built-in kind is
+        # a function of gamma and shot, already shown)
+        names = [f.name for f in fields(self) if f.name != "noise"]
+        body = ", ".join(f"{n}={getattr(self, n)!r}" for n in names)
+        if self.noise_kind.kind is not None:
+            body += f", noise={self.noise_kind!r}"
+        return f"{type(self).__name__}({body})"
 
     # ------------------------------------------------------------------ family flags
     @property

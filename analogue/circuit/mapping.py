@@ -568,9 +568,7 @@ def _is_plain(model: Model) -> bool:
 
 def _friction_amplitudes(model: Model) -> tuple[float, float]:
     """(Delta(0), max_v Delta(v)) of the (Stribeck) dry-friction law."""
-    if model.stribeck is None:
-        return model.delta, model.delta
-    return model.stribeck[0], max(model.delta, model.stribeck[0])
+    return model.friction.static, model.friction.peak
 
 
 def _sgn_law(model: Model) -> Model:
@@ -816,8 +814,7 @@ def _spring_leak(model: Model, tau_leak: float) -> dict:
     bb = np.array([[1.0, 0.0], [0.0, 0.0]])  # the noise drives v only; intensity cancels
     ideal = solve_continuous_lyapunov(np.array([[-1 / tau, -k], [1.0, 0.0]]), -bb)
     leaky = solve_continuous_lyapunov(np.array([[-1 / tau, -k], [1.0, -1 / tau_leak]]), -bb)
-    a_eff = model.a + (model.shot.rate * model.shot.mean
-                       if model.shot is not None and not model.shot.two_sided else 0.0)
+    a_eff = model.a + model.noise_kind.mean_force
     creep = abs(a_eff) / (k * tau_leak + 1.0 / tau)
     # frictionless velocity spread sqrt(tau_m/gamma) (Gaussian), else the mean jump (a model
     # with gamma = inf is noisy only through its shot noise)
@@ -920,7 +917,7 @@ def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
     ck = cap * kappa
     i_unit = ck / theta  # current per unit acceleration
     i_delta_total = model.delta * i_unit
-    i_stribeck = 0.0 if model.stribeck is None else (model.stribeck[0] - model.delta) * i_unit
+    i_stribeck = (model.friction.static - model.delta) * i_unit  # 0 unless Stribeck
     i_peak = delta_max * i_unit
     i_force = model.a * i_unit
 

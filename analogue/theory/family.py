@@ -41,7 +41,7 @@ import dataclasses
 import math
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
-from typing import cast
+from typing import NamedTuple, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -132,7 +132,7 @@ def _anchor(model: Model, g: ShotGrid) -> int:
             return int(np.flatnonzero(cells > zs.max())[0])
     if g.atom:
         return g.n - 1
-    a_eff = model.a + (model.shot.mean_force if model.shot is not None else 0.0)
+    a_eff = model.a + model.noise_kind.mean_force
     target = model.replace(a=a_eff, shot=None, gamma=math.inf).attractor
     return int(np.argmin(np.abs(g.v - target)))
 
@@ -225,11 +225,18 @@ def _grid_solution(model: Model, h: float) -> tuple[ShotGrid, np.ndarray]:
 
 def _law(model: Model, h: float) -> _Law:
     """The stationary law of :func:`stationary_law` and the moments of
-    :func:`stationary_moments` from the same grids h and h/2."""
-    if model.shot is None:
-        from .fokker_planck import Grid
-        v = Grid.span(*_grid_range(model), h).v  # the nodes of the Scharfetter-Gummel grid
-        return _Law(v, _gradient_density(model, v), 0.0, h, False)
+    :func:`stationary_moments` from the same grids h and h/2 (the route: the noise's exact
+    solver, ``model.noise.exact_solver``)."""
+    return _ROUTES[model.noise_kind.exact_solver].law(model, h)  # type: ignore[index]
+
+
+def _law_fokker_planck(model: Model, h: float) -> _Law:
+    from .fokker_planck import Grid
+    v = Grid.span(*_grid_range(model), h).v  # the nodes of the Scharfetter-Gummel grid
+    return _Law(v, _gradient_density(model, v), 0.0, h, False)
+
+
+def _law_kolmogorov_feller(model: Model, h: float) -> _Law:
     (gc, pc), (gf, pf) = _grid_solution(model, h), _grid_solution(model, h / 2.0)
     mc, mf = _moments_of(model, gc, pc), _moments_of(model, gf, pf)
     if gc.nodal:  # second order; fine node 2j is coarse node j (v = 0 a node of both)
@@ -306,7 +313,7 @@ def _gradient_smooth_law(model: Model) -> tuple[np.ndarray, np.ndarray]:
     from .kolmogorov_feller import _gaussian_range
     lo, hi = _gaussian_range(model)
     h = min(model.epsilon / 20.0, model.velocity_scale / 400.0,
-            model.stribeck[1] / 100.0 if model.stribeck is not None else math.inf)
+            model.friction.velocity_length / 100.0)
     def nodes(a: float, b: float) -> np.ndarray:
         n = int(min(2_000_000, 2 * math.ceil((b - a) / (2 * h))))
         return np.linspace(a, b, max(n, 2) + 1)
@@ -390,21 +397,27 @@ def stationary_moments(model: Model, h: float | None = None) -> StationaryMoment
     check_one_dimensional(model)
     if h is None:
         h = default_spacing(model)
-    if model.shot is None:
-        quad = (_gradient_quadrature(model) if model.epsilon == 0
-                else _gradient_smooth_moments(model))
-        mean, second, pp, pm, sign = quad
-        # SG is second order: Richardson (4 f - c)/3 for the diffusion
-        gc, gf = _grid_solution(model, h), _grid_solution(model, h / 2.0)
-        diff = (4.0 * _green_kubo(model, *gf) - _green_kubo(model, *gc)) / 3.0
-        atom = 0.0
-    else:
-        ext = _law(model, h).moments
-        assert ext is not None
-        mean, second, pp, pm, sign, atom, diff = ext
+    mean, second, pp, pm, sign, atom, diff = _ROUTES[
+        model.noise_kind.exact_solver].moments(model, h)  # type: ignore[index]
     return StationaryMoments(mean=float(mean), variance=float(second - mean * mean),
                              p_positive=float(pp), p_negative=float(pm), mean_sign=float(sign),
                              diffusion=float(diff), drift=float(mean), p_zero=float(atom))
+
+
+def _moments_fokker_planck(model: Model, h: float) -> tuple[float, ...]:
+    quad = (_gradient_quadrature(model) if model.epsilon == 0
+            else _gradient_smooth_moments(model))
+    mean, second, pp, pm, sign = quad
+    # SG is second order: Richardson (4 f - c)/3 for the diffusion
+    gc, gf = _grid_solution(model, h), _grid_solution(model, h / 2.0)
+    diff = (4.0 * _green_kubo(model, *gf) - _green_kubo(model, *gc)) / 3.0
+    return mean, second, pp, pm, sign, 0.0, diff
+
+
+def _moments_kolmogorov_feller(model: Model, h: float) -> tuple[float, ...]:
+    ext = _law(model, h).moments
+    assert ext is not None
+    return tuple(ext)
 
 
 # --------------------------------------------------------------------------- propagator
@@ -476,10 +489,10 @@ def _propagate(model: Model, v0: float, times: np.ndarray, h: float | None,
     without further kicks (``dp1/dt = (drift - rate) p1 + source``): the caller replaces it by
     :func:`_once_kicked`, its exact density, whose jump at the front the grid smears."""
     g = shot_generator(model, h, v0s=(v0,))
-    if model.shot is None or math.isfinite(model.gamma):
+    if not model.noise_kind.pure_kicks:
         out = _evolve(g, g.initial(float(v0)), times, model.tau_m)
         return g, np.clip(out, 0.0, None), None
-    lam = model.shot.rate
+    lam = model.noise_kind.shot.rate
     # the noise-free path once on a fine time grid (one ODE solve for the smooth law), then
     # interpolated: the source is evaluated at every half step
     tg = np.linspace(0.0, float(times.max()), 20001)
@@ -570,7 +583,7 @@ def _times(t: ArrayLike, t0: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _pure_shot(model: Model) -> bool:
-    return model.shot is not None and not math.isfinite(model.gamma)
+    return model.noise_kind.pure_kicks
 
 
 def _on_grid(model: Model, flat: np.ndarray, el: np.ndarray, v0: float, h: float,
@@ -661,7 +674,7 @@ def propagator_atom(model: Model, t: ArrayLike, v0: float, t0: float = 0.0, *,
     check_one_dimensional(model)
     t_arr, el = _times(t, t0)
     _, atom = _richardson_pair(model, np.zeros(1), el, v0, h, density=False)
-    if model.shot is not None and not math.isfinite(model.gamma):
+    if model.noise_kind.pure_kicks:
         vd, mass = unkicked(model, el, v0)
         atom = atom + np.where(vd == 0.0, mass, 0.0)
     atom = np.clip(atom, 0.0, 1.0)  # Richardson round-off near 0
@@ -1084,15 +1097,24 @@ def sample_stationary(model: Model, size: int | Sequence[int],
     shape = ((int(cast(int, size)),) if np.ndim(size) == 0
              else tuple(int(s) for s in cast("Sequence[int]", size)))
     h = default_spacing(model) / 2.0
-    if model.shot is None:
-        r = model._support_bound(50.0)
-        n = int(min(2_000_000, math.ceil(2 * r / (h / 4.0))))
-        v = np.linspace(-r, r, n + 1)
-        u = model.gamma * model.potential(v)
-        dens = np.exp(-(u - u.min()))
-        cdf = np.concatenate([[0.0], np.cumsum(0.5 * (dens[1:] + dens[:-1]))])
-        cdf /= cdf[-1]
-        return np.interp(rng.random(shape), cdf, v)
+    return _ROUTES[model.noise_kind.exact_solver].sample(  # type: ignore[index]
+        model, h, shape, rng)
+
+
+def _sample_fokker_planck(model: Model, h: float, shape: tuple[int, ...],
+                          rng: np.random.Generator) -> np.ndarray:
+    r = model._support_bound(50.0)
+    n = int(min(2_000_000, math.ceil(2 * r / (h / 4.0))))
+    v = np.linspace(-r, r, n + 1)
+    u = model.gamma * model.potential(v)
+    dens = np.exp(-(u - u.min()))
+    cdf = np.concatenate([[0.0], np.cumsum(0.5 * (dens[1:] + dens[:-1]))])
+    cdf /= cdf[-1]
+    return np.interp(rng.random(shape), cdf, v)
+
+
+def _sample_kolmogorov_feller(model: Model, h: float, shape: tuple[int, ...],
+                              rng: np.random.Generator) -> np.ndarray:
     g = shot_generator(model, h)
     p = _solve_stationary(g, model)
     idx = rng.choice(g.n, size=shape, p=p)
@@ -1100,3 +1122,19 @@ def sample_stationary(model: Model, size: int | Sequence[int],
     is_cell = ~(g.atom & (idx == g.n - 1)) if g.atom else np.ones(shape, bool)
     jitter = (rng.random(shape) - 0.5) * g.h
     return np.where(is_cell, v + jitter, v)
+
+
+class _Route(NamedTuple):
+    """One exact solver's stationary law, moments and sampler (issue 20: the route is the
+    noise variant's ``exact_solver``, not an attribute test)."""
+
+    law: Callable[[Model, float], _Law]
+    moments: Callable[[Model, float], tuple[float, ...]]
+    sample: Callable[[Model, float, tuple[int, ...], np.random.Generator], np.ndarray]
+
+
+_ROUTES: dict[str, _Route] = {
+    "fokker-planck": _Route(_law_fokker_planck, _moments_fokker_planck, _sample_fokker_planck),
+    "kolmogorov-feller": _Route(_law_kolmogorov_feller, _moments_kolmogorov_feller,
+                                _sample_kolmogorov_feller),
+}

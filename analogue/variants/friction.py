@@ -66,6 +66,16 @@ class FrictionLaw:
         """``Delta(0)``: the threshold |force| that keeps a resting object stuck."""
         raise NotImplementedError
 
+    @property
+    def peak(self) -> float:
+        """``max_v Delta(v)``."""
+        return max(self.delta, self.static)
+
+    @property
+    def velocity_length(self) -> float:
+        """The law's own velocity scale (Stribeck's ``v_s``; ``inf`` for the others)."""
+        return math.inf
+
     def magnitude(self, v: ArrayLike) -> np.ndarray:
         """``Delta(v)``."""
         raise NotImplementedError
@@ -195,6 +205,10 @@ class Coulomb(FrictionLaw):
     def static(self) -> float:
         return self.delta
 
+    @property
+    def peak(self) -> float:
+        return self.delta
+
     def magnitude(self, v: ArrayLike) -> np.ndarray:
         return np.full_like(np.asarray(v, dtype=float), self.delta)
 
@@ -280,6 +294,10 @@ class Stribeck(FrictionLaw):
     def static(self) -> float:
         return self.delta_s
 
+    @property
+    def velocity_length(self) -> float:
+        return self.v_s
+
     def magnitude(self, v: ArrayLike) -> np.ndarray:
         v = np.asarray(v, dtype=float)
         return self.delta + (self.delta_s - self.delta) * np.exp(-np.abs(v) / self.v_s)
@@ -337,6 +355,14 @@ class Cubic(FrictionLaw):
     @property
     def static(self) -> float:
         return self.inner.static
+
+    @property
+    def peak(self) -> float:
+        return self.inner.peak
+
+    @property
+    def velocity_length(self) -> float:
+        return self.inner.velocity_length
 
     def magnitude(self, v: ArrayLike) -> np.ndarray:
         return self.inner.magnitude(v)

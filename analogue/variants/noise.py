@@ -62,6 +62,16 @@ class Noise:
         kicks' ``rate mean^2``)."""
         return 1.0 / self.gamma
 
+    @property
+    def mean_force(self) -> float:
+        """Mean acceleration the noise exerts (one-sided kicks: ``rate mean``; else 0)."""
+        return 0.0
+
+    @property
+    def pure_kicks(self) -> bool:
+        """Kicks only (no Gaussian part): the motion between kicks is noise-free."""
+        return False
+
     def bind(self, gamma: float, shot: Any) -> Noise:
         """This kind for a model with these parameters (a built-in kind is rebuilt from them,
         so that ``Model.replace(gamma=..., shot=...)`` chooses the kind anew)."""
@@ -140,6 +150,14 @@ class Shot(Noise):
     @property
     def velocity_intensity(self) -> float:
         return 1.0 / self.gamma + self.shot.intensity
+
+    @property
+    def mean_force(self) -> float:
+        return float(self.shot.mean_force)
+
+    @property
+    def pure_kicks(self) -> bool:
+        return not self.gaussian
 
     def typical_speed(self, v_typ: float) -> float:
         return max(v_typ, self.shot.mean)
