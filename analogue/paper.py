@@ -261,6 +261,23 @@ REFERENCES: tuple[Reference, ...] = (
     Reference("Garnier2005", "N. Garnier and S. Ciliberto", "Nonequilibrium fluctuations in a "
               "resistor", "Phys. Rev. E 71, 060101(R)", 2005, "10.1103/PhysRevE.71.060101",
               used_for="work and heat fluctuations of a driven RC circuit"),
+    Reference("GPT2013", "A. Gnoli, A. Puglisi and H. Touchette", "Granular Brownian motion "
+              "with dry friction", "EPL 102, 14002", 2013, "10.1209/0295-5075/102/14002",
+              used_for="velocity power spectra of a granular probe with dry friction, measured "
+                       "(the chapter 'What experiments measure')"),
+    Reference("CJ2014", "Y. Chen and W. Just", "First-passage time of Brownian motion with dry "
+              "friction", "Phys. Rev. E 89, 022103", 2014, "10.1103/PhysRevE.89.022103",
+              arxiv="1312.0581",
+              used_for="first passage to rest (the chapter 'What experiments measure')"),
+    Reference("GMC2009", "P. S. Goohpattader, S. Mettu and M. K. Chaudhury",
+              "Experimental investigation of the drift and diffusion of small objects on a "
+              "surface subjected to a bias and an external white noise: roles of Coulombic "
+              "friction and hysteresis", "Langmuir 25, 9969", 2009, "10.1021/la901012m",
+              used_for="drift and diffusion under a bias against the noise power, measured"),
+    Reference("GC2010", "P. S. Goohpattader and M. K. Chaudhury", "Diffusive motion with "
+              "nonlinear friction: apparently Brownian", "J. Chem. Phys. 133, 024702", 2010,
+              "10.1063/1.3460530",
+              used_for="mobility and an Einstein-like relation under dry friction, measured"),
 )
 _BY_KEY = {r.key: r for r in REFERENCES}
 

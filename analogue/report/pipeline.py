@@ -41,7 +41,7 @@ from ..study.run import StudyHooks, StudyResult, load as _load, run_study
 from ..study.runs import ExperimentRuns, run_experiment_runs
 from ..study.schedule import Failures, result_of, say as _log
 from ..study.settings import RunOptions
-from . import beyond, figures, prose
+from . import beyond, figures, measure_chapter, prose
 from .html import Figure, Section, Table, write_page
 
 __all__ = ["RunOptions", "run_experiment", "build_experiment_report", "build_paper_report",
@@ -178,11 +178,12 @@ def _comparison_table(comps, caption) -> Table:
         b = c.budget
         rows.append([c.experiment, c.observable, c.theory_kind, c.circuit, c.circuit_stderr,
                      c.theory, c.z, abs(b.smoothing), abs(b.bandwidth), abs(b.integration),
-                     abs(b.finite_noise), c.within_budget,
+                     abs(b.sampling), abs(b.finite_noise), c.within_budget,
                      c.as_dict()["budget"]["dominant"]])
         classes.append("ok" if c.within_budget else "fail")
     return Table(caption, ["experiment", "observable", "theory", "circuit", "SE", "theory value",
-                           "z", "smoothing", "bandwidth", "integration", "finite noise",
+                           "z", "smoothing", "bandwidth", "integration", "sampling",
+                           "finite noise",
                            "within budget", "dominant error"], rows, classes)
 
 
@@ -295,11 +296,16 @@ class _Drawer(StudyHooks):
         self.figs: dict = {}            # experiment -> (figures, errors)
         self.oq_section: list = []      # the open question's section, once drawn
         self.fig1_section: Section | None = None
+        self.measure_f: dict = {}        # experiment -> future of its measure theory
+        self.measured = measure_chapter.ChapterResult()
 
     def background(self) -> dict:
-        if not _wants_open_question(self.experiments):
-            return {}
-        return {"open question (exact rate functions)": lambda: _open_question_data(self.opts)}
+        # the chapter "What experiments measure" (stick, slip): exact theory and Monte Carlo
+        # pairs, no circuit data; the chapter reads the experiments' runs (no deck of its own)
+        tasks = measure_chapter.theory_tasks(self.experiments, self.opts, progress=_log)
+        if _wants_open_question(self.experiments):
+            tasks["open question (exact rate functions)"] = lambda: _open_question_data(self.opts)
+        return tasks
 
     def experiment_ready(self, result: StudyResult, runs, analysis) -> None:
         with result.phases("figures", runs.exp.name):
@@ -308,6 +314,9 @@ class _Drawer(StudyHooks):
         result.figures[runs.exp.name] = [f.path for f in self.figs[runs.exp.name][0]]
 
     def background_ready(self, result: StudyResult, phase: str, future: Future) -> None:
+        if phase.startswith(measure_chapter.THEORY_PHASE):
+            self.measure_f[phase.rpartition(": ")[2]] = future
+            return
         _log("the paper's open question: exact rate functions at several gamma")
         with result.phases("figures: open question"):
             sec, err = result.failures.attempt(
@@ -331,6 +340,13 @@ class _Drawer(StudyHooks):
                 result.figures["Fig. 1"] = [fig.path]
         _log(f"{prose.main_part(result.experiments)} are complete "
              f"({time.perf_counter() - result.t0:.0f} s)")
+        if self.measure_f:
+            with result.phases(f"{measure_chapter.CHAPTER_TITLE} (comparisons, figures)"):
+                self.measured = measure_chapter.chapter(
+                    list(result.runs.values()), self.measure_f, self.out,
+                    result.failures.attempt,
+                    paper_comps=[c for a in result.analyses.values() for c in a.comparisons])
+            result.measured = {a.experiment: a for a in self.measured.analyses}
 
 
 def build_report(names, out: Path, opts: RunOptions, title: str, chapter=()) -> Path:
@@ -373,6 +389,7 @@ def write_report(result: StudyResult, drawer: _Drawer, out: Path, title: str,
         summary_rows.append([a.exp.name if hasattr(a, "exp") else a.runs.exp.name,
                              s["comparisons"], s["abs_z_below_3"], s["within_budget"],
                              sum(abs(c.z) < 3 for c in ex), len(ex)])
+    summary_rows += measure_chapter.summary_rows(drawer.measured)
     failed_names = [f["experiment"] for f in fails.items if f["experiment"]]
     summary_text = [
         f"{len(comps)} comparisons of circuit estimates with theory: {counts['abs_z_below_3']} "
@@ -407,6 +424,7 @@ def write_report(result: StudyResult, drawer: _Drawer, out: Path, title: str,
                                 figures=figs, error="; ".join(errs) if errs else None))
 
     sections.extend(drawer.oq_section)
+    sections.extend(drawer.measured.sections)
 
     if members:
         t_fig = time.perf_counter()

@@ -95,6 +95,9 @@ class StudyResult:
     analyses: dict[str, ExperimentAnalysis] = field(default_factory=dict)
     member_analyses: dict[str, MemberAnalysis] = field(default_factory=dict)
     failed: dict[str, str] = field(default_factory=dict)   # experiment -> the error that ended it
+    # the chapter "What experiments measure" (study.measure), filled by the page's hooks:
+    # experiment -> MeasureAnalysis; its comparisons are the study's too
+    measured: dict = field(default_factory=dict)
     paper_wall: float = 0.0       # seconds from the start until main_complete
     member_wall: float = 0.0      # the members' threads' time (the page adds its drawing)
     # filled by the page: experiment (or figure group) -> PNG paths; the page itself
@@ -114,7 +117,8 @@ class StudyResult:
 
     @property
     def comparisons(self) -> list[Comparison]:
-        return [c for a in self.all_analyses for c in a.comparisons]
+        return ([c for a in self.all_analyses for c in a.comparisons]
+                + [c for m in self.measured.values() for c in m.comparisons])
 
     def by_role(self, experiment: str) -> dict[str, Ensemble]:
         """An experiment's circuit runs by role (:data:`analogue.export.ROLES` names)."""

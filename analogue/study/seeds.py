@@ -52,8 +52,12 @@ STREAMS = {
     "board_pair": 123,            # the coloured/white SDE pair and the bandwidth study
     "board_sensitivities": 124,   # tolerance sensitivities
     "board_monte_carlo": 125,     # Monte Carlo boards (component draws)
+    # "what experiments measure" (study.measure): held/white Monte Carlo pairs
+    "measure_spectrum_pair": 130,      # the stationary pair (spectrum bands, Einstein ratio)
+    "measure_spectrum_pair_v0": 131,   # its starting velocities
+    "measure_first_passage_pair": 132,  # first passage from the i-th v0
 }
-_INDEXED = {"transition", "mc_transition"}
+_INDEXED = {"transition", "mc_transition", "measure_first_passage_pair"}
 _MAX_INDEX = 100
 
 

@@ -162,6 +162,36 @@ def test_quick_paper_comparisons_are_within_budget_or_flagged(paper_report):
                 assert str(escape(f"{c['observable']} ({name} ")) in html, (c["observable"], name)
 
 
+@pytest.mark.slow
+@pytest.mark.xdist_group("paper")
+def test_quick_paper_has_the_chapter_what_experiments_measure(paper_report):
+    """Issue 23 item 5: stick and slip each give 5 spectrum bands and their first-passage rows
+    (stick: mean and P(T <= t_a) from both v0; slip: P(T <= 8) from v0 = 2, mean and
+    P(T <= t_a) from v0 = -1), every one with a finite budget and within it at quick size; the
+    page has the chapter, its spectra and first-passage figures, and cites the experiments."""
+    from analogue.report.measure_chapter import CHAPTER_TITLE
+    from analogue.study.measure import BANDS, band_label
+    out, _ = paper_report
+    metrics = json.loads((out / "metrics.json").read_text())
+    bands = [band_label(lo, hi) for lo, hi in zip(BANDS[:-1], BANDS[1:])]
+    want = {"stick": bands + ["P(T<=1.61) from v0=2", "first passage mean from v0=2",
+                              "P(T<=1.17) from v0=-2", "first passage mean from v0=-2"],
+            "slip": bands + ["P(T<=8) from v0=2", "P(T<=0.423) from v0=-1",
+                             "first passage mean from v0=-1"]}
+    for name, labels in want.items():
+        rows = {c["observable"]: c for c in metrics["comparisons"] if c["experiment"] == name}
+        for label in labels:
+            c = rows[label]
+            assert c["budget"]["total"] is not None and c["budget"]["total"] >= 0, label
+            assert c["circuit_stderr"] > 0 and c["within_budget"], (name, label, c["z"])
+    html = (out / "index.html").read_text()
+    assert f">{CHAPTER_TITLE}</h2>" in html
+    for png in ("spectra_stick_slip.png", "first_passage_stick.png", "first_passage_slip.png"):
+        assert (out / png).is_file()
+    for cited in ("Gnoli", "Chen &amp; Just", "Goohpattader", "Touchette, Prellberg"):
+        assert cited in html
+
+
 def _chromium():
     path = chromium()
     assert path is not None  # requires_chromium skips the test otherwise

@@ -14,6 +14,7 @@ M = Model(tau_m=1.0, delta=0.7, a=0.2, gamma=10.0)
 
 @pytest.mark.parametrize("model,v0", [(M, 1.0), (M, -1.0), (M, 0.3), (M.replace(gamma=60.0), 1.0),
                                       (M.replace(a=0.9), 0.5),             # slip regime
+                                      (M.replace(a=1.2), -1.0),  # the slip experiment's crossing start
                                       (M.replace(epsilon=0.05), 0.8),      # tanh law
                                       (Model(1.0, 0.7, 0.2, 10.0, cubic=0.5), -0.6)])
 def test_grid_mean_equals_the_quadrature_formula(model, v0):

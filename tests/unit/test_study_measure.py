@@ -1,0 +1,116 @@
+"""The chapter "What experiments measure" (study.measure, issue 23): on Monte Carlo runs of the
+circuit's effective model in place of the circuit (the report's runs, same sizes), every
+spectrum band and first-passage row lies within its budget, the budget's terms are the ones
+the module docstring names, and the rows' theory values are the exact theory's."""
+import math
+
+import numpy as np
+import pytest
+
+from analogue.circuit.experiments import load_experiment, standard_circuit
+from analogue.montecarlo import simulate_sde
+from analogue.report import measure_chapter
+from analogue.study.settings import RunOptions, stationary_noise_dt
+from analogue.study.runs import ExperimentRuns
+from analogue.study import measure as M
+from analogue.theory import first_passage as tfp
+from analogue.theory import spectrum as tsp
+
+QUICK = RunOptions(quick=True)
+
+
+def _mc_runs(exp, replicas=250, stationary=32):
+    """Held-noise SDE ensembles of the effective model at the circuit's hold, the quick
+    report's sizes (the circuit's law: a tanh bridge, noise held for noise_dt)."""
+    settings = exp.report.for_options(QUICK)
+    mapping = exp.mapping()
+    m, hold = mapping.model_effective, mapping.noise_dt
+
+    def sde(noise_dt, *, t_end, replicas, seed, **k):
+        per = 8         # fine steps per hold; the held value is the mean of per normals
+        n_hold = round(t_end / noise_dt)
+        z = np.random.default_rng(seed).standard_normal((replicas, n_hold)) / math.sqrt(per)
+        e = simulate_sde(m, sample_dt=exp.sample_dt, dt=noise_dt / per, noise_hold=per,
+                         noise=z, t_end=t_end, replicas=replicas, seed=seed, **k)
+        e.meta["model_effective"] = m.as_dict()
+        return e
+    tr = {v0: sde(hold, v0=v0, t_end=exp.t_end, replicas=replicas, seed=exp.seed + i)
+          for i, v0 in enumerate(exp.v0)}
+    st_hold = stationary_noise_dt(hold, settings)
+    st = sde(st_hold, v0="stationary", t_end=settings.stationary_t_end, replicas=stationary,
+             seed=exp.seed + 9)
+    chk_t = sde(hold, v0=exp.v0[0], t_end=exp.t_end, replicas=8, seed=exp.seed)
+    return ExperimentRuns(exp=exp, settings=settings, quick=True, transition=tr, stationary=st,
+                          noise_free=chk_t, check_transition=chk_t, check_stationary=st)
+
+
+@pytest.fixture(scope="module")
+def stick():
+    exp = load_experiment(standard_circuit("stick"))
+    theory = M.measure_theory(exp, exp.report.for_options(QUICK))
+    return exp, theory, M.analyse_measure(_mc_runs(exp), theory)
+
+
+@pytest.mark.slow
+def test_rows_within_budget_on_the_circuits_law(stick):
+    """9 rows (5 bands, per v0 the mean and P(T <= t_a)): every one within its budget,
+    every budget finite."""
+    exp, theory, a = stick
+    comps = a.comparisons
+    assert [c.observable for c in comps[:5]] == [M.band_label(lo, hi) for lo, hi in
+                                                 zip(M.BANDS[:-1], M.BANDS[1:])]
+    assert {c.observable for c in comps[5:]} == {
+        "first passage mean from v0=2", "P(T<=1.61) from v0=2",
+        "first passage mean from v0=-2", "P(T<=1.17) from v0=-2"}
+    for c in comps:
+        assert math.isfinite(c.budget.total()) and c.circuit_stderr > 0, c.observable
+        assert c.within_budget, (c.observable, c.z, c.budget)
+
+
+@pytest.mark.slow
+def test_theory_values_and_terms(stick):
+    """The theory values are the exact S band averages and the exact first-passage law; the
+    sampling term of a band is E[Welch] - S (exact), of a mean the sampling bias bound; the
+    hold lowers the stick spectrum (held minus white < 0 in the lowest band, beyond its SE)."""
+    exp, theory, a = stick
+    sp = theory.spectrum
+    rows = {r.label: r for r in a.rows}
+    lo, hi = M.BANDS[0], M.BANDS[1]
+    sel = (sp.omega >= lo) & (sp.omega < hi)
+    r = rows[M.band_label(lo, hi)]
+    assert r.theory == pytest.approx(float(tsp.velocity_spectrum(exp.model, sp.omega[sel]).mean()),
+                                     rel=1e-9)
+    assert r.sampling == pytest.approx(float(sp.expected[sel].mean()) - r.theory, rel=1e-9)
+    d, se = sp.hold[r.label]
+    assert d < -2 * se
+    m = rows["first passage mean from v0=2"]
+    assert m.theory == pytest.approx(tfp.first_passage_mean(exp.model, 2.0), rel=1e-6)
+    assert m.sampling == pytest.approx(theory.first_passage[2.0].sampling_bound)
+    p = rows["P(T<=1.61) from v0=2"]
+    assert p.theory == pytest.approx(1 - tfp.first_passage_survival(exp.model, 2.0,
+                                                                    [exp.model.stick_time(2.0)])[0])
+    # the crossovers drawn in the figure: 1/tau_m and the sticking rate
+    assert sp.crossovers[0] == 1.0 and 1.0 < sp.crossovers[1] < 2.0
+
+
+def test_slip_rows_use_the_record_end_where_the_noise_free_path_never_stops():
+    """Slip from v0 = 2: the noise-free path never stops (t_a = inf) and the exact survival at
+    the record's end is 0.34, so there is no mean row and P(T <= 8) is the row."""
+    exp = load_experiment(standard_circuit("slip"))
+    mean, prob, t = M._fp_labels(2.0, exp.model.stick_time(2.0), exp.t_end,
+                                 float(tfp.first_passage_survival(exp.model, 2.0,
+                                                                  [exp.t_end])[0]) < M.CENSORED_LIMIT)
+    assert mean is None and prob == "P(T<=8) from v0=2" and t == 8.0
+    assert measure_chapter.wants(exp)
+    user = load_experiment(standard_circuit("slip"))
+    object.__setattr__(user, "source", None)     # built in memory: not the paper's file
+    assert not measure_chapter.wants(user)
+
+
+def test_first_passage_values_count_censored_paths_at_the_record_end():
+    from analogue import Ensemble
+    t = np.arange(5) * 0.5
+    v = np.array([[1.0, 0.5, -0.5, 0.2, 0.1],     # crosses at 0.75
+                  [1.0, 0.8, 0.6, 0.4, 0.2]])     # never: counted at 2.0
+    vals = M.FirstPassageValues("mean", "P", 1.0)(Ensemble(t, v, np.zeros_like(v)))
+    assert vals == {"P": 0.5, "mean": pytest.approx((0.75 + 2.0) / 2)}
