@@ -252,8 +252,9 @@ def _nested_class(cls, key: str):
     for token in re.findall(r"[A-Za-z_][A-Za-z0-9_]*", annotation):
         for home in (sys.modules.get(cls.__module__), _model_module, analogue):
             found = getattr(home, token, None) if home is not None else None
-            if isinstance(found, type) and dataclasses.is_dataclass(found):
-                return found
+            if isinstance(found, type) and (dataclasses.is_dataclass(found)
+                                            or hasattr(found, "from_mapping")):
+                return found  # a dataclass, or a kind chosen by its table (noise = {kind=...})
     return None
 
 
@@ -267,8 +268,11 @@ def _field_value(cls, table: str, key: str, value, where: str):
         if sub is None:
             raise TypeError(f"{what} must be a value, not a table")
         try:
-            return sub(**value)
+            build = getattr(sub, "from_mapping", None)
+            return build(value) if build is not None else sub(**value)
         except TypeError as exc:
+            if not dataclasses.is_dataclass(sub):
+                raise TypeError(f"{what}: {exc}") from None
             allowed = ", ".join(sorted(_init_fields(sub)))
             raise TypeError(f"{what}: {exc} (keys of [{table}.{key}]: {allowed})") from None
         except ValueError as exc:

@@ -10,8 +10,9 @@ chosen once, by type, where :class:`analogue.Model` is built, and found downstre
   correlation time ``tau_c``), the first member added as one module plus its line in
   :data:`NOISE_KINDS` (``Model(..., noise=OrnsteinUhlenbeck(tau_c))``).
 
-:data:`NOISE_KINDS` is the registration: the name a noise kind has in ``Model.as_dict`` and
-in an experiment's TOML (``noise = {kind = "ornstein-uhlenbeck", tau_c = 0.2}``).
+A new noise kind is one module with a :class:`Noise` subclass that names its ``kind``, imported
+here (the registration): :data:`NOISE_KINDS` maps the name it has in ``Model.as_dict`` and in an
+experiment's TOML (``noise = {kind = "ornstein-uhlenbeck", tau_c = 0.2}``) to the class.
 """
 from __future__ import annotations
 
@@ -26,16 +27,11 @@ __all__ = ["NOISE_KINDS", "Coulomb", "Cubic", "Free", "FrictionLaw", "Gaussian",
            "OrnsteinUhlenbeck", "Restoring", "Shot", "Silent", "Spring", "Stribeck",
            "build_friction", "build_noise", "build_restoring", "noise_from_mapping"]
 
-#: Noise kinds given as ``Model(noise=...)``, by their ``as_dict``/TOML name.
-NOISE_KINDS: dict[str, type[Noise]] = {
-    OrnsteinUhlenbeck.kind: OrnsteinUhlenbeck,  # type: ignore[dict-item]
-}
+#: Noise kinds given as ``Model(noise=...)``, by their ``as_dict``/TOML name: a subclass of
+#: :class:`Noise` that names a ``kind`` registers itself when its module is imported (above).
+NOISE_KINDS: dict[str, type[Noise]] = Noise.registry
 
 
 def noise_from_mapping(spec: Any) -> Noise:
     """A registered noise kind from its ``as_dict`` form ``{"kind": name, **parameters}``."""
-    fields = dict(spec)
-    kind = fields.pop("kind", None)
-    if kind not in NOISE_KINDS:
-        raise ValueError(f"noise kind must be one of {sorted(NOISE_KINDS)}, got {kind!r}")
-    return NOISE_KINDS[kind](**fields)
+    return Noise.from_mapping(spec)

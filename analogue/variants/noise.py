@@ -47,6 +47,26 @@ class Noise:
     #: the shot-noise parameters (analogue.ShotNoise) or None
     shot: Any = None
 
+    #: the registry: every subclass that names a ``kind`` (analogue.variants.NOISE_KINDS)
+    registry: ClassVar[dict[str, type[Noise]]] = {}
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        name = cls.__dict__.get("kind")
+        if name is not None:
+            if name in Noise.registry:
+                raise TypeError(f"noise kind {name!r} is registered twice")
+            Noise.registry[name] = cls
+
+    @classmethod
+    def from_mapping(cls, spec: Any) -> Noise:
+        """A registered kind from its ``as_dict``/TOML table ``{kind = name, ...}``."""
+        fields = dict(spec)
+        kind = fields.pop("kind", None)
+        if kind not in Noise.registry:
+            raise ValueError(f"noise kind must be one of {sorted(Noise.registry)}, got {kind!r}")
+        return Noise.registry[kind](**fields)
+
     @property
     def is_noisy(self) -> bool:
         return True

@@ -117,3 +117,23 @@ def test_exact_theory_refuses_coloured_noise_instead_of_answering_for_white_nois
                  lambda: exact.stationary_moments(m), lambda: family.scgf(m, [0.1])):
         with pytest.raises(ValueError, match="ornstein-uhlenbeck"):
             call()
+
+
+def test_an_experiment_file_takes_the_noise_kind_as_a_table(tmp_path):
+    from pathlib import Path
+
+    from analogue.circuit.experiments import load_experiment
+    stick = (Path(__file__).resolve().parents[2] / "circuits" / "stick.toml").read_text()
+    text = stick.replace('name = "stick"', 'name = "colour"').replace(
+        "mass = 1.0\n", 'mass = 1.0\nnoise = {kind = "ornstein-uhlenbeck", tau_c = 0.2}\n', 1)
+    path = tmp_path / "colour.toml"
+    path.write_text(text)
+    assert load_experiment(path).model.noise == OrnsteinUhlenbeck(0.2, 10.0)
+    for bad, error, words in (("tau_c = -1", ValueError, "model.noise: noise.tau_c"),
+                              ("tau_c = 0.2, colour = 1", TypeError, "model.noise.*colour")):
+        path.write_text(text.replace("tau_c = 0.2", bad))
+        with pytest.raises(error, match=words):
+            load_experiment(path)
+    path.write_text(text.replace('"ornstein-uhlenbeck"', '"pink"'))
+    with pytest.raises(ValueError, match="noise kind must be one of"):
+        load_experiment(path)

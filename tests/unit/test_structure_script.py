@@ -39,3 +39,21 @@ def test_measure_reads_the_package():
     assert m["feature_branches_total"] == sum(m["feature_branches"].values()) > 0
     assert all(not f.startswith("analogue/variants/") for f in m["feature_branches"])
     assert m["longest_functions"] and m["longest_functions"][0][1] >= m["longest_functions"][-1][1]
+
+
+def test_the_variants_own_modules_stay_free_of_feature_branches():
+    """Issue 20: the model, its Monte Carlo and the netlist find what differs between members
+    on the variants (analogue.variants).  What is left in model.py is the constructor's
+    validation of the parameters, once."""
+    import ast
+
+    s = _script()
+    root = SCRIPT.parent.parent / "analogue"
+    for rel in ("montecarlo.py", "circuit/netlist.py", "theory/weak_noise_family.py"):
+        assert s.feature_branches(root / rel) == [], rel
+    tree = ast.parse((root / "model.py").read_text())
+    model = next(n for n in tree.body if isinstance(n, ast.ClassDef) and n.name == "Model")
+    post_init = next(n for n in model.body
+                     if isinstance(n, ast.FunctionDef) and n.name == "__post_init__")
+    lines = range(post_init.lineno, (post_init.end_lineno or 0) + 1)
+    assert all(line in lines for line in s.feature_branches(root / "model.py"))
