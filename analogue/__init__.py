@@ -1,7 +1,8 @@
 """analogue: stick-slip friction with noise, as theory and as an ngspice circuit.
 
 Public entry points: :class:`Model`, :class:`Ensemble`, :func:`simulate` (the circuit in
-ngspice), :func:`open_ensemble` (netCDF files of ``Ensemble.to_netcdf`` / ``analogue export``),
+ngspice) with :class:`Runner` (how its decks run: store, workers, executor, timeout,
+progress), :func:`open_ensemble` (netCDF files of ``Ensemble.to_netcdf`` / ``analogue export``),
 :func:`load_runs` (an experiment's circuit runs by role), ``report(experiment, out=...,
 quick=...)`` (what ``analogue report`` does, returning an :class:`analogue.study.run.StudyResult`;
 ``analogue.report`` is also the package of the page's modules), the theory packages :mod:`analogue.theory.weak_noise` and
@@ -25,7 +26,8 @@ theory                      ``theory.weak_noise*`` (the paper's gamma -> inf res
 estimators                  ``estimators.*``: densities, stationary moments, work, spectra,
                             first passage, jackknife/resampling, with standard errors
 runs                        ``montecarlo`` (SDE reference), ``circuit.*`` (mapping, decks,
-                            ngspice, the run store, :func:`simulate`), ``data`` (netCDF)
+                            ngspice, the run store, :class:`Runner`, :func:`simulate`),
+                            ``data`` (netCDF)
 study                       ``study.*``: settings, seeds, the observable catalogue, the runs
                             by role (``runs``), circuit-free theory (``theory_curves``),
                             ``comparisons``, ``budget``, ``metrics``, the family members'
@@ -41,8 +43,8 @@ command line                ``cli``
 from .model import Model, MechanicalParameters, ShotNoise
 from .ensemble import Ensemble
 
-__all__ = ["Model", "MechanicalParameters", "ShotNoise", "Ensemble", "simulate", "open_ensemble",
-           "load_runs", "report"]
+__all__ = ["Model", "MechanicalParameters", "ShotNoise", "Ensemble", "simulate", "Runner",
+           "open_ensemble", "load_runs", "report"]
 __version__ = "0.1.0"
 
 
@@ -50,7 +52,7 @@ _SUBMODULES = ("theory", "estimators", "montecarlo", "circuit", "report", "plots
 
 
 def __dir__():
-    """The module's names with the lazily loaded ones (``simulate``, ``open_ensemble``,
+    """The module's names with the lazily loaded ones (``simulate``, ``Runner``, ``open_ensemble``,
     ``load_runs`` and the subpackages), which :func:`__getattr__` imports on first use."""
     return sorted(set(globals()) | set(__all__) | set(_SUBMODULES))
 
@@ -60,6 +62,9 @@ def __getattr__(name):
     if name == "simulate":
         from .circuit.simulate import simulate
         return simulate
+    if name == "Runner":
+        from .circuit.runner import Runner
+        return Runner
     # xarray / netCDF and the report's run plan load only when asked for, too.
     if name == "open_ensemble":
         from .data import open_ensemble

@@ -1,7 +1,8 @@
 """Running board decks through the project's ngspice runner and run store.
 
 Replicas of one board are split into decks of ``per_deck`` replicas; each deck runs as its own
-``ngspice -b -r`` process via :func:`analogue.circuit.simulate.run_decks` (parallel workers,
+``ngspice -b -r`` process via :func:`analogue.circuit.decks.run_decks` with an
+:class:`analogue.Runner` (parallel workers,
 content-addressed store keyed by the deck text, which names the DAC files and carries their
 sha256).  Position is integrated digitally from the sampled output (the decks save no
 position node).  Replica ``r`` of every board is driven by the DAC sequence ``(seed, r)``:
@@ -16,7 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..circuit.simulate import run_decks, time_grid
+from ..circuit.decks import run_decks, time_grid
+from ..circuit.runner import Runner
 from ..circuit.store import open_store
 from ..ensemble import Ensemble
 from .design import BoardDesign
@@ -45,8 +47,17 @@ def noise_directory(store) -> Path:
 def run_board(design: BoardDesign, board: BoardInstance, *, v0, t_end: float, sample_dt: float,
               seed: int, store=None, workers=None, per_deck: int = DEFAULT_PER_DECK,
               reltol: float = DEFAULT_RELTOL, first_replica: int = 0, friction_kind="bridge",
-              ota=None, vendor=None) -> Ensemble:
-    """Simulate ``len(v0)`` replicas of ``board``; returns an Ensemble in model units."""
+              ota=None, vendor=None, runner: Runner | None = None) -> Ensemble:
+    """Simulate ``len(v0)`` replicas of ``board``; returns an Ensemble in model units.
+    ``runner``: how the decks run (the same :class:`analogue.Runner` as the model's runs;
+    default: silent, with ``store`` and ``workers``, which it replaces).  The board's decks
+    are split by ``per_deck`` (the DAC noise files fix each replica's noise, so the split
+    changes no number), not by the runner's ``replicas_per_deck``."""
+    if runner is None:
+        runner = Runner(store=store, workers=workers, progress=False)
+    elif store is not None or workers is not None:
+        raise TypeError("run_board: pass either runner= or store=/workers=, not both")
+    store = runner.store
     v0 = np.atleast_1d(np.asarray(v0, dtype=float))
     times = time_grid(t_end, sample_dt)
     ndir = noise_directory(store)
@@ -60,7 +71,7 @@ def run_board(design: BoardDesign, board: BoardInstance, *, v0, t_end: float, sa
     t0 = _time.perf_counter()
     # no op-amp output leaves its rails: a result beyond twice that is not this board's
     v_max = 2.0 * board.rails * abs(design.to_model_v)
-    v, x, _, info = run_decks(decks, times, v0, store=store, workers=workers, progress=False,
+    v, x, _, info = run_decks(decks, times, v0, runner=runner,
                               limits={"v": v_max, "x": v_max * t_end})
     meta = {"source": "board", "board": board.label, "seed": seed, "model": design.model.as_dict(),
             "realised": design.realised.as_dict(), "deck_sha256": [d.sha256 for d in decks],

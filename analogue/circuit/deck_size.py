@@ -41,8 +41,10 @@ import numpy as np
 
 from .. import checks
 from ..model import Model
+from .decks import _default_sample_dt, run_ensemble
 from .mapping import map_model
-from .tolerances import RunDecks, require_run
+from .runner import Runner
+from .tolerances import RunDecks, calibration_runner, require_run
 
 __all__ = [
     "DEFAULT_BOUNDS",
@@ -127,9 +129,9 @@ def _check_bounds(bounds) -> tuple[int, int]:
     return lo, hi
 
 
-def _calibrate(model: Model, spec, *, store, scheduler, workers, executor=None,
-               timeout=None, run: RunDecks | None = None) -> dict:
-    simulate = require_run(run, "choose_deck_size")
+def _calibrate(model: Model, spec, *, runner: Runner, run: RunDecks | None = None) -> dict:
+    """Points per hold for each of ``CAL_SIZES``, measured with ``runner`` through
+    :func:`analogue.circuit.decks.run_ensemble` (or the legacy ``run``)."""
     mapping = map_model(model, spec)
     t_cal = CAL_HOLDS * mapping.noise_dt
     out = {}
@@ -137,15 +139,19 @@ def _calibrate(model: Model, spec, *, store, scheduler, workers, executor=None,
         # (shot noise, springs, gamma = inf: no exp(-gamma U) sampler; start at rest on the
         # attractor, as the tolerance calibration does)
         v0 = "stationary" if model.is_gradient else float(model.attractor)
-        kw = {"v0": v0, "t_end": t_cal, "replicas": r, "seed": CAL_SEED, "replicas_per_deck": r,
-                  "store": store, "progress": False, "workers": workers}
-        if scheduler is not None:
-            kw["scheduler"] = scheduler
-        if executor is not None:
-            kw["executor"] = executor
-        if timeout is not None:
-            kw["timeout"] = timeout  # the run's per-deck limit holds for its calibration too
-        ens = simulate(model, circuit=spec, **kw)
+        if run is not None:
+            kw = {"v0": v0, "t_end": t_cal, "replicas": r, "seed": CAL_SEED,
+                  "replicas_per_deck": r, "store": runner.store, "progress": False,
+                  "workers": runner.workers, "timeout": runner.timeout}
+            if runner.scheduler is not None:
+                kw["scheduler"] = runner.scheduler
+            if runner.executor is not None:
+                kw["executor"] = runner.executor
+            ens = run(model, circuit=spec, **kw)
+        else:
+            ens = run_ensemble(model, spec, v0=v0, t_end=t_cal, replicas=r, seed=CAL_SEED,
+                               sample_dt=_default_sample_dt(model, t_cal),
+                               runner=runner.replace(replicas_per_deck=r))
         pts = ens.meta.get("deck_raw_points") or [None]
         if pts[0] is None:
             raise RuntimeError("deck-size calibration: the run did not record its time points")
@@ -159,7 +165,8 @@ _MEMO: dict = {}
 def choose_deck_size(model: Model, spec, *, replicas: int, t_end: float, workers: int,
                      bounds=DEFAULT_BOUNDS, store=None, scheduler=None, executor=None,
                      timeout=None, measured: dict | None = None,
-                     min_replica_holds: int = 0, run: RunDecks | None = None) -> DeckSizeChoice:
+                     min_replica_holds: int = 0, run: RunDecks | None = None,
+                     runner: Runner | None = None) -> DeckSizeChoice:
     """Replicas per deck for a run of ``replicas`` paths of length ``t_end``; ``spec`` must
     have its tolerances set (:mod:`analogue.circuit.tolerances`).  The cost model assumes
     :data:`NOTIONAL_WORKERS` processes whatever ``workers`` is (the processes that run the
@@ -167,9 +174,12 @@ def choose_deck_size(model: Model, spec, *, replicas: int, t_end: float, workers
     alone, the same on every machine.
     ``measured``: points per hold by deck size, skipping the calibration (tests).  Runs of
     fewer than ``min_replica_holds`` replica-holds get ``DEFAULT_REPLICAS_PER_DECK`` (within
-    the bounds) without a calibration (source "default").  ``run``: how the calibration's
-    decks run (as for :func:`analogue.circuit.tolerances.choose_tolerances`); needed only when
-    a calibration runs."""
+    the bounds) without a calibration (source "default").  ``runner`` (or the run options
+    ``store``, ``scheduler``, ``executor``, ``timeout`` of earlier versions) and ``run``: how
+    the calibration's decks run, as for
+    :func:`analogue.circuit.tolerances.choose_tolerances` (through
+    :func:`analogue.circuit.decks.run_ensemble`, never :func:`analogue.simulate`)."""
+    run = require_run(run, "choose_deck_size")
     lo, hi = _check_bounds(bounds)
     replicas = checks.integer("replicas", replicas, minimum=1)
     workers = checks.integer("workers", workers, minimum=1)
@@ -182,9 +192,11 @@ def choose_deck_size(model: Model, spec, *, replicas: int, t_end: float, workers
     if measured is None:
         key = (repr(model.as_dict()), repr(spec))
         if key not in _MEMO:
-            _MEMO[key] = _calibrate(model, spec, store=store, scheduler=scheduler,
-                                    workers=workers, executor=executor, timeout=timeout,
-                                    run=run)
+            cal = calibration_runner("choose_deck_size", runner, store=store,
+                                     scheduler=scheduler, executor=executor, timeout=timeout)
+            if cal.workers is None:
+                cal = cal.replace(workers=workers)
+            _MEMO[key] = _calibrate(model, spec, runner=cal, run=run)
         measured = _MEMO[key]
     pred = {r: job_time(r, replicas, holds, NOTIONAL_WORKERS, measured) for r in allowed}
     best = min(allowed, key=lambda r: (round(pred[r], 6), -r))

@@ -43,8 +43,9 @@ error would reject every candidate there, today's fixed values included.  The re
 integration check re-measures the chosen tolerances on the real runs, so its budget shows
 what the choice cost.
 
-The calibration runs go through :func:`analogue.simulate` and so into the content-addressed
-run store: a repeated choice costs file reads only, and the decision is a pure function of
+The calibration runs go through :func:`analogue.circuit.decks.run_ensemble` (the level below
+:func:`analogue.simulate`, which never runs again from here: issue 20) with the caller's
+:class:`~analogue.circuit.runner.Runner`, and so into the content-addressed run store: a repeated choice costs file reads only, and the decision is a pure function of
 those stored runs (it is also memoised in-process for ``store=False``).  A value the user sets
 in :class:`~analogue.circuit.mapping.CircuitSpec` (reltol, trtol or method) is never
 overridden: only the unset ones are chosen, among candidates that agree with the set ones.
@@ -54,6 +55,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -61,6 +63,7 @@ from .. import checks
 from ..ensemble import Ensemble
 from ..estimators.smoothed_indicator import kernel_width, window
 from ..model import Model
+from .decks import _default_sample_dt, run_ensemble
 from .mapping import (
     FIXED_METHOD,
     FIXED_RELTOL,
@@ -69,6 +72,7 @@ from .mapping import (
     CircuitSpec,
     map_model,
 )
+from .runner import DEFAULT_TIMEOUT, Runner
 
 __all__ = [
     "CAL_HOLDS",
@@ -90,19 +94,39 @@ __all__ = [
     "select",
 ]
 
-# How a calibration's decks run: simulate(model, circuit=spec, **run_options) -> Ensemble, handed
-# in by the simulator (which imports this module; the reverse would be an import circle).
+# A simulate-like callable, ``run(model, circuit=spec, v0=..., t_end=..., replicas=...,
+# seed=..., replicas_per_deck=..., **run_options) -> Ensemble``: the way calibrations ran
+# before the Runner (kept for callers that pass one; without it they run through
+# decks.run_ensemble).
 RunDecks = Callable[..., Ensemble]
 
 
-def require_run(run: RunDecks | None, who: str) -> RunDecks:
-    if run is None:
-        raise ValueError(f"{who}: a calibration must run circuit decks; pass run= (for example "
-                         "analogue.circuit.simulate.simulate, which does so itself)")
-    if not callable(run):
-        raise TypeError(f"{who}: run must be callable like analogue.circuit.simulate.simulate, "
+def require_run(run: RunDecks | None, who: str) -> RunDecks | None:
+    """``run`` if None or callable (the legacy way to run a calibration), else TypeError."""
+    if run is not None and not callable(run):
+        raise TypeError(f"{who}: run must be callable like analogue.simulate, "
                         f"got {type(run).__name__}")
     return run
+
+
+def calibration_runner(who: str, runner: Runner | None, *, store: Any = None,
+                       workers: int | None = None, scheduler: Any = None,
+                       executor: Any = None, timeout: float | None = None) -> Runner:
+    """The Runner a calibration uses: ``runner`` (silent, its own deck split), or one made
+    of the run options of earlier versions; never both."""
+    given = [k for k, v in (("store", store), ("workers", workers), ("scheduler", scheduler),
+                            ("executor", executor), ("timeout", timeout)) if v is not None]
+    if runner is None:
+        return Runner(store=store, workers=workers, scheduler=scheduler, executor=executor,
+                      timeout=DEFAULT_TIMEOUT if timeout is None else timeout
+                      ).for_calibration()
+    if not isinstance(runner, Runner):
+        raise TypeError(f"{who}: runner must be an analogue.Runner, got "
+                        f"{type(runner).__name__}")
+    if given:
+        raise TypeError(f"{who}: pass either runner= or the run options "
+                        f"({', '.join(given)}), not both")
+    return runner.for_calibration()
 
 
 DEFAULT_FRACTION = 0.1
@@ -352,37 +376,46 @@ def reference_spec(spec: CircuitSpec, mapping, tightest: Tolerances) -> CircuitS
 _MEMO: dict = {}
 
 
-def _calibrate(model: Model, spec: CircuitSpec, candidates, *, store, workers, scheduler,
-               executor=None, timeout=None, run: RunDecks | None = None):
-    """Run (or load) the calibration through ``run`` (:func:`choose_tolerances`); returns
+def _calibrate(model: Model, spec: CircuitSpec, candidates, *, runner: Runner,
+               run: RunDecks | None = None):
+    """Run (or load) the calibration (:func:`choose_tolerances`) with ``runner``, through
+    :func:`analogue.circuit.decks.run_ensemble` (or the legacy ``run``); returns
     (results, t_cal)."""
-    simulate = require_run(run, "choose_tolerances")
     mapping = map_model(model, spec.replace(**FIXED.as_dict()))
     t_cal = CAL_HOLDS * mapping.noise_dt
     tightest = min(candidates, key=lambda c: c.reltol)
     memo_key = (repr(model.as_dict()), repr(spec), tuple(candidates), CAL_HOLDS, CAL_REPLICAS)
-    if store is False and memo_key in _MEMO:
+    if runner.store is False and memo_key in _MEMO:
         return _MEMO[memo_key]
     # Start from the stationary law where it is exp(-gamma U) (1-D Gaussian members); shot
     # noise, springs and gamma = inf have no such sampler (it returned NaN for shot noise):
     # start those at rest on the deterministic attractor.
     v0 = "stationary" if model.is_gradient else float(model.attractor)
-    kw = {"v0": v0, "t_end": t_cal, "replicas": CAL_REPLICAS, "seed": CAL_SEED,
-              "replicas_per_deck": CAL_DECK, "store": store, "workers": workers, "scheduler": scheduler,
-              "progress": False}
-    if scheduler is None:
-        kw.pop("scheduler")
-    if executor is not None:
-        kw["executor"] = executor
-    if timeout is not None:
-        kw["timeout"] = timeout  # the run's per-deck limit holds for its calibration too
-    ref = simulate(model, circuit=reference_spec(spec, mapping, tightest), **kw)
+    cal = runner.replace(replicas_per_deck=CAL_DECK)
+
+    def ensemble(spec_: CircuitSpec) -> Ensemble:
+        if run is not None:
+            kw = {"v0": v0, "t_end": t_cal, "replicas": CAL_REPLICAS, "seed": CAL_SEED,
+                  "replicas_per_deck": CAL_DECK, "store": cal.store, "workers": cal.workers,
+                  "progress": False, "timeout": cal.timeout}
+            if cal.scheduler is not None:
+                kw["scheduler"] = cal.scheduler
+            if cal.executor is not None:
+                kw["executor"] = cal.executor
+            return run(model, circuit=spec_, **kw)
+        # the grid analogue.simulate gives a run of t_cal by default (the stored decks'
+        # keys name it)
+        return run_ensemble(model, spec_, v0=v0, t_end=t_cal, replicas=CAL_REPLICAS,
+                            seed=CAL_SEED, sample_dt=_default_sample_dt(model, t_cal),
+                            runner=cal)
+
+    ref = ensemble(reference_spec(spec, mapping, tightest))
     threshold = 0.1 * model.velocity_scale if math.isfinite(model.gamma) else 0.0
     # the indicators as the report's integration check measures them (smoothed)
     h = kernel_width(threshold, mapping.model_effective.epsilon)
     results = []
     for tol in candidates:
-        ens = simulate(model, circuit=spec.replace(**tol.as_dict()), **kw)
+        ens = ensemble(spec.replace(**tol.as_dict()))
         pts = ens.meta.get("deck_raw_points")
         per = (float(np.sum(pts)) / (CAL_REPLICAS * CAL_HOLDS)
                if pts and all(p is not None for p in pts) else math.nan)
@@ -403,7 +436,8 @@ def choose_tolerances(model: Model, spec: CircuitSpec | None = None, *, replicas
                       store=None, workers=None, scheduler=None, executor=None,
                       timeout=None, min_replica_holds: int = 0,
                       check_replicas: int | None = None,
-                      observables=None, run: RunDecks | None = None) -> ToleranceChoice:
+                      observables=None, run: RunDecks | None = None,
+                      runner: Runner | None = None) -> ToleranceChoice:
     """The tolerances for a run of ``replicas`` paths of length ``t_end`` (model units) of
     ``model`` in the circuit ``spec`` (module docstring).  Values set in ``spec`` win.
     Runs of fewer than ``min_replica_holds`` replica-holds get the fixed values instead of a
@@ -412,10 +446,12 @@ def choose_tolerances(model: Model, spec: CircuitSpec | None = None, *, replicas
     (module docstring).  ``observables``: the run is compared on those only
     (:data:`TRANSITION_OBSERVABLES` for a transition run, :data:`STATIONARY_OBSERVABLES` for
     a stationary one; None: every one of :func:`path_observables`).
-    ``run``: how the calibration's decks run, ``run(model, circuit=spec, v0=..., t_end=...,
-    replicas=..., seed=..., replicas_per_deck=..., **options) -> Ensemble`` --
-    :func:`analogue.circuit.simulate.simulate` passes itself; needed only when a calibration
-    runs (this module never imports the simulator that calls it)."""
+    ``runner``: how the calibration's decks run (an :class:`analogue.Runner`; its
+    ``progress``, ``label`` and ``replicas_per_deck`` are the calibration's own); the run
+    options ``store``, ``workers``, ``scheduler``, ``executor`` and ``timeout`` of earlier
+    versions make one (not together with ``runner``).  The decks run through
+    :func:`analogue.circuit.decks.run_ensemble`, never :func:`analogue.simulate`;
+    ``run``: a simulate-like callable to run them instead (earlier versions needed one)."""
     if observables is not None:
         observables = tuple(observables)
         unknown = [o for o in observables if o not in ALL_OBSERVABLES]
@@ -430,6 +466,7 @@ def choose_tolerances(model: Model, spec: CircuitSpec | None = None, *, replicas
         raise ValueError(f"fraction must be in (0, 1], got {fraction!r}")
     if check_replicas is not None:
         check_replicas = checks.integer("check_replicas", check_replicas, minimum=1)
+    run = require_run(run, "choose_tolerances")
     unset = spec.unset_tolerances
     if not unset:
         assert spec.reltol is not None and spec.trtol is not None and spec.method is not None
@@ -448,9 +485,10 @@ def choose_tolerances(model: Model, spec: CircuitSpec | None = None, *, replicas
         # The user's values are outside every candidate: measure the user's value itself
         # with the unset ones from each candidate.
         pool = list(dict.fromkeys(Tolerances(**{**c.as_dict(), **given}) for c in candidates))
+    cal = calibration_runner("choose_tolerances", runner, store=store, workers=workers,
+                             scheduler=scheduler, executor=executor, timeout=timeout)
     results, t_cal = _calibrate(model, spec.replace(**{k: None for k in unset}), tuple(pool),
-                                store=store, workers=workers, scheduler=scheduler,
-                                executor=executor, timeout=timeout, run=run)
+                                runner=cal, run=run)
     best, met, name, ratio = select(results, replicas=replicas, t_end=float(t_end), t_cal=t_cal,
                                     fraction=fraction, check_replicas=check_replicas,
                                     observables=observables)

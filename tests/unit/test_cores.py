@@ -113,7 +113,7 @@ def test_dask_worker_limits_its_threads_once(monkeypatch):
     worker (local runs: threads of the caller's process) it leaves them alone."""
     import types
 
-    from analogue.circuit import simulate as sim
+    from analogue.circuit import decks as sim   # run_batch's module (simulate re-exports it)
     calls = []
     monkeypatch.setattr(sim, "limit_worker_threads", lambda: calls.append(1))
     monkeypatch.setattr(sim, "_WORKER_LIMITED", False)

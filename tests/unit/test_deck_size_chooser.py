@@ -58,16 +58,16 @@ def test_choice_does_not_depend_on_the_machines_workers(measured, replicas):
     assert len(chosen) == 1
 
 
-def test_the_calibration_runs_through_the_given_run_and_needs_one():
-    """The chooser calibrates through ``run`` (the simulator hands in itself: the chooser never
-    imports the simulator that calls it, issue 20); without one a calibration is refused by
-    name, before anything runs."""
+def test_the_calibration_runs_through_a_given_run():
+    """A simulate-like ``run`` handed in (the way calibrations ran before the Runner; without
+    one they run through decks.run_ensemble: tests/unit/test_runner.py) runs every
+    calibration size, and one that is not callable is refused by name."""
     import numpy as np
 
     from analogue import Ensemble
     ds._MEMO.clear()
-    with pytest.raises(ValueError, match="run="):
-        ds.choose_deck_size(STICK, SPEC, replicas=500, t_end=10.0, workers=2)
+    with pytest.raises(TypeError, match="run must be callable"):
+        ds.choose_deck_size(STICK, SPEC, replicas=500, t_end=10.0, workers=2, run="ngspice")
     calls = []
 
     def run(model, *, circuit, replicas, replicas_per_deck, **kw):

@@ -207,10 +207,9 @@ def test_unknown_observables_are_refused(bad):
         tl.choose_tolerances(STICK, CircuitSpec(), replicas=4, t_end=1.0, observables=bad)
 
 
-def test_a_calibration_without_run_is_refused_by_name():
-    """The chooser calibrates through ``run`` (handed in by the simulator, which it does not
-    import: issue 20); a direct call that needs a calibration and gives none says so."""
-    with pytest.raises(ValueError, match="run="):
-        tl.choose_tolerances(STICK, CircuitSpec(), replicas=16, t_end=1.0)
+def test_a_run_that_is_not_callable_is_refused_by_name():
+    """``run`` (a simulate-like callable, the way calibrations ran before the Runner) is
+    optional now: without it the calibration runs through decks.run_ensemble
+    (tests/unit/test_runner.py); one that is not callable is refused before anything runs."""
     with pytest.raises(TypeError, match="run must be callable"):
         tl.choose_tolerances(STICK, CircuitSpec(), replicas=16, t_end=1.0, run="ngspice")
