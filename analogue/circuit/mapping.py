@@ -614,13 +614,7 @@ def velocity_range(model: Model, level: float = SWING_LEVEL) -> tuple[float, flo
             if model.spring > 0:
                 r = math.sqrt(2.0 * model.tau_m * level / model.gamma)
                 lo, hi = min(lo, -r), max(hi, r)
-    if model.shot is not None:
-        sh = model.shot
-        reach = sh.rate * model.tau_m * sh.mean + level * sh.mean
-        hi = max(hi, 0.0) + reach
-        if sh.two_sided:
-            lo = min(lo, 0.0) - reach
-    return lo, hi
+    return model.noise_kind.widen_range(lo, hi, model.tau_m, level)
 
 
 def velocity_std(model: Model) -> float | None:
@@ -643,9 +637,7 @@ def _one_dimensional(model: Model) -> Model:
     """The 1-D stand-in for the bias estimates: with a spring, the force a is balanced by the
     spring on average (<v> = 0), so the velocity law is estimated by the a = 0, spring-free
     member."""
-    if model.spring > 0:
-        return model.replace(a=0.0, spring=0.0, x0=0.0)
-    return model
+    return model.restoring.velocity_stand_in(model)
 
 
 def _smoothing_scale(model: Model) -> float:
@@ -655,8 +647,7 @@ def _smoothing_scale(model: Model) -> float:
     scales = []
     if math.isfinite(model.gamma):
         scales.append(model.velocity_scale)
-    if model.shot is not None:
-        scales.append(model.shot.mean)
+    scales += model.noise_kind.jump_scales()
     if not scales:
         # noise-free (gamma = inf, no shot): the deterministic velocity scale of the motion
         return max(model.static_friction, model.delta, abs(model.a)) * model.tau_m or 1.0
@@ -708,9 +699,8 @@ def default_smoothing(model: Model, bias_tolerance: float = 0.05, std: float | N
     def worst(frac: float) -> float:
         """The largest enforced smoothing term over the target (<= 1: accepted)."""
         r = central(frac) / target
-        if model.stribeck is not None:
-            r = max(r, frac * scale / model.stribeck[1] / target)
-        return r
+        # the friction law's own velocity length (Stribeck's v_s; inf: no term)
+        return max(r, frac * scale / model.friction.velocity_length / target)
 
     s = DEFAULT_SMOOTHING
     r0 = r = worst(s)
@@ -1014,9 +1004,7 @@ def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
                      "noise": 0.0})
     if part is not None and not part.ideal:
         bias["junction_capacitance"] = 2.0 * part.CJO / cap
-    if model.stribeck is not None and epsilon > 0:
-        # the tanh must switch well inside the Stribeck decay length
-        bias["stribeck_smoothing"] = epsilon / model.stribeck[1]
+    bias.update(model.friction.smoothing_budget(epsilon))
 
     # --- cubic viscous law: I = g3 V^3
     g3 = model.cubic * cap / (theta * kappa * kappa)

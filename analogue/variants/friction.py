@@ -112,6 +112,10 @@ class FrictionLaw:
         """The Monte Carlo step this law allows at the typical speed ``v_typ``."""
         return dt
 
+    def smoothing_budget(self, epsilon: float) -> dict[str, float]:
+        """The law's terms of the circuit's bias budget for the tanh width ``epsilon``."""
+        return {}
+
     def entries(self) -> dict[str, Any]:
         """The law's keys of ``Model.as_dict`` (none for the paper's law)."""
         return {}
@@ -325,6 +329,10 @@ class Stribeck(FrictionLaw):
         ds, vs = self.delta_s, self.v_s
         return out - (ds - self.delta) / vs * np.exp(-np.abs(v) / vs)
 
+    def smoothing_budget(self, epsilon: float) -> dict[str, float]:
+        # the tanh must switch well inside the Stribeck decay length
+        return {"stribeck_smoothing": epsilon / self.v_s} if epsilon > 0 else {}
+
     def dt_limit(self, dt: float, v_typ: float) -> float:
         # resolve the Stribeck length crossed at the typical speed (6 of them)
         return min(dt, self.v_s / (50.0 * 6.0 * v_typ))
@@ -392,6 +400,9 @@ class Cubic(FrictionLaw):
             inner(v, out)
             subtract(out, cubic * v**3, out)
         return force
+
+    def smoothing_budget(self, epsilon: float) -> dict[str, float]:
+        return self.inner.smoothing_budget(epsilon)
 
     def dt_limit(self, dt: float, v_typ: float) -> float:
         # keep the explicit cubic term stable: dt * 3 cubic v^2 <= 1/50 at 6 typical speeds

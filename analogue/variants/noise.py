@@ -100,6 +100,15 @@ class Noise:
     def typical_speed(self, v_typ: float) -> float:
         return v_typ
 
+    def widen_range(self, lo: float, hi: float, tau_m: float, level: float) -> tuple[float, float]:
+        """The circuit's velocity range ``(lo, hi)`` widened by how far the noise's kicks
+        reach (analogue.circuit.mapping.velocity_range; ``level``: jumps of ``level`` means)."""
+        return lo, hi
+
+    def jump_scales(self) -> list[float]:
+        """Velocity scales of the kicks (the mean jump) for the circuit's smoothing."""
+        return []
+
     def dt_limit(self, dt: float) -> float:
         return dt
 
@@ -181,6 +190,17 @@ class Shot(Noise):
 
     def typical_speed(self, v_typ: float) -> float:
         return max(v_typ, self.shot.mean)
+
+    def widen_range(self, lo: float, hi: float, tau_m: float, level: float) -> tuple[float, float]:
+        sh = self.shot
+        reach = sh.rate * tau_m * sh.mean + level * sh.mean
+        hi = max(hi, 0.0) + reach
+        if sh.two_sided:
+            lo = min(lo, 0.0) - reach
+        return lo, hi
+
+    def jump_scales(self) -> list[float]:
+        return [self.shot.mean]
 
     def dt_limit(self, dt: float) -> float:
         return min(dt, 0.05 / self.shot.rate)

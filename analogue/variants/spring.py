@@ -24,6 +24,11 @@ class Restoring:
     def add_force(self, out: np.ndarray, x: Any) -> np.ndarray:
         return out
 
+    def velocity_stand_in(self, model: Any) -> Any:
+        """The 1-D member whose velocity law stands in for this model's in estimates (the
+        circuit's bias budget): the model itself."""
+        return model
+
     def dt_limit(self, dt: float) -> float:
         return dt
 
@@ -59,6 +64,11 @@ class Spring(Restoring):
 
     def add_force(self, out: np.ndarray, x: Any) -> np.ndarray:
         return out - self.spring * np.asarray(x, dtype=float)
+
+    def velocity_stand_in(self, model: Any) -> Any:
+        """The force a is balanced by the spring on average (<v> = 0): the a = 0, spring-free
+        member."""
+        return model.replace(a=0.0, spring=0.0, x0=0.0)
 
     def dt_limit(self, dt: float) -> float:
         # resolve the spring period
