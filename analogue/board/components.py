@@ -32,6 +32,7 @@ SOIC16 = "Package_SO:SOIC-16_3.9x9.9mm_P1.27mm"
 SOT23 = "Package_TO_SOT_SMD:SOT-23"
 SOT89 = "Package_TO_SOT_SMD:SOT-89-3"
 SOD123 = "Diode_SMD:D_SOD-123"
+SOD123F = "Diode_SMD:D_SOD-123F"
 BNC = "Connector_Coaxial:BNC_TEConnectivity_1478204_Vertical"
 HDR3 = "Connector_PinHeader_2.54mm:PinHeader_1x03_P2.54mm_Vertical"
 TB3 = "TerminalBlock_Phoenix:TerminalBlock_Phoenix_MKDS-1,5-3-5.08_1x03_P5.08mm_Horizontal"
@@ -257,6 +258,15 @@ def board_components(design: BoardDesign, matched: tuple = ()) -> list[Part]:
         Part("C18", "10uF", "bulk decoupling, -15 V entry", "Murata", "GRM32ER71H106KA12L",
              "TDK C3225X7R1H106K250AC", C1210, ((1, "1", "GND"), (2, "2", "-15V")), "10 %",
              "X7R 50 V", "", 10e-6, "C"),
+        # rail clamps at the power entry: reverse-biased in use; a rail pulled the wrong way
+        # (one output of the supply on before the other, the ICs' quiescent current from V+
+        # to V- lifting the idle rail; leads swapped at J6) stops a Schottky drop past
+        # ground, inside the ICs' supply ratings, and a swapped supply runs into its 100 mA
+        # limit through them
+        *[Part(ref, "MBR140", f"rail clamp: Schottky from {a} to {k}", "onsemi", "MBR140SFT1G",
+               "Nexperia PMEG4010CEH (40 V, 1 A, SOD-123F)", SOD123F, ((1, "K", k), (2, "A", a)),
+               "-", "40 V, 1 A", "", math.nan, "D")
+          for ref, a, k in (("D5", "GND", "+15V"), ("D6", "-15V", "GND"))],
         Part("C16", "330nF", "input capacitor of U5", "KEMET", "C0805C334K5RACTU",
              "Murata GRM21BR71H334KA01L", C0805, ((1, "1", "+15V"), (2, "2", "GND")), "10 %",
              "X7R 50 V", "", 330e-9, "C"),

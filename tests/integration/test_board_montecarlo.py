@@ -95,6 +95,9 @@ def test_board_job_writes_every_output(tmp_path):
     assert (out / "bom.csv").read_text().startswith("references,quantity,value,description,"
                                                     "manufacturer,mpn,second_source,footprint")
     assert (out / "board.net").read_text().startswith('(export (version "E")')
+    # every compared observable carries a positive statistical error, even from 4 replicas
+    # (issue 21 item 12: a standard error of exactly 0 was printed)
+    assert all(c["circuit_stderr"] > 0 for c in metrics["comparisons"]), metrics["comparisons"]
     bench = metrics["bench"]
     assert bench["common_mode"]["min_margin"] > 0.5
     assert bench["residual_friction"]["relative_to_I0"] < 1e-3

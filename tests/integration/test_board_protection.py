@@ -36,3 +36,27 @@ def test_the_ic_voltage_no_longer_meets_the_switch_pin_directly():
     assert en["first_pin"].startswith("U3 ") and reset["first_pin"].startswith("U4 ")
     assert ic["current_A"] < 1e-3                # 10 kOhm: 0.93 mA
     assert en["current_A"] < 5e-3 and reset["current_A"] < 5e-3      # 1 kOhm: 4.3 mA
+
+
+def test_the_board_page_quotes_these_currents():
+    # docs/board/README.md quotes the unpowered currents: they must be today's (issue 21 item 12)
+    from pathlib import Path
+    rows = {(r["connector"], r["pin"]): r for r in unpowered_inputs(board_components(DESIGN))}
+    text = " ".join((Path(__file__).parents[2] / "docs" / "board" / "README.md").read_text().split())
+    ma = {k: f"{r['current_A'] * 1e3:.2g} mA" for k, r in rows.items()}
+    for quoted in (f"({ma[('J3', 1)]} at 10 V, DG412 30 mA)", f"({rows[('J5', 1)]['series_ohm'] / 1e3:g} "
+                   f"kOhm: {ma[('J5', 1)]} at 5 V)", f"({ma[('J1', 1)]} into U1B, 10 mA)"):
+        assert quoted in text, quoted
+
+
+def test_each_rail_has_a_clamp_that_stops_it_going_the_wrong_way():
+    # reverse-biased Schottkys from ground to +15 V and from -15 V to ground: a rail pulled
+    # past ground (supply outputs switched on one after the other, leads swapped at J6) is
+    # held a Schottky drop from it
+    parts = {p.ref: p for p in board_components(DESIGN)}
+    clamps = {}
+    for p in parts.values():
+        if p.kind == "D" and p.mpn == parts["D5"].mpn:
+            pins = {name: net for _num, name, net in p.pins}
+            clamps[(pins["A"], pins["K"])] = p.ref
+    assert set(clamps) == {("GND", "+15V"), ("-15V", "GND")}
