@@ -5,14 +5,17 @@ Monte Carlo data go through exactly the same code.
 """
 from __future__ import annotations
 
+import hashlib
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from . import netcdf_layout
+from .model import Model
 
-__all__ = ["Ensemble"]
+__all__ = ["Ensemble", "Provenance"]
 
 # provenance keys shown by Ensemble.__repr__ (when present), in this order
 _REPR_META = ("source", "seed", "scheme", "noise_dt", "ngspice_version")
@@ -27,6 +30,107 @@ def _short(value) -> str:
             (", ...}" if len(value) > 3 else "}")
     text = repr(value)
     return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _opt_float(value: Any) -> float | None:
+    return float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) \
+        else None
+
+
+def _ints(value: Any) -> tuple[int, ...]:
+    return tuple(int(v) for v in value) if isinstance(value, (list, tuple)) else ()
+
+
+@dataclass(frozen=True)
+class Provenance(Mapping):
+    """Where an ensemble came from, typed (issue 20): what :func:`analogue.simulate` records
+    in ``Ensemble.meta``, as fields.  A read-only view made from ``meta`` (which stays the
+    plain, JSON-safe dict it always was, so ``ens.meta["seed"]`` keeps working); as a
+    :class:`~collections.abc.Mapping` it also answers every key of that dict
+    (``prov["deck_size"]``), and :meth:`as_attrs` gives the flat netCDF attributes
+    (:func:`analogue.netcdf_layout.flat_attrs`) that :meth:`Ensemble.to_netcdf` writes.
+
+    Fields: ``source`` ("circuit", "sde", "board", ...), ``model`` (the model's parameters,
+    :meth:`Model.as_dict`; :meth:`to_model` rebuilds it) and ``model_effective`` (what the
+    circuit realises), ``seed`` and the ``deck_seeds`` and ``deck_replicas`` of the deck
+    split (``replicas_per_deck``), ``ngspice_version``, ``deck_sha256`` (one hash per deck
+    netlist; :attr:`netlist_hash` names them all), ``tolerances`` and ``deck_size`` (the
+    values and how they were chosen), ``t_end``, ``sample_dt``, ``noise_dt``.  Missing
+    entries are None or empty (a Monte Carlo ensemble has no decks).
+    """
+
+    meta: Mapping[str, Any] = field(repr=False)
+    source: str | None = None
+    model: Mapping[str, Any] | None = None
+    model_effective: Mapping[str, Any] | None = None
+    seed: int | None = None
+    deck_seeds: tuple[int, ...] = ()
+    deck_replicas: tuple[int, ...] = ()
+    replicas_per_deck: int | None = None
+    ngspice_version: str | None = None
+    deck_sha256: tuple[str, ...] = ()
+    tolerances: Mapping[str, Any] | None = None
+    deck_size: Mapping[str, Any] | None = None
+    t_end: float | None = None
+    sample_dt: float | None = None
+    noise_dt: float | None = None
+
+    @classmethod
+    def from_meta(cls, meta: Mapping[str, Any]) -> Provenance:
+        """The typed view of an ensemble's ``meta`` (any producer's)."""
+        m = meta
+        seed = m.get("seed")
+        per = m.get("replicas_per_deck")
+        ver = m.get("ngspice_version")
+        return cls(
+            meta=m, source=m.get("source") if isinstance(m.get("source"), str) else None,
+            model=m.get("model") if isinstance(m.get("model"), Mapping) else None,
+            model_effective=(m.get("model_effective")
+                             if isinstance(m.get("model_effective"), Mapping) else None),
+            seed=int(seed) if isinstance(seed, int) and not isinstance(seed, bool) else None,
+            deck_seeds=_ints(m.get("deck_seeds")), deck_replicas=_ints(m.get("deck_replicas")),
+            replicas_per_deck=int(per) if isinstance(per, int) else None,
+            ngspice_version=ver if isinstance(ver, str) else None,
+            deck_sha256=tuple(str(h) for h in m.get("deck_sha256") or ()),
+            tolerances=m.get("tolerances") if isinstance(m.get("tolerances"), Mapping) else None,
+            deck_size=m.get("deck_size") if isinstance(m.get("deck_size"), Mapping) else None,
+            t_end=_opt_float(m.get("t_end")), sample_dt=_opt_float(m.get("sample_dt")),
+            noise_dt=_opt_float(m.get("noise_dt")))
+
+    @property
+    def netlist_hash(self) -> str | None:
+        """One sha256 over the decks' netlist hashes, in deck order (None without decks):
+        two runs with this hash ran the very same netlists."""
+        if not self.deck_sha256:
+            return None
+        return hashlib.sha256(" ".join(self.deck_sha256).encode()).hexdigest()
+
+    def to_model(self) -> Model | None:
+        """The :class:`~analogue.Model` the ensemble simulates (None when not recorded)."""
+        return Model(**self.model) if self.model is not None else None
+
+    def as_attrs(self) -> dict:
+        """Flat netCDF attributes (str, numbers, lists of numbers) of the whole ``meta``,
+        with ``netlist_hash`` added when there are decks: what :meth:`Ensemble.to_netcdf`
+        writes (:func:`analogue.netcdf_layout.flat_attrs`)."""
+        attrs = netcdf_layout.flat_attrs(dict(self.meta))
+        if self.netlist_hash is not None:
+            attrs.setdefault("netlist_hash", self.netlist_hash)
+        return attrs
+
+    def as_dict(self) -> dict:
+        """The ``meta`` dict itself (a copy)."""
+        return dict(self.meta)
+
+    # Mapping: every key of meta, as before
+    def __getitem__(self, key: str) -> Any:
+        return self.meta[key]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.meta)
+
+    def __len__(self) -> int:
+        return len(self.meta)
 
 
 @dataclass(frozen=True)
@@ -118,6 +222,13 @@ class Ensemble:
         return self.v.shape[0]
 
     @property
+    def provenance(self) -> Provenance:
+        """``meta`` as a typed :class:`Provenance` (model, seeds, ngspice version, netlist
+        hash, tolerances, deck split; ``as_attrs()`` for netCDF).  A view made on access:
+        ``meta`` stays the dict it is."""
+        return Provenance.from_meta(self.meta)
+
+    @property
     def dt(self) -> float:
         """Sample interval (the grid is uniform for every producer in this package)."""
         return float(self.t[1] - self.t[0]) if self.t.size > 1 else float("nan")
@@ -153,7 +264,7 @@ class Ensemble:
         """An ``xarray.Dataset``: ``v`` and ``x`` on dims (``replica``, ``time``), the noise
         (when recorded) on (``replica``, ``noise_time``), units on every coordinate and
         variable, provenance as JSON-safe attributes.  See :mod:`analogue.netcdf_layout`."""
-        return netcdf_layout.to_dataset(self)
+        return netcdf_layout.to_dataset(self, self.provenance.as_attrs())
 
     @classmethod
     def from_xarray(cls, dataset) -> Ensemble:

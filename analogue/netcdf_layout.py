@@ -141,8 +141,11 @@ class EnsembleFields(Protocol):
     def replicas(self) -> int: ...
 
 
-def to_dataset(ens: EnsembleFields):
-    """An ensemble's arrays and meta as an ``xarray.Dataset`` (see the module docstring)."""
+def to_dataset(ens: EnsembleFields, attrs: dict | None = None):
+    """An ensemble's arrays and meta as an ``xarray.Dataset`` (see the module docstring).
+    ``attrs``: the flat provenance attributes (default :func:`flat_attrs` of ``ens.meta``;
+    :meth:`analogue.Ensemble.to_xarray` passes ``ens.provenance.as_attrs()``, which adds
+    the ``netlist_hash``)."""
     import xarray as xr
 
     meta_json = json.dumps(ens.meta, sort_keys=True, default=_json_default)
@@ -180,7 +183,7 @@ def to_dataset(ens: EnsembleFields):
     attrs = {"title": "analogue ensemble of stick-slip trajectories",
              "analogue_format": FORMAT_VERSION,
              "units_note": _UNITS_NOTE,
-             **flat_attrs(ens.meta),
+             **(flat_attrs(ens.meta) if attrs is None else attrs),
              META_ATTR: meta_json}
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)
 
