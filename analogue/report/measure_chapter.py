@@ -122,10 +122,10 @@ def _spectrum_text(a: measure.MeasureAnalysis, comps: list[Comparison]) -> str:
             f"{est.dof:.0f} degrees of freedom per frequency) against the exact S(omega), "
             f"whose plateau S(0) = 2 D_x = {sp.exact[0]:.4g} bends over at 1/tau_m = {w1:.3g} "
             f"and {corner}. Averaged over {len(rows)} frequency bands, {ok} of {len(rows)} lie "
-            f"within budget. The noise hold (T = {sp.hold_dt:.3g}) lowers the spectrum by at "
-            f"most {100 * hold:.2g} % of S in any band (measured by a held/white Monte Carlo "
-            f"pair, because in the stick regime the hold also lowers the variance itself, "
-            f"beyond the sinc^2 factor of a linear response); sampling every "
+            f"within budget. The noise hold (T = {sp.hold_dt:.3g}) moves the spectrum by at "
+            f"most {100 * hold:.2g} % of S in any band, measured by a held/white Monte Carlo "
+            f"pair (in the stick regime the hold also lowers the variance itself, beyond the "
+            f"sinc^2 factor of a linear response, so no closed form is used); sampling every "
             f"{sp.sample_dt:g} (aliasing) and the window's leakage move the estimator's "
             f"expectation by at most {100 * samp:.2g} % of S, computed exactly from the "
             f"autocorrelation.")
@@ -144,8 +144,8 @@ def _fp_text(a: measure.MeasureAnalysis, comps: list[Comparison]) -> str:
         if th.values.mean_label is not None:
             c = by[th.values.mean_label]
             bits.append(f"the exact mean time to rest is {th.mean:.3g} (circuit {c.circuit:.3g} "
-                        f"+- {c.circuit_stderr:.2g}, z = {c.z:.2f}, of which the sampling "
-                        f"every {a.theory.spectrum.sample_dt:g} may add up to "
+                        f"+- {c.circuit_stderr:.2g}, z = {c.z:.2f}; sampling the path every "
+                        f"{a.theory.spectrum.sample_dt:g} delays the observed crossing by up to "
                         f"{th.sampling_bound:.2g})")
         else:
             bits.append(f"{100 * th.survival_end:.0f} % of the paths are still moving at the "
@@ -155,9 +155,12 @@ def _fp_text(a: measure.MeasureAnalysis, comps: list[Comparison]) -> str:
         bits.append(f"P(T <= {th.values.t_prob:.3g}) = {c.theory:.3f} exact, {c.circuit:.3f} "
                     f"+- {c.circuit_stderr:.3f} circuit")
         parts.append(", ".join(bits))
-    return (f"{a.experiment}: " + "; ".join(parts) + ". Noise makes the time to rest shorter "
-            "than t_a on average in the stick regime (a path may reach v = 0 early), and makes "
-            "rest possible at all in the slip regime.")
+    m = a.theory.model
+    why = ("Noise makes the mean time to rest shorter than t_a in the stick regime (a path may "
+           "reach v = 0 early, and the mean weighs the early ones)" if m.regime == "stick" else
+           "Noise makes rest possible at all where the noise-free path slides on to v_ss, and "
+           "shortens the crossing of paths started below 0")
+    return f"{a.experiment}: " + "; ".join(parts) + f". {why}."
 
 
 def _transport_text(a: measure.MeasureAnalysis, paper_comps: list[Comparison]) -> str:
@@ -179,8 +182,15 @@ def _transport_text(a: measure.MeasureAnalysis, paper_comps: list[Comparison]) -
     return out
 
 
+SWEEP_NOTE = ("The issue's curves (the mobility against the force a, and D_x against the noise "
+              "strength on log-log axes with its local exponent) are the sweep's: `analogue "
+              "sweep` (analogue.study.sweep) was not in this version when the chapter was "
+              "written, so this page gives them at the experiments' own parameters only (the "
+              "exact mobility, Einstein-like ratio and local exponent below).")
+
+
 def chapter(all_runs, futures: dict, out: Path, attempt, *, paper_comps=(),
-            sweep_note: str = "") -> ChapterResult:
+            sweep_note: str = SWEEP_NOTE) -> ChapterResult:
     """The chapter from the report's runs (``all_runs``: ExperimentRuns) and the futures of
     :func:`theory_tasks` (``{experiment: Future}``).  ``attempt(section, stage, fn, experiment)`` runs a
     piece and records its failure (the pipeline's ``_Failures.attempt``).  ``paper_comps``:

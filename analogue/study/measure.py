@@ -42,7 +42,11 @@ each with the terms of its error budget.
 
   - *sampling*: the first crossing observed every ``dt`` comes late by at most
     :func:`~analogue.estimators.first_passage.sampling_bias_bound` (``beta sigma sqrt(dt)
-    T'(0+) + dt``); for ``P(T <= t)`` that delay times the exact density ``f(t)``;
+    T'(0+) + dt``) on average; for ``P(T <= t)`` that delay times the exact density ``f(t)``
+    (first order).  Where the drift pushes away from rest on both sides (slip from v0 = 2:
+    ``T'(0+) = 26``, bound 0.69) the mean delay is made of rare long excursions and the term
+    overstates the change of ``P`` (0.043 there, 1.4 standard errors at quick size): a
+    conservative allowance, not a correction;
   - *bandwidth*: held/white Monte Carlo pair from ``v0`` on the effective model, both
     observed at the circuit's sampling interval (what the hold changes in what the estimator
     sees: with tanh friction and held noise a path that comes to rest sits at a small
