@@ -113,8 +113,8 @@ def _anchor(model: Model, g: ShotGrid) -> int:
     atom, else the state nearest the noise-free attractor of the mean force (``a`` plus the
     mean kick force ``rate mean`` for one-sided kicks): states below the support of one-sided
     kicks are transient and must not be anchored."""
-    shot = model.shot
-    if shot is not None and not shot.two_sided and not math.isfinite(model.gamma):
+    noise = model.noise_kind
+    if noise.one_sided and noise.pure_kicks:
         # one-sided kicks only push up, and the flow from above ends at the highest sliding
         # attractor v*: [v*, inf) is the recurrent class, everything below it (the stuck state
         # included) transient (Stribeck, tau_m = 5, Delta = 0.3, delta_s = 1, v_s = 0.2,
@@ -124,7 +124,7 @@ def _anchor(model: Model, g: ShotGrid) -> int:
         # that cell's weight was 1e-12 of the peak, and the solve failed)
         zs = stable_zeros(model)
         if zs.size and zs.max() > 0.0:
-            bulk = stable_zeros(model.replace(a=model.a + shot.mean_force, shot=None,
+            bulk = stable_zeros(model.replace(a=model.a + noise.mean_force, shot=None,
                                               gamma=math.inf))
             cells = g.v[:-1] if g.atom else g.v
             if bulk.size and bulk.max() > zs.max():
@@ -626,7 +626,7 @@ def _richardson_pair(model: Model, flat: np.ndarray, el: np.ndarray, v0: float,
         span = (float(centres[0] - g.h / 2), float(centres[-1] + g.h / 2))
         inside = (flat >= span[0]) & (flat <= span[1])
         dens[:, inside] += _once_kicked(model, flat[inside], el, v0, span)
-        if not model.shot.two_sided:  # type: ignore[union-attr]
+        if model.noise_kind.one_sided:
             # kicks only push up and the flow keeps the order of velocities: every kicked
             # path lies above the unkicked one, so nothing is below the front (the grid's
             # twice-kicked part leaked 7e-4 of density into the bin of 0.02 below it)
@@ -794,13 +794,9 @@ def scgf_domain(model: Model) -> tuple[float, float]:
     the whole line; Gaussian-only members have the whole line too."""
     check_one_dimensional(model)
     F = _force(model)
-    shot = model.shot
-    if shot is None or model.cubic > 0:
+    if model.friction.bounded_kick_displacement:
         return -math.inf, math.inf
-    pole = 1.0 / (F * model.tau_m * shot.mean)
-    if shot.two_sided:
-        return -abs(pole), abs(pole)
-    return (-math.inf, pole) if pole > 0 else (pole, math.inf)
+    return model.noise_kind.work_domain(F * model.tau_m)
 
 
 def _kick_transform(model: Model, c: float) -> tuple[Model, float]:
@@ -883,7 +879,8 @@ class _Scgf:
         self.model, self.h = model, h
         self.F = _force(model)
         self.domain = scgf_domain(model)
-        if model.shot is not None:
+        self.kicks = model.noise_kind.exact_solver == "kolmogorov-feller"
+        if self.kicks:
             self.fine = (shot_generator(model, h), shot_generator(model, h / 2.0))
             self.order = 2.0 if math.isfinite(model.gamma) else 1.0
             mom = _grid_moments(model, h)
@@ -895,7 +892,7 @@ class _Scgf:
         model, h, F = self.model, self.h, self.F
         if not self.domain[0] < k < self.domain[1]:
             return math.inf
-        if model.shot is None:
+        if not self.kicks:
             a = _principal_gradient(model, h, k, F)
             b = _principal_gradient(model, h / 2.0, k, F)
             return (4.0 * b - a) / 3.0
@@ -904,8 +901,9 @@ class _Scgf:
         # the change of measure for every k it is valid for but pure one-sided shot noise at
         # k F < 0, whose transformed kicks shrink to nothing (mean/u, u -> inf): that side
         # keeps the tilted generator with the transient states moved away
-        if model.cubic == 0 and c != 0 and (c > 0 or model.shot.two_sided
-                                            or math.isfinite(model.gamma)):
+        noise = model.noise_kind
+        if (not model.friction.bounded_kick_displacement and c != 0
+                and (c > 0 or not (noise.one_sided and noise.pure_kicks))):
             return self._transformed(c, w)
         # start the shift from the Gaussian approximation k <w> + k^2 F^2 D_x (a wrong start
         # only costs retries: :func:`_principal` checks what it converged to)
@@ -918,7 +916,7 @@ class _Scgf:
     def _transformed(self, c: float, w: float) -> float:
         model = self.model
         kicks: Kicks | None = None
-        if model.shot is not None and model.shot.two_sided:
+        if not model.noise_kind.one_sided:  # (kicks here: two-sided)
             tm, kicks, const = _two_sided_transform(model, c)
             # symmetric stand-ins: the smaller mean sets the spacing, the larger the range,
             # widened by the transformed kicks' mean force
@@ -964,11 +962,11 @@ def rate_function_asymptote(model: Model) -> tuple[float, float]:
     every w).  For Delta = 0 exactly ``J(w) = (sqrt(B) - sqrt(rate))^2``,
     ``B = (w - F a tau_m) k_pole`` (pure shot noise)."""
     check_one_dimensional(model)
-    shot = model.shot
-    if shot is None or shot.two_sided or model.cubic > 0:
+    noise = model.noise_kind
+    if not noise.one_sided or model.friction.bounded_kick_displacement:
         raise ValueError("rate_function_asymptote needs one-sided shot noise and cubic = 0 "
                          "(otherwise the SCGF has no pole)")
-    return 1.0 / (_force(model) * model.tau_m * shot.mean), shot.rate
+    return 1.0 / (_force(model) * model.tau_m * noise.shot.mean), noise.shot.rate
 
 
 def _scgf_one(model: Model, k: float, h: float) -> float:
@@ -997,8 +995,8 @@ def work_edge(model: Model) -> float | None:
     function there is ``rate`` (no kick at all), and +inf beyond (Delta = 0: the closed form
     ``(sqrt(B) - sqrt(rate))^2`` at ``B = 0``)."""
     check_one_dimensional(model)
-    shot = model.shot
-    if shot is None or shot.two_sided or math.isfinite(model.gamma):
+    noise = model.noise_kind
+    if not (noise.one_sided and noise.pure_kicks):
         return None
     from .kolmogorov_feller import has_atom
     cands = [float(z) for z in stable_zeros(model)] + ([0.0] if has_atom(model) else [])

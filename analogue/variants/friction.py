@@ -55,6 +55,9 @@ class FrictionLaw:
     closed_form: ClassVar[bool] = False
     #: the cubic coefficient (0 unless the law is :class:`Cubic`)
     cubic: float = 0.0
+    #: a kick's displacement ``int v dt`` stays bounded however large the kick (a cubic term);
+    #: with the linear viscous law it grows like ``tau_m z`` (analogue.theory.family.scgf_domain)
+    bounded_kick_displacement: ClassVar[bool] = False
     #: (delta_s, v_s) or None
     stribeck: tuple[float, float] | None = None
     delta: float
@@ -347,6 +350,7 @@ class Cubic(FrictionLaw):
 
     inner: FrictionLaw
     cubic: float
+    bounded_kick_displacement: ClassVar[bool] = True
 
     @property
     def delta(self) -> float:  # type: ignore[override]

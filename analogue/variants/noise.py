@@ -92,6 +92,16 @@ class Noise:
         """Kicks only (no Gaussian part): the motion between kicks is noise-free."""
         return False
 
+    @property
+    def one_sided(self) -> bool:
+        """Kicks that only push up (their mean force is ``rate mean``)."""
+        return False
+
+    def work_domain(self, scale: float) -> tuple[float, float]:
+        """Where the work's SCGF ``lambda(k)`` is finite when a kick z adds ``scale z`` to the
+        work (``scale = F tau_m``, linear viscous law): the whole line without kicks."""
+        return -math.inf, math.inf
+
     def bind(self, gamma: float, shot: Any) -> Noise:
         """This kind for a model with these parameters (a built-in kind is rebuilt from them,
         so that ``Model.replace(gamma=..., shot=...)`` chooses the kind anew)."""
@@ -187,6 +197,19 @@ class Shot(Noise):
     @property
     def pure_kicks(self) -> bool:
         return not self.gaussian
+
+    @property
+    def one_sided(self) -> bool:
+        return not self.shot.two_sided
+
+    def work_domain(self, scale: float) -> tuple[float, float]:
+        """Below the pole of the kicks' moment generating function ``M(c)``, ``c = k scale``:
+        ``1/(1 - c mean)`` one-sided, ``1/(1 - c^2 mean^2)`` two-sided (analogue.theory.family
+        .scgf_domain)."""
+        pole = 1.0 / (scale * self.shot.mean)
+        if self.shot.two_sided:
+            return -abs(pole), abs(pole)
+        return (-math.inf, pole) if pole > 0 else (pole, math.inf)
 
     def typical_speed(self, v_typ: float) -> float:
         return max(v_typ, self.shot.mean)
