@@ -327,7 +327,7 @@ def _grid_range(model: Model, v0s: Iterable[float] = ()) -> tuple[float, float]:
         if math.isfinite(model.gamma):
             reach += model._support_bound(45.0)
         lo, hi = -reach, reach
-        if not shot.two_sided and not math.isfinite(model.gamma):
+        if model.noise_kind.one_sided and model.noise_kind.pure_kicks:
             # one-sided kicks, no diffusion: on v < 0 the drift is >= -v/tau_m + a > 0 below
             # tau_m a, so nothing below min(0, tau_m a) is ever visited (from such starts).
             lo = min(0.0, tau * model.a)
@@ -344,19 +344,16 @@ def default_spacing(model: Model, align: bool = True) -> float:
     """Spacing resolving the jump mean/25, the Gaussian width/40, the Stribeck length/10 and
     the kink length 1/(gamma (Delta(0) + |a|))/2 (when gamma is finite); for pure shot noise
     refined by :func:`_pure_shot_spacing` (with ``align``, also aligned with the attractor)."""
-    scales = []
-    if model.shot is not None:
-        scales.append(model.shot.mean / 25.0)
+    scales = [mean / 25.0 for mean in model.noise_kind.jump_scales()]
     if math.isfinite(model.gamma):
         scales.append(math.sqrt(model.tau_m / model.gamma) / 40.0)
         if model.static_friction > 0:
             scales.append(0.5 / (model.gamma * (model.static_friction + abs(model.a))))
-    if model.stribeck is not None:
-        scales.append(model.stribeck[1] / 10.0)
+    scales.append(model.friction.velocity_length / 10.0)  # Stribeck's v_s (else inf)
     if model.epsilon > 0:
         scales.append(model.epsilon / 8.0)
     h = min(scales)
-    if model.shot is not None and not math.isfinite(model.gamma):
+    if model.noise_kind.pure_kicks:
         h = _pure_shot_spacing(model, h, align)
     return h
 
