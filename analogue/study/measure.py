@@ -112,10 +112,12 @@ BANDS = (0.5, 1.5, 4.0, 10.0, 30.0, 100.0)
 CENSORED_LIMIT = 1e-4
 #: Held/white Monte Carlo pairs.  Their loop costs per step more than per replica (the
 #: report's 256-replica stationary pair takes 2.3 s), so the stationary pair has as many as
-#: the report's (:data:`analogue.report.comparisons.MC_STATIONARY_REPLICAS`); the
+#: the report's (:data:`analogue.study.comparisons.MC_STATIONARY_REPLICAS`); the
 #: first-passage pairs 1024, paired differences with SE ~0.002 on a mean of ~1.5.
 PAIR_REPLICAS = 1024
 STATIONARY_PAIR_REPLICAS = 256
+
+
 def applies(model: Model) -> bool:
     """Whether this chapter's theory covers the model: the paper's 1-D model (finite gamma,
     no spring, no kicks), whose spectra and first passage the exact numerics give."""
@@ -211,7 +213,6 @@ class SpectrumTheory:
     hold: dict
     curve_omega: np.ndarray
     curve: np.ndarray
-    curve_linear_hold: np.ndarray
     replica_sd: dict          # band label -> spread of one replica's band average (held run)
     crossovers: tuple
     sample_dt: float
@@ -284,7 +285,6 @@ def _spectrum_theory(exp, settings: ReportSettings, model_eff: Model, noise_dt: 
     curve = tsp.velocity_spectrum(model, w_curve)
     return SpectrumTheory(omega=omega, exact=s, expected=expected, smoothing=smoothing,
                           hold=hold, curve_omega=w_curve, curve=curve,
-                          curve_linear_hold=curve * tsp.noise_hold_factor(w_curve, hold_dt),
                           replica_sd=replica_sd,
                           crossovers=tsp.crossover_frequencies(model), sample_dt=dt,
                           hold_dt=hold_dt, mobility=mobility(model),
