@@ -91,9 +91,11 @@ class _Frame:
     @classmethod
     def of(cls, model: Model) -> _Frame:
         checks.instance("model", model, Model, description="an analogue.Model")
-        if model.cubic or model.stribeck is not None or model.spring or model.shot is not None:
+        # the paper's friction law without a spring, white Gaussian noise (or none: the theory
+        # does not depend on gamma), chosen by the model's variants (analogue.variants)
+        if not (model.closed_form and model.noise_kind.white_gaussian_only):
             raise ValueError("analogue.theory.weak_noise is the paper's closed-form theory (cubic=0, "
-                             "stribeck=None, spring=0, shot=None); for the family use "
+                             "stribeck=None, spring=0, shot=None, noise=None); for the family use "
                              "analogue.theory.weak_noise_family")
         flip = -1.0 if model.a < 0 else 1.0
         return cls(model.tau_m, model.delta, abs(model.a), flip)

@@ -137,3 +137,15 @@ def test_an_experiment_file_takes_the_noise_kind_as_a_table(tmp_path):
     path.write_text(text.replace('"ornstein-uhlenbeck"', '"pink"'))
     with pytest.raises(ValueError, match="noise kind must be one of"):
         load_experiment(path)
+
+
+def test_weak_noise_theories_refuse_coloured_noise():
+    """The weak-noise theories are those of white Gaussian noise (optimal paths of a gradient
+    system): before the guard, analogue.theory.weak_noise.action accepted a coloured-noise
+    model (it tested only cubic, stribeck, spring and shot)."""
+    from analogue.theory import weak_noise, weak_noise_family
+    m = Model(1.0, 0.7, 0.2, 10.0, noise=OrnsteinUhlenbeck(0.2))
+    with pytest.raises(ValueError, match="noise=None"):
+        weak_noise.action(m, 0.5, 1.0, 1.0)
+    with pytest.raises(ValueError, match="noise = None"):
+        weak_noise_family.quasi_potential(m, 0.5)
