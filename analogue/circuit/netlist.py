@@ -107,11 +107,8 @@ def bridge_subcircuit(mapping: CircuitMapping) -> SubCircuit:
     sub.D("2", sub.gnd, "p", model=_MODEL_NAME)
     sub.D("3", "n", "t", model=_MODEL_NAME)
     sub.D("4", "n", sub.gnd, model=_MODEL_NAME)
-    if mapping.stribeck_volts > 0:
-        # Stribeck: the source follows Delta(V_t) (behavioural: see analogue.circuit.nonlinear)
-        sub.BehavioralSource("delta", "p", "n", current_expression=_amplitude_expr(mapping, "t"))
-    else:
-        sub.I("delta", "p", "n", _spice_value("I_Delta", mapping.i_delta))
+    # the friction law's amplitude source (Stribeck: a B-source following Delta(V_t))
+    mapping.model.friction.bridge_source(sub, mapping, _spice_value)
     part = _bridge_part(mapping)
     if part.rp:
         # The vendor models' parallel resistor across each diode.
@@ -122,20 +119,10 @@ def bridge_subcircuit(mapping: CircuitMapping) -> SubCircuit:
     return sub
 
 
-def _amplitude_expr(m: CircuitMapping, node: str) -> str:
-    """Friction amplitude as a B-source expression of V(node): ``I_Delta`` or, with the
-    Stribeck law, ``I_Delta + I_s exp(-|V|/V_s)``."""
-    base = _spice_value("I_Delta", m.i_delta)
-    if m.stribeck_volts <= 0:
-        return base
-    return (f"{base}+{_spice_value('I_Stribeck', m.i_stribeck)}*exp(-abs(V({node}))/"
-            f"{_spice_value('V_s', m.stribeck_volts)})")
-
-
 def _friction_expr(m: CircuitMapping, law: str, node: str = "v") -> str:
-    amp = _amplitude_expr(m, node)
-    if m.stribeck_volts > 0:
-        amp = f"({amp})"
+    """The Coulomb element's B-source current: the friction law's amplitude factor
+    (``I_Delta``, or Stribeck's ``(I_Delta + I_s exp(-|V|/V_s))``) times tanh or sgn."""
+    amp = m.model.friction.amplitude_factor(m, node, _spice_value)
     if law == "tanh":
         return f"{amp}*tanh(V({node})/{_spice_value('eps_V', m.eps_volts)})"
     return f"{amp}*sgn(V({node}))"
@@ -183,20 +170,10 @@ def replica_subcircuit(mapping: CircuitMapping) -> SubCircuit:
         sub.BehavioralSource("coulomb", "v", sub.gnd, current_expression=_friction_expr(m, "tanh"))
     elif element == "behavioural-sgn":
         sub.BehavioralSource("coulomb", "v", sub.gnd, current_expression=_friction_expr(m, "sgn"))
-    if m.cubic_element == "behavioural":
-        sub.BehavioralSource("cubic", "v", sub.gnd,
-                             current_expression=f"{_spice_value('g3', m.g3)}*V(v)*V(v)*V(v)")
-    elif m.cubic_element == "diode-network":
-        sub.X("cubic", "cubicnet", "v")
-    if m.inductance > 0:
-        # L (initial current = spring force at x0) -- R_L -- 0 V sense source -- ground
-        end = "ls" if m.inductor_rs > 0 else "lg"
-        sub.raw_spice += (f"Lspring v {end} {_spice_value('L', m.inductance)} "
-                          f"ic={_spice_value('I_L0', m.inductor_ic)}\n")
-        if m.inductor_rs > 0:
-            sub.R("leak", "ls", "lg", _spice_value("R_L", m.inductor_rs))
-        sub.V("sense", "lg", sub.gnd, "0")
-        sub.CCVS("xs", "xs", sub.gnd, "vsense", _spice_value("H_x", m.x_spring_gain))
+    # the friction law's own elements beyond the Coulomb element (the cubic conductance) and
+    # the restoring force's (the spring's inductor): analogue.variants
+    m.model.friction.replica_elements(sub, m, _spice_value)
+    m.model.restoring.replica_elements(sub, m, _spice_value)
     sub.VCCS("x", sub.gnd, "x", "v", sub.gnd, _spice_value("g_x", m.g_x))
     sub.C("x", "x", sub.gnd, _spice_value("C_x", m.cap_x))
     return sub
@@ -287,14 +264,8 @@ def build_deck(mapping: CircuitMapping, *, replicas: int, v0, t_end: float, seed
     if bridge:
         # uic skips the operating point, so the bridge's inner nodes need consistent starting
         # values too (else D1 starts forward biased by the whole of V and the first step fails).
-        if mapping.stribeck_volts > 0:
-            i0 = (mapping.i_delta + mapping.i_stribeck
-                  * np.exp(-np.abs(volts) / mapping.stribeck_volts))
-            vpn = [bridge_node_voltages(_bridge_part(mapping), i0[i], volts[i:i + 1]) for i in range(replicas)]
-            vp = np.array([a[0] for a, _ in vpn])
-            vn = np.array([b[0] for _, b in vpn])
-        else:
-            vp, vn = bridge_node_voltages(_bridge_part(mapping), mapping.i_delta, volts)
+        vp, vn = mapping.model.friction.bridge_node_voltages(
+            mapping, volts, lambda i, v: bridge_node_voltages(_bridge_part(mapping), i, v))
         ic += [f"v(xr{i}.xcoulomb.p)={_spice_value('ic', vp[i])} "
                f"v(xr{i}.xcoulomb.n)={_spice_value('ic', vn[i])}"
                for i in range(replicas)]

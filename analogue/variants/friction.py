@@ -123,6 +123,26 @@ class FrictionLaw:
         """The law's keys of ``Model.as_dict`` (none for the paper's law)."""
         return {}
 
+    # ------------------------------------------------ circuit (analogue.circuit.netlist)
+    def amplitude_factor(self, m: Any, node: str, value: Callable[[str, float], str]) -> str:
+        """The friction amplitude as a factor of a B-source expression of V(node) (mapping
+        ``m``; ``value`` formats a deck number): ``I_Delta``."""
+        return value("I_Delta", m.i_delta)
+
+    def bridge_source(self, sub: Any, m: Any, value: Callable[[str, float], str]) -> None:
+        """The diode bridge's amplitude source between its nodes p and n: ``I_Delta``."""
+        sub.I("delta", "p", "n", value("I_Delta", m.i_delta))
+
+    def bridge_node_voltages(self, m: Any, volts: np.ndarray,
+                             nodes: Callable[[Any, np.ndarray], tuple[np.ndarray, np.ndarray]]
+                             ) -> tuple[np.ndarray, np.ndarray]:
+        """Consistent starting voltages of the bridge's inner nodes at terminal ``volts``
+        (``nodes(i_delta, volts)``: analogue.circuit.parts.bridge_node_voltages)."""
+        return nodes(m.i_delta, volts)
+
+    def replica_elements(self, sub: Any, m: Any, value: Callable[[str, float], str]) -> None:
+        """The law's elements of one replica beyond the Coulomb element: none."""
+
     # ------------------------------------------------------ Monte Carlo step
     def fast_dry(self) -> Callable[[np.ndarray], np.ndarray]:
         """:meth:`dry` as a function of an array (analogue.montecarlo's reference loop)."""
@@ -332,6 +352,26 @@ class Stribeck(FrictionLaw):
         ds, vs = self.delta_s, self.v_s
         return out - (ds - self.delta) / vs * np.exp(-np.abs(v) / vs)
 
+    def _amplitude(self, m: Any, node: str, value: Callable[[str, float], str]) -> str:
+        return (f"{value('I_Delta', m.i_delta)}+{value('I_Stribeck', m.i_stribeck)}"
+                f"*exp(-abs(V({node}))/{value('V_s', m.stribeck_volts)})")
+
+    def amplitude_factor(self, m: Any, node: str, value: Callable[[str, float], str]) -> str:
+        """``(I_Delta + I_s exp(-|V|/V_s))``."""
+        return f"({self._amplitude(m, node, value)})"
+
+    def bridge_source(self, sub: Any, m: Any, value: Callable[[str, float], str]) -> None:
+        # the source follows Delta(V_t) (behavioural: see analogue.circuit.nonlinear)
+        sub.BehavioralSource("delta", "p", "n", current_expression=self._amplitude(m, "t", value))
+
+    def bridge_node_voltages(self, m: Any, volts: np.ndarray,
+                             nodes: Callable[[Any, np.ndarray], tuple[np.ndarray, np.ndarray]]
+                             ) -> tuple[np.ndarray, np.ndarray]:
+        # the amplitude differs per replica (Delta(V) at each start): one call each
+        i0 = m.i_delta + m.i_stribeck * np.exp(-np.abs(volts) / m.stribeck_volts)
+        vpn = [nodes(i0[i], volts[i:i + 1]) for i in range(volts.size)]
+        return np.array([a[0] for a, _ in vpn]), np.array([b[0] for _, b in vpn])
+
     def smoothing_budget(self, epsilon: float) -> dict[str, float]:
         # the tanh must switch well inside the Stribeck decay length
         return {"stribeck_smoothing": epsilon / self.v_s} if epsilon > 0 else {}
@@ -407,6 +447,27 @@ class Cubic(FrictionLaw):
 
     def smoothing_budget(self, epsilon: float) -> dict[str, float]:
         return self.inner.smoothing_budget(epsilon)
+
+    def amplitude_factor(self, m: Any, node: str, value: Callable[[str, float], str]) -> str:
+        return self.inner.amplitude_factor(m, node, value)
+
+    def bridge_source(self, sub: Any, m: Any, value: Callable[[str, float], str]) -> None:
+        self.inner.bridge_source(sub, m, value)
+
+    def bridge_node_voltages(self, m: Any, volts: np.ndarray,
+                             nodes: Callable[[Any, np.ndarray], tuple[np.ndarray, np.ndarray]]
+                             ) -> tuple[np.ndarray, np.ndarray]:
+        return self.inner.bridge_node_voltages(m, volts, nodes)
+
+    def replica_elements(self, sub: Any, m: Any, value: Callable[[str, float], str]) -> None:
+        """The cubic conductance ``g3 V^3`` from v to ground: a B-source, or the diode-resistor
+        breakpoint network (subcircuit ``cubicnet``, analogue.circuit.nonlinear)."""
+        self.inner.replica_elements(sub, m, value)
+        if m.cubic_element == "behavioural":
+            sub.BehavioralSource("cubic", "v", sub.gnd,
+                                 current_expression=f"{value('g3', m.g3)}*V(v)*V(v)*V(v)")
+        elif m.cubic_element == "diode-network":
+            sub.X("cubic", "cubicnet", "v")
 
     def dt_limit(self, dt: float, v_typ: float) -> float:
         # keep the explicit cubic term stable: dt * 3 cubic v^2 <= 1/50 at 6 typical speeds

@@ -41,6 +41,9 @@ class Restoring:
     def entries(self) -> dict[str, Any]:
         return {"x0": self.x0} if self.x0 != 0 else {}
 
+    def replica_elements(self, sub: Any, m: Any, value: Any) -> None:
+        """This force's elements of one replica's subcircuit (analogue.circuit.netlist): none."""
+
     def mc_meta(self) -> dict[str, Any]:
         """This force's entries of a Monte Carlo ensemble's meta."""
         return {}
@@ -83,6 +86,18 @@ class Spring(Restoring):
 
     def mc_meta(self) -> dict[str, Any]:
         return {"position": "model.x0 + x (x = integral of v, x[:, 0] = 0)"}
+
+    def replica_elements(self, sub: Any, m: Any, value: Any) -> None:
+        """The inductor ``Lspring`` from v (initial current = the spring force at x0) -- R_L --
+        a 0 V sense source -- ground; a CCVS turns the sensed current into node ``xs`` = the
+        position in model units."""
+        end = "ls" if m.inductor_rs > 0 else "lg"
+        sub.raw_spice += (f"Lspring v {end} {value('L', m.inductance)} "
+                          f"ic={value('I_L0', m.inductor_ic)}\n")
+        if m.inductor_rs > 0:
+            sub.R("leak", "ls", "lg", value("R_L", m.inductor_rs))
+        sub.V("sense", "lg", sub.gnd, "0")
+        sub.CCVS("xs", "xs", sub.gnd, "vsense", value("H_x", m.x_spring_gain))
 
 
 def build_restoring(spring: float, x0: float) -> Restoring:
