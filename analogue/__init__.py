@@ -15,8 +15,9 @@ Where things live (layers, lowest first; an import only points down,
 foundations                 ``checks`` (argument checks), ``cores`` (usable CPUs), ``files``
                             (atomic UTF-8 writes), ``noise_free`` (deterministic motion),
                             ``netcdf_layout``, ``paper`` (the paper's parameters)
-model and data              ``model`` (:class:`Model`, the family's variants), ``ensemble``
-                            (:class:`Ensemble`, simulated paths with provenance)
+model and data              ``model`` (:class:`Model`), ``variants`` (the family's variants as
+                            types: friction law, spring, noise kind; found by dispatch),
+                            ``ensemble`` (:class:`Ensemble`, simulated paths with provenance)
 theory                      ``theory.weak_noise*`` (the paper's gamma -> inf results),
                             ``theory.exact`` / ``stationary`` / ``propagation`` /
                             ``exact_grid`` (Fokker-Planck), ``work_statistics`` (tilted
