@@ -47,6 +47,19 @@ def assert_within_se(estimate: float, truth: float, stderr: float, *, k: float =
         + (f" + bias {abs(bias):.3g}" if bias else ""))
 
 
+def stationary_stats(e: Any, t_from: float, every: int = 1) -> tuple[float, float, float, float]:
+    """``(mean, se, variance, se)`` of an ensemble's velocity pooled over its output times from
+    ``t_from`` on (every ``every``-th), standard errors from the replicas: each replica's own
+    average is one independent draw, so the correlation along a path is accounted for."""
+    v = e.v[:, e.t >= t_from - 1e-9][:, ::every]
+    mean_i = v.mean(axis=1)
+    mean = float(mean_i.mean())
+    sq_i = ((v - mean) ** 2).mean(axis=1)
+    n = v.shape[0]
+    return (mean, float(mean_i.std(ddof=1)) / math.sqrt(n),
+            float(sq_i.mean()), float(sq_i.std(ddof=1)) / math.sqrt(n))
+
+
 def assert_unit_normal(z: np.ndarray, *, k: float = 4.0) -> None:
     """Mean 0 and standard deviation 1 within k standard errors (i.i.d. normals)."""
     n = np.size(z)

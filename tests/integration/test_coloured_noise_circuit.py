@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 
 import pytest
+from conftest import stationary_stats
 
 import analogue
 from analogue import Model
@@ -18,17 +19,7 @@ from analogue.variants.coloured import stationary_velocity_variance
 pytestmark = pytest.mark.requires_ngspice
 
 
-def _stationary(e, t_from, every):
-    """(mean, se, variance, se) pooled over one time point per ``every`` after ``t_from``,
-    standard errors from the replicas' own averages (independent)."""
-    keep = (e.t >= t_from - 1e-9)
-    v = e.v[:, keep][:, ::every]
-    mean_i = v.mean(axis=1)
-    mean = float(mean_i.mean())
-    sq_i = ((v - mean) ** 2).mean(axis=1)
-    n = v.shape[0]
-    return (mean, float(mean_i.std(ddof=1)) / math.sqrt(n),
-            float(sq_i.mean()), float(sq_i.std(ddof=1)) / math.sqrt(n))
+_stationary = stationary_stats  # (mean, se, variance, se), se from the replicas
 
 
 def _circuit(model, seed):

@@ -14,6 +14,8 @@ import math
 import numpy as np
 import pytest
 
+from conftest import stationary_stats
+
 from analogue import Model, ShotNoise
 from analogue.montecarlo import default_dt, simulate_sde
 from analogue.variants import NOISE_KINDS, Gaussian, OrnsteinUhlenbeck
@@ -52,18 +54,8 @@ def test_model_binds_round_trips_and_refuses():
     assert default_dt(m) <= 0.5 / 50
 
 
-def _stationary(e, t_from):
-    """Per-replica values at the output times after ``t_from``, one time point per unit of
-    time (about the correlation time), pooled: (mean, its se, variance, its se) with the
-    standard errors from the replicas (each replica's own average is one independent draw)."""
-    keep = e.t >= t_from
-    v = e.v[:, keep]
-    mean_i = v.mean(axis=1)
-    mean = float(mean_i.mean())
-    sq_i = ((v - mean) ** 2).mean(axis=1)
-    n = v.shape[0]
-    return (mean, float(mean_i.std(ddof=1)) / math.sqrt(n),
-            float(sq_i.mean()), float(sq_i.std(ddof=1)) / math.sqrt(n))
+# pooled over output times one unit apart (about the correlation time), se from the replicas
+_stationary = stationary_stats
 
 
 @pytest.mark.parametrize("tau_c", [0.2, 1.0, 3.0])
