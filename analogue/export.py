@@ -38,6 +38,7 @@ from .files import write_text
 from .study.members import is_member_experiment, member_runs, member_sizes
 from .report.plan import RunOptions
 from .study.runs import run_experiment_runs
+from .data import write_netcdf
 
 __all__ = ["ROLES", "experiment_runs", "export_experiment", "find_metrics", "load_runs",
            "metrics_rows", "report_decks", "report_size", "runs_by_role", "size_line"]
@@ -209,7 +210,6 @@ def export_experiment(experiment, out, *, report=None, quick: bool = False, stor
     its runs are not these: another size (its provenance's ``quick``) or other decks (its
     ``deck_hashes``, e.g. the file was edited since).  A ``report`` given explicitly whose
     runs are not these is refused (ValueError; of another size: before anything runs)."""
-    from .data import write_netcdf
 
     say = say or (lambda _line: None)
     exp = experiment if isinstance(experiment, Experiment) else load_experiment(experiment)

@@ -20,6 +20,10 @@ from ..study.members import (CHAPTER_TITLE, CHECK_REPLICAS, MEMBERS, MemberAnaly
                              member_sizes, rate_function_data, stick_window, weak_noise_law,
                              work_tau)
 from ..study.metrics import Comparison
+from .html import Table
+from . import family_figures as FF
+from .html import Figure, Section
+from .prose import experiment_paragraphs
 
 __all__ = [
     "CHAPTER_TITLE",
@@ -182,7 +186,6 @@ def weak_noise_text(m: Model, f: dict) -> str:
 
 
 def member_table(a: MemberAnalysis):
-    from .html import Table
     rows, classes = [], []
     for c in a.comparisons:
         b = c.budget
@@ -200,8 +203,6 @@ def member_table(a: MemberAnalysis):
 def member_section(a: MemberAnalysis, out: Path, attempt=None):
     """The section of one member (figures drawn from the analysis); ``attempt(what, fn)``
     runs a figure and returns (result, error) (the pipeline's failure recorder)."""
-    from . import family_figures as FF
-    from .html import Figure, Section
     attempt = attempt or (lambda what, fn: (fn(), None))
     figs, errs = [], []
     for what, fn in FF.member_figures(a):
@@ -210,7 +211,6 @@ def member_section(a: MemberAnalysis, out: Path, attempt=None):
             errs.append(f"figure '{what}': {err}")
         elif r is not None:
             figs.append(Figure(*r))
-    from .prose import experiment_paragraphs
     return Section(f"{CHAPTER_TITLE}: {a.exp.name}", member_text(a) + experiment_paragraphs(a.exp),
                    figures=figs, tables=[member_table(a)], error="; ".join(errs) or None)
 

@@ -24,6 +24,8 @@ from ..plots.style import KIND_COLOURS, TIME, VELOCITY, new_figure, save
 from ..study.comparisons import ExperimentAnalysis
 from ..study.runs import ExperimentRuns
 from ..study.theory_curves import ExperimentTheory, FigureCurves, propagator_times
+from ..plots.paper_theory import fig5_boundaries, fig5_layout
+from ..study.catalogue import find
 
 __all__ = ["fig_deterministic", "fig_prehistory", "fig_propagator", "fig_stationary",
            "fig_work_paths", "fig_rate_function", "fig_budget",
@@ -156,7 +158,6 @@ def fig_boundaries(runs: ExperimentRuns, out: Path):
     """Paper Fig. 5: boundary lines w, u (eqs. (41), (45)) and one optimal path of each kind
     around them (theory only).  Every time and range comes from the experiment's model and
     v0 (:func:`analogue.plots.paper_theory.fig5_layout`); the stick regime only."""
-    from ..plots.paper_theory import fig5_boundaries, fig5_layout
     m = runs.exp.model
     if m.regime != "stick":
         return None
@@ -391,7 +392,6 @@ def budget_axes(comps, reference: str):
 
 
 def fig_budget(analysis: ExperimentAnalysis, out: Path):
-    from ..study.catalogue import find
     comps = [c for c in analysis.comparisons
              if c.theory_kind == "exact"
              and not ((o := find(c.observable)) is not None and o.entry.fit_test)]

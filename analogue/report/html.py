@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import jinja2
+from ..files import write_text
 
 __all__ = ["Figure", "Table", "Section", "write_page", "render_page"]
 
@@ -127,6 +128,5 @@ def render_page(title: str, intro: list, sections: list) -> str:
 def write_page(path: Path, title: str, intro: list, sections: list) -> Path:
     """Write ``path`` (index.html) with every figure inlined (atomically: a reader never sees
     half a page)."""
-    from ..files import write_text
     # UTF-8 whatever the locale, the path named as it is on disk; a full disk names the page
     return write_text(Path(path), render_page(title, intro, sections))

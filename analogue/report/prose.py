@@ -17,6 +17,8 @@ import logging
 import math
 import re
 from pathlib import Path
+from ..circuit.experiments import PAPER_EXPERIMENTS, standard_circuit
+from ..circuit.experiments import PAPER_EXPERIMENTS
 
 __all__ = ["is_paper_experiment", "is_paper_report", "main_part", "model_sentence", "description_mismatches",
            "experiment_paragraphs", "circuit_paragraph", "equation_text", "board_link",
@@ -32,7 +34,6 @@ def _num(x: float) -> str:
 def is_paper_experiment(exp) -> bool:
     """One of the paper's experiments, from the standard circuits (a user's
     ``./circuits/stick.toml`` is the user's, whatever its name)."""
-    from ..circuit.experiments import PAPER_EXPERIMENTS, standard_circuit
     source = getattr(exp, "source", None)   # an experiment built in memory has none
     if exp.name not in PAPER_EXPERIMENTS or source is None:
         return False
@@ -44,7 +45,6 @@ def is_paper_experiment(exp) -> bool:
 
 def is_paper_report(experiments) -> bool:
     """The paper's own report: exactly the paper's experiments, from the standard circuits."""
-    from ..circuit.experiments import PAPER_EXPERIMENTS
     return (sorted(e.name for e in experiments) == sorted(PAPER_EXPERIMENTS)
             and all(is_paper_experiment(e) for e in experiments))
 

@@ -27,6 +27,10 @@ from ..model import Model
 from .catalogue import (stationary_label, stationary_observables, stationary_theory,
                                transition_label)
 from ..theory.friction_law import stationary_law_with_friction, transition_moments_with_friction
+from ..estimators.resampling import jackknife_difference
+from ..montecarlo import simulate_sde_held_pair
+from ..montecarlo import _given_v0, default_dt
+from ..montecarlo import simulate_sde
 
 __all__ = ["held_noise_pair", "held_noise_pair_chunks", "PAIR_CHUNK", "integration_term", "real_diode_element",
            "real_diode_transition_element", "SE_MULTIPLIER", "RICHARDSON",
@@ -53,7 +57,6 @@ def integration_term(values, check: Ensemble, nominal: Ensemble, h: float) -> di
     (:mod:`analogue.estimators.smoothed_indicator`; the other kinds do not depend on ``s``,
     so their last term is 0).  SE: the paired delete-a-group jackknife.  Returns ``{name:
     (term, d_h, se, kernel)}``."""
-    from ..estimators.resampling import jackknife_difference
     diff = jackknife_difference(values(h), check, nominal)
     if h > 0:
         half = values(0.5 * h)
@@ -129,7 +132,6 @@ def _pair_chunk(model: Model, v0, z: np.ndarray, per_hold: int, dt: float, sampl
     holds: not sent back), with this process's CPU seconds."""
     import time
 
-    from ..montecarlo import simulate_sde_held_pair
     c0 = time.process_time()
     held, white = simulate_sde_held_pair(model, v0=v0, t_end=t_end, replicas=z.shape[0],
                                          noise=z, noise_hold=per_hold, dt=dt,
@@ -148,7 +150,6 @@ def held_noise_pair_chunks(model: Model, *, v0, t_end: float, replicas: int, see
     collected (the report's critical path: the draw, then the longest chunk)."""
     import time
 
-    from ..montecarlo import _given_v0, default_dt
 
     per_hold = max(MIN_STEPS_PER_HOLD, math.ceil(noise_dt / default_dt(model) - 1e-9))
     dt = noise_dt / per_hold
@@ -164,7 +165,7 @@ def held_noise_pair_chunks(model: Model, *, v0, t_end: float, replicas: int, see
         return lambda: pair
     v_all, v0_meta = _given_v0(v0, replicas, f"a number or an array of shape ({replicas},)")
     t_draw = time.thread_time()
-    parts = []
+    parts: list = []
     for lo in range(0, replicas, PAIR_CHUNK):
         hi = min(replicas, lo + PAIR_CHUNK)
         # row after row from the one stream: the numbers of rng.standard_normal((replicas, n))
@@ -216,7 +217,6 @@ def _held_pair_with_kicks(model: Model, *, v0, t_end, replicas, seed, z, per_hol
     """Shot + Gaussian noise (the fused loop is Gaussian-only): two runs whose kicks come from
     one seed, so that the pair differs by the hold alone (a shot + Gaussian member's report
     failed on the fused loop's refusal)."""
-    from ..montecarlo import simulate_sde
     n_hold = z.shape[1] // per_hold
     kicks = int(np.random.SeedSequence(seed, spawn_key=(8,)).generate_state(1)[0])
     kw = dict(v0=v0, t_end=t_end, replicas=replicas, dt=dt, sample_dt=sample_dt, seed=kicks)

@@ -32,6 +32,12 @@ from ..estimators.smoothed_indicator import window
 from ..estimators.variance_error import sample_variance_se
 from ..model import Model
 from ..theory.stationary import integrated_autocorrelation, stationary_moments
+from ..estimators import transport
+from ..estimators import work_rate_samples
+from ..estimators.goodness_of_fit import histogram_chi2
+from ..theory.stationary import stick_fraction_theory
+from ..estimators.transport import diffusion_leave_group_out
+from ..estimators.resampling import subset
 
 __all__ = ["KINDS", "Kind", "Observable", "TRANSITION", "STATIONARY", "density_moments",
            "PAPER", "GAUSSIAN_MEMBER", "SHOT_MEMBER", "SPRING_MEMBER", "member_stick_window",
@@ -201,17 +207,14 @@ def _force_balance(s: StationarySample, tau=None) -> float:
 
 
 def _diffusion(s: StationarySample, tau=None) -> float:
-    from ..estimators import transport
     return float(transport(s.ens, burn_in=s.burn_in).diffusion)
 
 
 def _work_rates(s: StationarySample, tau: float) -> np.ndarray:
-    from ..estimators import work_rate_samples
     return work_rate_samples(s.ens, tau, s.force, burn_in=s.burn_in)
 
 
 def _chi2_per_dof(samples, v, f) -> tuple[float, float]:
-    from ..estimators.goodness_of_fit import histogram_chi2
     chi2, dof = histogram_chi2(samples, v, f)
     return chi2 / dof, math.sqrt(2.0 / dof)
 
@@ -294,7 +297,6 @@ def _window_mass(th: StationaryTheory) -> float:
 def _stick_theory(th: StationaryTheory, tau=None) -> float:
     if th.law is not None:
         return _window_mass(th)
-    from ..theory.stationary import stick_fraction_theory
     return float(stick_fraction_theory(th.model, th.threshold))
 
 
@@ -701,7 +703,6 @@ class StationaryValues:
                                  force=self.force, taus=self.taus, smoothing=self.smoothing)
 
     def leave_group_out(self, ens: Ensemble, labels: np.ndarray, groups: int) -> list[dict]:
-        from ..estimators.transport import diffusion_leave_group_out
         s = stationary_sample(ens, burn_in=self.burn_in, threshold=self.threshold,
                               force=self.force)
         cols: dict[str, np.ndarray] = {}
@@ -730,7 +731,6 @@ class StationaryValues:
                 mw, vw = _mean_var_left_out(s.work(o.tau), labels, groups)
                 cols[o.label] = mw if name == "mean w" else vw
             else:   # a kind without a per-replica form: the direct route
-                from ..estimators.resampling import subset
                 return [self(subset(ens, labels != j)) for j in range(groups)]
         return [{k: float(c[j]) for k, c in cols.items()} for j in range(groups)]
 

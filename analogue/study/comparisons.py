@@ -148,9 +148,9 @@ def bandwidth_terms(exp: Experiment, settings: ReportSettings, *,
                                       noise_dt=stationary_noise_dt(noise_dt, settings),
                                       **common)
 
-    jobs = [(v0, lambda i=i, v0=v0: transition_pair(i, v0)) for i, v0 in enumerate(exp.v0)]
+    jobs: list = [(v0, lambda i=i, v0=v0: transition_pair(i, v0)) for i, v0 in enumerate(exp.v0)]
     jobs.append((None, stationary_pair))
-    values = {v0: (lambda e, v0=v0: transition_values(e, v0, times)) for v0 in exp.v0}
+    values: dict = {v0: (lambda e, v0=v0: transition_values(e, v0, times)) for v0 in exp.v0}
     values[None] = stationary_fn
     # each pair's chunks are queued before the previous pair is waited for (one pair ahead:
     # the noise of two pairs in memory at most, 1.3 GB for the quick work experiment's

@@ -50,6 +50,13 @@ from .budget import SE_MULTIPLIER, held_noise_pair
 from .metrics import Budget, compare
 from ..estimators import work_rate_samples
 from .observables import jackknife_difference, subset
+from ..theory.kolmogorov_feller import default_spacing
+from ..theory import family
+from ..circuit.simulate import simulate
+from ..montecarlo import simulate_sde
+from ..theory.exact import stationary_moments as _sm
+from ..theory.weak_noise_family import quasi_potential
+from ..theory.exact import rate_function as _rf
 
 __all__ = [
     "MEMBERS",
@@ -205,7 +212,6 @@ def _estimators(exp: Experiment, observables, threshold: float) -> dict:
 def _h(exp: Experiment) -> float:
     """One grid spacing for the ideal and the smoothed model: the ideal model's default (the
     smoothed model's own default resolves epsilon and needs ~45000 states for shot noise)."""
-    from ..theory.kolmogorov_feller import default_spacing
     return default_spacing(exp.model)
 
 
@@ -217,7 +223,6 @@ def _stationary_theory(exp: Experiment, model: Model, observables, threshold: fl
     Richardson pair h, h/2 (shot.toml's stick fraction: 0.434366 at h, 0.434449 at h/2,
     0.434475 at h/8; this pair 0.434477; the first-order pair 2 f - c overshot to 0.434532);
     values read from the Richardson moments are the same on both grids and unchanged."""
-    from ..theory import family
     h = _h(exp)
     moments = family.stationary_moments(model, h=h)
     coarse, fine = (C.stationary_theory(model, moments, threshold=threshold,
@@ -248,7 +253,6 @@ def _transition_law(exp: Experiment, model: Model, v0: float, times):
     (stuck) propagator_atom has it; elsewhere it is a moving delta outside the density (left
     out before: var v at t = 0.5 read 0.308 instead of 0.163 for tau_m 2, Delta 0.3, a -0.5,
     two-sided kicks rate 1.5, mean 0.4, v0 = 0)."""
-    from ..theory import family
     lo = min(v0, model.potential_minimum() if model.is_gradient else 0.0) - 12 * model.velocity_scale
     hi = max(v0, model.attractor) + 12 * model.velocity_scale + (
         12 * model.shot.mean if model.shot is not None else 0.0)
@@ -270,7 +274,6 @@ def _paper_law(model: Model, v: np.ndarray) -> tuple[np.ndarray, float]:
     cubic or Stribeck term): exp(-gamma U)/Z with Gaussian noise only; otherwise the
     Kolmogorov-Feller grid law interpolated (Model.stationary_pdf refuses shot noise: a cubic
     or Stribeck member with pure shot noise crashed its report)."""
-    from ..theory import family
     base = model.replace(stribeck=None, cubic=0.0)
     if base.shot is None:
         return base.stationary_pdf(v), 0.0
@@ -294,7 +297,6 @@ def _circuit(exp: Experiment, *, v0, t_end: float, replicas: int, seed: int, siz
     """One circuit run through :func:`analogue.simulate` (seeded, stored).  ``per_deck``
     fixes the deck size, so that a re-run of the first deck with ``spec`` (the integration
     check) sees the same noise: a deck's noise depends on (seed, deck index, deck size)."""
-    from ..circuit.simulate import simulate
     kw = opts.simulate_kwargs() if opts is not None else {"progress": False}
     if per_deck is not None:
         kw["replicas_per_deck"] = per_deck
@@ -370,7 +372,6 @@ def member_runs(exp: Experiment, opts=None, *, quick: bool | None = None,
                        per_deck=CHECK_REPLICAS)
         return MemberRuns(exp, sizes, quick, transition=circ, check=chk,
                           seeds={"transition": seed, "check_transition": seed})
-    from ..theory import family
     v0_stat = family.sample_stationary(m, sizes.stationary_replicas, plan.member_stationary_v0)
     tick(f"{name}: stationary circuit run ({sizes.stationary_replicas} x "
          f"{sizes.stationary_t_end:g})")
@@ -443,7 +444,6 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
                    progress=None) -> MemberAnalysis:
     """Run the member's circuit (quick sizes by default in the chapter) and compare it with
     its exact theory (1-D) or its Monte Carlo (spring)."""
-    from ..theory import family
     t0 = time.perf_counter()
     if isinstance(exp, str):
         exp = load_experiment(standard_circuit(exp) if exp in MEMBERS else exp)
@@ -469,7 +469,6 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
         circ, chk = _analysed(exp, runs.transition), _analysed(exp, runs.check)
         first = _xs_subset(circ, np.arange(CHECK_REPLICAS))
         tick(f"{name}: Monte Carlo reference ({sizes.mc_replicas} replicas)")
-        from ..montecarlo import simulate_sde
         mc = simulate_sde(m, v0=0.0, t_end=sizes.stationary_t_end, replicas=sizes.mc_replicas,
                           seed=plan.member_monte_carlo, sample_dt=sizes.sample_dt)
         mc.meta["_x0"] = m.x0
@@ -600,7 +599,6 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
         base = m.replace(stribeck=None, cubic=0.0)  # the paper's law at the same Delta
         fig["paper_density"], _ = _paper_law(m, v)
         fig["paper_label"] = f"paper's law (Delta = {m.delta:g}, no extension)"
-        from ..theory.exact import stationary_moments as _sm
         bm = _sm(base)
         res.facts.update(paper_mean=bm.mean, paper_variance=bm.variance)
     if m.shot is None:
@@ -644,7 +642,6 @@ def weak_noise_law(m: Model, v: np.ndarray, exact: np.ndarray) -> dict:
     (where the law concentrates as gamma -> inf; the kink's cusp at v = 0 is one when sticking
     is stable) and the barriers of U between neighbouring minima (the weak-noise escape costs:
     the hopping rate goes like exp(-gamma barrier))."""
-    from ..theory.weak_noise_family import quasi_potential
     u = quasi_potential(m, v)
     wn = np.exp(-m.gamma * u)
     wn = wn / np.trapezoid(wn, v)
@@ -671,7 +668,6 @@ def rate_function_data(m: Model, stat: Ensemble, burn: float, tau: float | None 
     a point when <w> ~ 0 (stick regime, small a) while the circuit's estimate spread over the
     whole work distribution.  circuits/cubic.toml keeps its grid (1.5 <w> = 1.53 > 3 sd_tau
     = 0.44)."""
-    from ..theory import family
     tau = work_tau(m) if tau is None else checks.positive("tau", tau)
     pure_shot = m.shot is not None and not math.isfinite(m.gamma)
     scale = m.gamma if math.isfinite(m.gamma) else 1.0
@@ -704,7 +700,6 @@ def rate_function_data(m: Model, stat: Ensemble, burn: float, tau: float | None 
     if not pure_shot:
         # the paper's model at the same Delta, a, gamma (with pure shot noise there is no
         # paper's curve at the same gamma = inf: the paper's I needs Gaussian noise)
-        from ..theory.exact import rate_function as _rf
         base = m.replace(stribeck=None, cubic=0.0, shot=None)
         rf["paper"] = _rf(base, w)
         rf["paper_label"] = ("paper's model, same Delta and gamma (no kicks)"

@@ -16,6 +16,10 @@ from ..estimators.resampling import jackknife, jackknife_difference, subset
 from ..model import Model
 from .catalogue import (stationary_label, stationary_theory, stationary_values, transition_label,
                                transition_theory, transition_values)
+from ..theory import exact
+from ..theory.cache import cached_call
+from ..theory import weak_noise
+from ..theory.work_statistics import work_variance
 
 __all__ = ["histogram_chi2", "transition_values", "stationary_values", "jackknife", "subset", "jackknife_difference",
            "exact_transition", "weak_noise_transition", "exact_stationary", "velocity_grid",
@@ -41,8 +45,6 @@ def exact_transition(model: Model, v0: float, times, h: float | None = None,
     bias) is computed on one common grid so that discretisation errors cancel.  If
     ``densities`` is a dict, the grid and densities are stored in it ("v", "f").  ``cache``:
     the theory cache (:func:`analogue.theory.cache.open_cache`; False: compute afresh)."""
-    from ..theory import exact
-    from ..theory.cache import cached_call
     v = velocity_grid(model, [v0])
     f = np.atleast_2d(cached_call(exact.propagator, model, v, np.asarray(times, dtype=float),
                                   float(v0), h=h, cache=cache))
@@ -54,7 +56,6 @@ def exact_transition(model: Model, v0: float, times, h: float | None = None,
 def weak_noise_transition(model: Model, v0: float, times, densities: dict | None = None) -> dict:
     """The same moments of the paper's saddle-point propagator (eqs. (46)-(51)).  If
     ``densities`` is a dict, the grid and densities are stored in it ("v", "f")."""
-    from ..theory import weak_noise
     v = velocity_grid(model, [v0])
     f = np.array([np.asarray(weak_noise.propagator(model, v, t, v0)) for t in times])
     if densities is not None:
@@ -65,7 +66,6 @@ def weak_noise_transition(model: Model, v0: float, times, densities: dict | None
 def work_variance_exact(model: Model, tau: float, n: int = 801, h: float | None = None) -> float:
     """Var(w) = (F/tau)^2 * 2 int_0^tau (tau - s) C(s) ds from the exact autocorrelation C
     (Green-Kubo route, independent of the work density)."""
-    from ..theory import exact
     s = np.linspace(0.0, tau, n)
     c = np.asarray(exact.autocorrelation(model, s, h=h), dtype=float)
     var_int = 2.0 * integrate.simpson((tau - s) * c, x=s)
@@ -78,9 +78,6 @@ def exact_stationary(model: Model, *, threshold: float, taus=(), h: float | None
     variances of all windows from one autocorrelation
     (:func:`analogue.theory.work_statistics.work_variance`, the same numbers as
     :func:`work_variance_exact`)."""
-    from ..theory import exact
-    from ..theory.cache import cached_call
-    from ..theory.work_statistics import work_variance
     m = cached_call(exact.stationary_moments, model, cache=cache)
     taus = [float(t) for t in taus]
     var_w = (np.asarray(cached_call(work_variance, model, np.asarray(taus), h=h, cache=cache))

@@ -42,6 +42,7 @@ from .schedule import (CIRCUIT_THREADS, MEMBER_THREADS, SCHEDULER_CIRCUIT_THREAD
 from .settings import RunOptions
 from .theory_curves import (CURVE_GROUPS, ExperimentTheory, FigureCurves, experiment_theory,
                             figure_curves)
+from .. import __version__
 
 __all__ = ["StudyResult", "StudyHooks", "run_study", "load", "experiment_section_title"]
 
@@ -192,7 +193,6 @@ class StudyResult:
 def _software() -> dict:
     import matplotlib  # its version only (the study draws nothing); loaded by the page anyway
     import scipy
-    from .. import __version__
     return {"analogue": __version__, "python": platform.python_version(), "numpy": np.__version__,
             "scipy": scipy.__version__, "matplotlib": matplotlib.__version__,
             "platform": platform.platform()}

@@ -48,6 +48,13 @@ from ..ensemble import Ensemble
 from ..model import Model
 from .seeds import SeedPlan
 from .settings import ReportSettings, RunOptions, stationary_noise_dt
+from ..circuit.simulate import run_decks, time_grid, value_limits
+from ..circuit.deck_size import choose_deck_size
+from ..circuit.simulate import simulate
+from ..circuit.tolerances import resolve_spec
+from ..circuit import ngspice as _ng
+from ..theory.exact import sample_stationary
+from .theory_curves import stationary_taus
 
 __all__ = ["ExperimentRuns", "run_experiment_runs", "first_deck_size", "check_plan",
            "stationary_check_plan", "head"]
@@ -198,7 +205,6 @@ class ExperimentRuns:
 
 def _noise_free_run(exp: Experiment, seed: int, kw: dict) -> Ensemble:
     """One replica per v0 on the user's circuit with the noise off (paper Fig. 1)."""
-    from ..circuit.simulate import run_decks, time_grid, value_limits
     deck = exp.noise_free_deck(seed=seed)
     times = time_grid(deck.t_end, exp.sample_dt)
     v0 = np.asarray(exp.v0, dtype=float)
@@ -232,9 +238,6 @@ def _choose(model, spec, replicas: int, t_end: float, kw: dict, check: int, obse
     """(spec with its tolerances set, replicas per deck, why) for one run of the report whose
     integration error is measured on about ``check`` of its paths, compared on
     ``observables`` (circuit.tolerances.STATIONARY_OBSERVABLES, or None: all)."""
-    from ..circuit.deck_size import choose_deck_size
-    from ..circuit.simulate import simulate
-    from ..circuit.tolerances import resolve_spec
     # (the run's --timeout holds for the calibrations too: issue 19, a hung ngspice kept a
     # --timeout 3 run going for the calibrations' default hour per deck)
     common = {k: kw[k] for k in ("store", "scheduler", "timeout") if k in kw}
@@ -292,7 +295,6 @@ def _run_jobs(jobs: list[tuple[str, Callable[..., Any]]], kw: dict) -> dict:
     holds :func:`analogue.circuit.ngspice.interrupt_guard` meanwhile (a signal kills every
     ngspice process and raises there).  With a Dask scheduler address the jobs run one after
     another on it (each simulate call connects on its own)."""
-    from ..circuit import ngspice as _ng
     if kw.get("scheduler"):
         return {name: fn({}) for name, fn in jobs}
     workers = default_workers(kw)
@@ -334,9 +336,6 @@ def _run_jobs(jobs: list[tuple[str, Callable[..., Any]]], kw: dict) -> dict:
 @indexing_runs  # the store's index by experiment (analogue store ls): every entry used
 def run_experiment_runs(exp: Experiment, opts: RunOptions,
                         settings: ReportSettings | None = None) -> ExperimentRuns:
-    from ..circuit.simulate import simulate
-    from ..theory.exact import sample_stationary
-    from .theory_curves import stationary_taus
 
     t_start = time.perf_counter()
     settings = (settings or exp.report).for_options(opts)

@@ -32,6 +32,13 @@ from ..model import Model
 from ..theory.cache import cached_call
 from .observables import exact_stationary, exact_transition, weak_noise_transition
 from .settings import ReportSettings
+from ..theory import weak_noise
+from ..estimators import stationary_density
+from ..theory.weak_noise_work import work_optimal_path
+from ..estimators import work_distribution
+from ..theory import exact
+from ..theory.work_statistics import rate_function_curve
+from ..theory.work_statistics import weak_noise_limit_rate_function
 
 __all__ = ["TransitionTheory", "ExperimentTheory", "FigureCurves", "experiment_theory",
            "figure_curves", "stationary_taus", "propagator_times", "CURVE_GROUPS"]
@@ -149,7 +156,6 @@ class FigureCurves:
 
 
 def _prehistory_curves(runs):
-    from ..theory import weak_noise
     targets = [p if len(p) == 3 else (runs.exp.v0[0],) + tuple(p)
                for p in runs.settings.prehistory]
     out = []
@@ -162,7 +168,6 @@ def _prehistory_curves(runs):
 
 
 def _stationary_curves(runs):
-    from ..estimators import stationary_density
     m = runs.exp.model
     d = stationary_density(runs.stationary, burn_in=runs.settings.stationary_burn_in, bins=50)
     v = np.unique(np.concatenate([np.linspace(d.edges[0], d.edges[-1], 800), [0.0]]))
@@ -188,7 +193,6 @@ def _windows_with_rate(ens, tau, force, w_target, half_width, burn_in):
 def _work_path_curves(runs):
     """Per (w, tau): circuit windows of that work rate and the work-optimal path between
     their median end points (eq. (60))."""
-    from ..theory.weak_noise_work import work_optimal_path
     m = runs.exp.model
     out = []
     for w, tau in runs.settings.work_paths:
@@ -205,7 +209,6 @@ def _work_path_curves(runs):
 
 def work_distributions(runs) -> dict:
     """The circuit's work-rate histograms, one per window that fits (Figs. 8-9)."""
-    from ..estimators import work_distribution
     m = runs.exp.model
     settings = runs.settings
     out = {}
@@ -221,7 +224,6 @@ def _finite_tau_pdfs(model, dists, min_replicas=10, cache=None):
     """Exact finite-tau work densities on the bin centres the circuit estimates use, one call
     per tau: {tau: {w: density}}.  The fluctuation ratio pairs bins that both have data, so
     its -w are among these centres too (the bins are symmetric about 0)."""
-    from ..theory import exact
     out = {}
     for tau, d in dists.items():
         w = d.centres[d.contributing >= min_replicas]
@@ -256,8 +258,6 @@ def exact_rate_curve(model: Model, w: np.ndarray, cache=None):
     (:func:`analogue.theory.work_statistics.rate_function_curve` for the paper's model; family
     members through :func:`analogue.theory.exact.rate_function`, I(-w) read off the reversed
     grid)."""
-    from ..theory import exact
-    from ..theory.work_statistics import rate_function_curve
     if model.is_paper:
         w, rate, fr = cached_call(rate_function_curve, model, w, cache=cache)
         return np.asarray(w), np.asarray(rate), np.asarray(fr)
@@ -266,8 +266,6 @@ def exact_rate_curve(model: Model, w: np.ndarray, cache=None):
 
 
 def _rate_function_curves(runs, cache=None):
-    from ..theory import weak_noise
-    from ..theory.work_statistics import weak_noise_limit_rate_function
     m = runs.exp.model
     dists = work_distributions(runs)
     if not dists or m.a == 0:
