@@ -131,7 +131,9 @@ def write_report(out: Path, exp, design, metrics: dict) -> Path:
         "model minus requested, exact theory), smoothing (bridge tanh width, exact theory), "
         f"bandwidth (SDE pair coloured minus white, {st['pair_replicas']} replicas, |d| + 2 se), "
         f"integration (reltol 1e-3 against 1e-4 on the same noise, {st['integ_replicas']} "
-        "replicas), statistical = 3 standard errors (jackknife over replicas)."),
+        "replicas), statistical = 3 standard errors: "
+        + (metrics["comparisons"][0].get("stderr_method", "jackknife over replicas")
+           if metrics["comparisons"] else "jackknife over replicas") + "."),
         _trajectory_text(metrics.get("trajectory_check"))],
         tables=[Table("Nominal board vs exact theory", ["observable", "board", "stderr", "theory",
                                                         "z", "rounding", "smoothing", "bandwidth",
