@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import subprocess
 import sys
 
@@ -75,6 +76,11 @@ def test_report_returns_the_study(tmp_path, monkeypatch):
     assert set(res.by_role("mine")) >= {"stationary", "noise_free", "check_transition",
                                         "check_stationary"}
     assert not res.failures.items and "comparisons" in repr(res)
+    # a user's report claims no section of the paper's (issue 20 item 3: it read "Paper Fig. 1:
+    # deterministic motion" over the user's own noise-free runs)
+    titles = re.findall(r"<h2[^>]*>(.*?)</h2>", res.page.read_text())
+    assert "Deterministic motion (noise off)" in titles
+    assert not [t for t in titles if "paper" in t.lower()], titles
     with pytest.raises(KeyError, match="no runs"):
         res.by_role("other")
 
