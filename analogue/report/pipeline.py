@@ -118,16 +118,18 @@ def report(experiment, out=None, *, quick: bool = False, opts: RunOptions | None
     path or an :class:`~analogue.circuit.experiments.Experiment`; ``out``: the report
     directory (default ``report/<name>``); ``quick``: the quick sizes (ignored when ``opts``,
     a :class:`~analogue.study.settings.RunOptions`, is given: its own ``quick`` counts);
-    ``runner``: reserved for :class:`analogue.Runner` (None until the circuit layer has it).
+    ``runner``: how the decks run, an :class:`analogue.Runner` (its store, workers, scheduler,
+    timeout, progress: :meth:`~analogue.study.settings.RunOptions.from_runner`).
 
     Returns the :class:`~analogue.study.run.StudyResult`: its ``comparisons``, ``figures``
     (experiment -> PNG paths), ``page`` (``index.html``), ``failures``, the runs
     (``by_role(name)``).  A section that failed is in ``failures`` (and on the page); with
     ``raise_incomplete`` it raises :class:`ReportIncomplete` instead, as the command line
     does."""
+    if runner is not None and opts is not None:
+        raise TypeError("pass either runner= (an analogue.Runner) or opts=, not both")
     if runner is not None:
-        raise TypeError("runner: not supported yet (analogue.Runner is not in this version); "
-                        "pass opts=RunOptions(...) instead")
+        opts = RunOptions.from_runner(runner, quick=quick)
     exp = _load(experiment)  # validated before anything runs
     out = Path(out) if out is not None else Path("report") / exp.name
     opts = opts if opts is not None else RunOptions(quick=quick, progress=False)

@@ -232,14 +232,16 @@ def run_study(experiments: Iterable, *, members: Iterable = (), opts: RunOptions
     members among them are analysed as members, and so are those of ``members``).
 
     ``opts`` says how the circuits run (:class:`~analogue.study.settings.RunOptions`; default:
-    local, quick when ``quick``); ``quick`` overrides ``opts.quick``.  ``runner`` is accepted
-    for :class:`analogue.Runner` once the circuit layer has it, and must be None until then.
+    local, quick when ``quick``); ``quick`` overrides ``opts.quick``.  ``runner``: how the
+    decks run, an :class:`analogue.Runner` (:meth:`RunOptions.from_runner`) in place of
+    ``opts``.
     ``hooks`` (:class:`StudyHooks`): what the caller does while the study runs.  Failures of
     single experiments are recorded in the result, never raised; an interrupt is raised after
     every ngspice process was killed."""
     if runner is not None:
-        raise TypeError("runner: not supported yet (analogue.Runner is not in this version); "
-                        "pass opts=RunOptions(...) instead")
+        if opts is not None:
+            raise TypeError("pass either runner= (an analogue.Runner) or opts=, not both")
+        opts = RunOptions.from_runner(runner, quick=bool(quick))
     opts = opts or RunOptions(quick=bool(quick))
     if quick is not None and quick != opts.quick:
         opts = replace(opts, quick=quick)
