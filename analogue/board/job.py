@@ -17,7 +17,8 @@ Steps (each result carries its seeds and sizes):
    enable low, a transient started by the reset switch (the OTA alternative was dropped,
    issue 21: it puts up to 10 V across an input rated for 5 V, and with a divider that fits
    its width is no better than the bridge's);
-6. schematic.svg, bom.csv, board.net (KiCad), board.cir, metrics.json, index.html.
+6. schematic.svg, bom.csv, board.net and board.kicad_sch (KiCad), board.cir, metrics.json,
+   index.html.
 """
 from __future__ import annotations
 
@@ -40,6 +41,7 @@ from . import budget, calibration, tolerance
 from .bench import bench_checks
 from .bom import write_bom
 from .kicad import write_kicad_netlist
+from .kicad_sch import write_kicad_schematic
 from .design import BoardSpec, design_board
 from .netlist import build_board_deck, nominal_instance
 from .runner import noise_directory, run_board
@@ -237,6 +239,7 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
     matched["offset_limit"] = tolerance.offset_limit(design, grads, se_ref, MATCH_FRACTION, tol)
     write_bom(design, out / "bom.csv", matched=tuple(matched["bom_refs"]))
     write_kicad_netlist(design, out / "board.net", matched=tuple(matched["bom_refs"]))
+    write_kicad_schematic(design, out / "board.kicad_sch", matched=tuple(matched["bom_refs"]))
     deck = build_board_deck(design, nominal, v0=[float(exp.v0[0])], t_end=exp.t_end,
                             sample_dt=SAMPLE_DT, seed=seed, noise_dir=out)
     # the deck names its DAC file without a directory (ngspice lower-cases paths): it lies

@@ -107,7 +107,8 @@ def write_report(out: Path, exp, design, metrics: dict) -> Path:
     sections.append(Section("Schematic and bill of materials", paragraphs=[
         Markup('Vector schematic (overview and a parts sheet with every designator): '
                '<a href="schematic.svg">schematic.svg</a>; KiCad netlist (Pcbnew: File, Import, '
-               'Netlist): <a href="board.net">board.net</a>; SPICE deck: '
+               'Netlist): <a href="board.net">board.net</a>; KiCad schematic (every part on net '
+               'labels): <a href="board.kicad_sch">board.kicad_sch</a>; SPICE deck: '
                '<a href="board.cir">board.cir</a>; BOM: <a href="bom.csv">bom.csv</a>.')],
         figures=figs, tables=[Table("Bill of materials (one channel)", bom[0], bom[1:])]))
 

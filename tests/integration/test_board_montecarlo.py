@@ -85,7 +85,8 @@ def test_board_job_writes_every_output(tmp_path):
     index = run_board_job("stick", root / "Board", store=root / "Store", workers=2,
                           settings=TINY, log=lambda *_: None)
     out = index.parent
-    for name in ("schematic.svg", "bom.csv", "board.net", "board.cir", "metrics.json", "index.html"):
+    for name in ("schematic.svg", "bom.csv", "board.net", "board.kicad_sch", "board.cir",
+                 "metrics.json", "index.html"):
         assert (out / name).stat().st_size > 0, name
     metrics = json.loads((out / "metrics.json").read_text())
     validate_metrics(metrics)
