@@ -38,7 +38,8 @@ from .members import CHAPTER_TITLE, MemberAnalysis, analyse_member, is_member_ex
 from .metrics import Comparison, validate_metrics
 from .runs import ExperimentRuns, run_experiment_runs
 from .schedule import (CIRCUIT_THREADS, MEMBER_THREADS, SCHEDULER_CIRCUIT_THREADS, Failures,
-                       Phases, Workers, circuit_cost, monte_carlo_pool, result_of, say)
+                       Phases, Workers, circuit_cost, member_cost, monte_carlo_pool, result_of,
+                       say)
 from .settings import RunOptions
 from .theory_curves import (CURVE_GROUPS, ExperimentTheory, FigureCurves, experiment_theory,
                             figure_curves)
@@ -319,10 +320,13 @@ def _schedule(result: StudyResult, opts: RunOptions, hooks: StudyHooks, pool: Wo
     # ~2.4 CPU-s) but left the cores to the main thread alone for those seconds, and on a
     # larger machine all but one idle
     paper_done: Future = Future()
-    members_f = [family.submit_after([*runs_f.values()],
-                                     "family member (circuit and theory)", exp.name,
-                                     lambda exp=exp: member_task(exp, opts))
-                 for exp in result.members]
+    members_f: list = [None] * len(result.members)
+    for j in sorted(range(len(result.members)),
+                    key=lambda j: -member_cost(result.members[j])):   # longest first
+        members_f[j] = family.submit_after([*runs_f.values()],
+                                           "family member (circuit and theory)",
+                                           result.members[j].name,
+                                           lambda exp=result.members[j]: member_task(exp, opts))
     runs_by_index: dict = {}
     analyses_by_index: dict = {}
     # The hooks draw in this thread as soon as an experiment's theory curves are in, while

@@ -30,7 +30,8 @@ from ..circuit.simulate import POLL_S
 from .settings import RunOptions
 
 __all__ = ["Failures", "Phases", "Workers", "result_of", "say", "error_text", "circuit_cost",
-           "CIRCUIT_THREADS", "SCHEDULER_CIRCUIT_THREADS", "MEMBER_THREADS", "monte_carlo_pool"]
+           "CIRCUIT_THREADS", "SCHEDULER_CIRCUIT_THREADS", "MEMBER_THREADS", "monte_carlo_pool",
+           "member_cost", "MEMBER_SECONDS"]
 
 log = logging.getLogger("analogue.report.pipeline")
 
@@ -224,6 +225,22 @@ class Workers:
             for t in self.threads:
                 t.join(0.05)
         ngspice.terminate_all()
+
+
+# The standard members' analyses (circuit runs and their references), seconds measured on the
+# quick paper (2-core machine, load 1.7-3.3, two member threads).  Only their order is used:
+# the members are queued longest first.  In the order of MEMBERS (cubic, stribeck, spring,
+# shot) the spring started third and ran alone on one thread for its last 11 s (the job's
+# members took 33 s; longest first would make it about 29 s).  The spring's cost is its Monte
+# Carlo reference (the position feeds back into the force at every step), not its decks, so
+# circuit_cost (replica-time) does not order the members.
+MEMBER_SECONDS = {"spring": 22.7, "cubic": 15.2, "stribeck": 10.5, "shot": 6.7}
+
+
+def member_cost(exp) -> float:
+    """The queueing key of a family member (:data:`MEMBER_SECONDS`; 0 for one not measured:
+    queued after those)."""
+    return MEMBER_SECONDS.get(exp.name, 0.0)
 
 
 def monte_carlo_pool():

@@ -196,3 +196,23 @@ def test_one_local_circuit_thread_two_with_a_scheduler(tmp_path, monkeypatch, sc
     monkeypatch.setattr(S, "_schedule", schedule_)
     S.run_study([], opts=RunOptions(scheduler=scheduler, progress=False))
     assert seen == {"circuit": threads, "family": SCH.MEMBER_THREADS}
+
+
+def test_members_are_queued_longest_first(monkeypatch):
+    """The family members start in the order of their measured cost (issue 22: the spring,
+    the longest, queued third, ran alone at the end), whatever order they are given in; the
+    result keeps the given order."""
+    started: list = []
+    monkeypatch.setattr(SCH, "MEMBER_THREADS", 1)
+    monkeypatch.setattr(S, "MEMBER_THREADS", 1)
+
+    def member(exp, opts):
+        started.append(exp.name)
+        raise RuntimeError("member stub")
+    monkeypatch.setattr(S, "member_task", member)
+    names = ["shot", "cubic", "spring", "stribeck"]
+    result = S.run_study([], members=[load_experiment(standard_circuit(n)) for n in names],
+                         opts=RunOptions(quick=True, progress=False))
+    assert started == sorted(names, key=lambda n: -SCH.MEMBER_SECONDS[n])
+    assert started[0] == "spring"
+    assert [e.name for e in result.members] == names
