@@ -5,7 +5,8 @@ ngspice) with :class:`Runner` (how its decks run: store, workers, executor, time
 progress), :func:`open_ensemble` (netCDF files of ``Ensemble.to_netcdf`` / ``analogue export``),
 :func:`load_runs` (an experiment's circuit runs by role), ``report(experiment, out=...,
 quick=...)`` (what ``analogue report`` does, returning an :class:`analogue.study.run.StudyResult`;
-``analogue.report`` is also the package of the page's modules), the theory packages :mod:`analogue.theory.weak_noise` and
+``analogue.report`` is also the package of the page's modules), :func:`sweep` (an experiment
+over a grid of parameters: circuit and exact theory, an xarray.Dataset), the theory packages :mod:`analogue.theory.weak_noise` and
 :mod:`analogue.theory.exact`, and the estimators in :mod:`analogue.estimators`.
 
 Where things live (layers, lowest first; an import only points down,
@@ -45,7 +46,7 @@ from .model import Model, MechanicalParameters, ShotNoise
 from .ensemble import Ensemble
 
 __all__ = ["Model", "MechanicalParameters", "ShotNoise", "Ensemble", "simulate", "Runner",
-           "open_ensemble", "load_runs", "report"]
+           "open_ensemble", "load_runs", "report", "sweep"]
 __version__ = "0.1.0"
 
 
@@ -54,7 +55,7 @@ _SUBMODULES = ("theory", "estimators", "montecarlo", "circuit", "report", "plots
 
 def __dir__():
     """The module's names with the lazily loaded ones (``simulate``, ``Runner``, ``open_ensemble``,
-    ``load_runs`` and the subpackages), which :func:`__getattr__` imports on first use."""
+    ``load_runs``, ``sweep`` and the subpackages), which :func:`__getattr__` imports on first use."""
     return sorted(set(globals()) | set(__all__) | set(_SUBMODULES))
 
 
@@ -73,6 +74,10 @@ def __getattr__(name):
     if name == "load_runs":
         from .export import load_runs
         return load_runs
+    # parameter sweeps (circuit + exact theory over a grid, an xarray.Dataset): study layer
+    if name == "sweep":
+        from .study.sweep import sweep
+        return sweep
     if name in _SUBMODULES:
         import importlib
         return importlib.import_module(f".{name}", __name__)

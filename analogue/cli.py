@@ -1,4 +1,4 @@
-"""Command-line interface: ``analogue netlist | run | report | paper | theory | figures``.
+"""Command-line interface: ``analogue netlist | run | report | paper | sweep | theory | figures``.
 
 Every failure is one line on stderr (``analogue: error: ...``) and an exit code: 2 for bad
 input (usage, wrong values or types, an unreadable experiment file), 1 for a run that failed
@@ -426,6 +426,45 @@ def figures(out):
     """Draw the paper's theory figures (Figs. 1-9, weak-noise curves) as PNG files."""
     from .plots.paper_theory import draw_all
     for p in draw_all(out):
+        click.echo(f"wrote {p}")
+
+
+# -------------------------------------------------------------------------------- sweep
+@main.command()
+@click.argument("experiment")
+@click.option("--vary", "vary", multiple=True, required=True, metavar="NAME=START:STOP:N",
+              help="A model parameter and its grid: N evenly spaced values from START to STOP "
+                   "(N = 1..64; append :log for geometric spacing); repeat for a grid over "
+                   "several (at most 256 points).  NAME: tau_m, delta, a, gamma, mass, cubic "
+                   "(delta_s, v_s with a Stribeck law).")
+@click.option("--out", type=click.Path(file_okay=False, path_type=Path),
+              callback=_out_dir_option, required=True,
+              help="Directory for sweep.nc and the figures (mobility.png/svg when a is varied, "
+                   "diffusion.png/svg when gamma is).")
+@_run_options
+def sweep(experiment, vary, out, workers, scheduler, store, timeout, quick, progress):
+    """Sweep EXPERIMENT (a name or a TOML path) over model parameters: the circuit and the
+    exact theory at every point (drift, variance, P(v>0), stick fraction, D_x, work rate,
+    mean first-passage time to rest, with standard errors and budgets) in DIR/sweep.nc;
+    resumable from the run store."""
+    import logging as _logging
+    from .study.sweep import parse_vary_text, plan_sweep
+    from .study.sweep import sweep as run_sweep
+    from .plots.sweep import draw_sweep
+    try:
+        grid = parse_vary_text(vary)
+        plan_sweep(experiment, grid, quick=quick)   # validated before anything runs
+    except ValueError as exc:
+        raise click.BadParameter(str(exc), param_hint="--vary") from None
+    logger = _logging.getLogger("analogue.sweep")
+    for h in [h for h in logger.handlers if isinstance(h, _ProgressLines)]:
+        logger.removeHandler(h)
+    logger.addHandler(_ProgressLines())
+    logger.setLevel(_logging.INFO)
+    opts = _options(workers, scheduler, store, timeout, quick, progress)
+    ds = run_sweep(experiment, grid, quick=quick, out=out, **opts.simulate_kwargs())
+    click.echo(f"wrote {Path(out) / 'sweep.nc'}")
+    for p in draw_sweep(ds, out):
         click.echo(f"wrote {p}")
 
 

@@ -56,8 +56,15 @@ STREAMS = {
     "measure_spectrum_pair": 130,      # the stationary pair (spectrum bands, Einstein ratio)
     "measure_spectrum_pair_v0": 131,   # its starting velocities
     "measure_first_passage_pair": 132,  # first passage from the i-th v0
+    # parameter sweeps (study.sweep): per grid point, keyed by the point's model
+    # (study.sweep.point_seed), not by an index
+    "sweep_stationary": 140,      # the point's stationary circuit run (+ its starting velocities)
+    "sweep_first_passage": 141,   # the point's first-passage circuit run
+    "sweep_band": 142,            # the point's held/white Monte Carlo pairs
 }
 _INDEXED = {"transition", "mc_transition", "measure_first_passage_pair"}
+# streams whose seeds depend on more than (seed, index): not in SeedPlan.all
+_POINTWISE = {"sweep_stationary", "sweep_first_passage", "sweep_band"}
 _MAX_INDEX = 100
 
 
@@ -78,8 +85,11 @@ class SeedPlan:
     def stream(self, name: str, index: int = 0) -> int:
         """The seed of stream ``name`` (a key of :data:`STREAMS`), ``index`` for the
         per-v0 streams; an int in ``1 .. 2**31 - 1``."""
-        if name not in STREAMS:
-            raise ValueError(f"seed stream must be one of {', '.join(STREAMS)}; got {name!r}")
+        if name not in STREAMS or name in _POINTWISE:
+            raise ValueError(f"seed stream must be one of "
+                             f"{', '.join(k for k in STREAMS if k not in _POINTWISE)}; got "
+                             f"{name!r} (the sweep streams' seeds: analogue.study.sweep."
+                             f"point_seed)")
         index = checks.integer("v0 index", index, minimum=0, maximum=_MAX_INDEX - 1)
         if index and name not in _INDEXED:
             raise ValueError(f"seed stream {name!r} has one seed (index 0), got index {index!r}")
@@ -95,7 +105,7 @@ class SeedPlan:
 
     def __getattr__(self, name: str) -> int:
         # stationary, noise_free, mc_stationary, mc_stationary_v0, member_*
-        if name in STREAMS and name not in _INDEXED:
+        if name in STREAMS and name not in _INDEXED and name not in _POINTWISE:
             return self.stream(name)
         raise AttributeError(name)
 
@@ -103,7 +113,8 @@ class SeedPlan:
         """Every seed by name (for the provenance)."""
         out = {f"transition {i}": self.transition(i) for i in range(n_v0)}
         out.update({f"mc_transition {i}": self.mc_transition(i) for i in range(n_v0)})
-        out.update({k: self.stream(k) for k in STREAMS if k not in _INDEXED})
+        out.update({k: self.stream(k) for k in STREAMS
+                    if k not in _INDEXED and k not in _POINTWISE})
         return out
 
     def describe(self) -> dict:

@@ -11,7 +11,7 @@ from analogue.cli import main
 from analogue.theory import exact, weak_noise
 
 ROOT = Path(__file__).resolve().parents[2]
-COMMANDS = ["netlist", "run", "report", "paper", "theory", "figures"]
+COMMANDS = ["netlist", "run", "report", "paper", "sweep", "theory", "figures"]
 
 
 @pytest.mark.parametrize("cmd", COMMANDS)
@@ -22,7 +22,7 @@ def test_every_subcommand_has_help(cli, cmd):
 
 
 def test_run_commands_offer_workers_scheduler_quick(cli):
-    for cmd in ("run", "report", "paper"):
+    for cmd in ("run", "report", "paper", "sweep"):
         out = cli.invoke(main, [cmd, "--help"]).output
         for opt in ("--workers", "--scheduler", "--quick", "--store"):
             assert opt in out, (cmd, opt)
