@@ -375,12 +375,47 @@ def _report(names, out: Path, opts: RunOptions, title: str, chapter=()) -> Study
 def write_report(result: StudyResult, drawer: _Drawer, out: Path, title: str,
                  opts: RunOptions) -> Path:
     """The page and metrics.json of a study whose figures ``drawer`` drew."""
-    experiments, members, fails = result.experiments, result.members, result.failures
+    experiments, members = result.experiments, result.members
     _log("drawing figures")
     draw0 = time.perf_counter()
-    sections = []
-    member_analyses = list(result.member_analyses.values())
-    comps = result.comparisons
+    sections = [_summary_section(result, drawer), _circuit_section(result)]
+    if drawer.fig1_section is not None:
+        sections.append(drawer.fig1_section)
+    for exp in experiments:
+        if exp.name in result.failed:
+            sections.append(_failed_section(exp, result.failed[exp.name]))
+            continue
+        figs, errs = drawer.figs[exp.name]
+        sections.append(Section(_experiment_title(exp), experiment_section_text(exp),
+                                figures=figs, error="; ".join(errs) if errs else None))
+    sections.extend(drawer.oq_section)
+    sections.extend(drawer.measured.sections)
+    if members:
+        sections.extend(_chapter_sections(result, out, opts))
+    sections.append(Section("All comparisons and their error budgets", [
+        prose.budget_text([*experiments, *members])],
+        tables=[_comparison_table(result.comparisons, "Comparisons")]))
+
+    result.phases.items.append({"phase": "figures and page", "experiment": None,
+                                "thread": "main", "start_s": round(draw0 - result.t0, 3),
+                                "seconds": round(time.perf_counter() - draw0, 3)})
+    wall = time.perf_counter() - result.t0
+    provenance = result.provenance(wall)
+    sections.extend(_provenance_sections(provenance, wall))
+    metrics = result.metrics(provenance)
+    # (ensure_ascii=False: a path under a non-UTF-8 locale is written as its own UTF-8 bytes,
+    # not as escaped lone surrogates; files.write_text)
+    write_text(out / "metrics.json", json.dumps(metrics, indent=2, default=str,
+                                                ensure_ascii=False))
+    index = write_page(out / "index.html", title, _intro(result, provenance, wall, out, opts),
+                       sections)
+    result.page = index
+    _log(f"report written: {index}")
+    return index
+
+
+def _summary_section(result: StudyResult, drawer: _Drawer) -> Section:
+    comps, fails = result.comparisons, result.failures
     counts = result.summary()
     summary_rows = []
     for a in result.all_analyses:
@@ -395,65 +430,51 @@ def write_report(result: StudyResult, drawer: _Drawer, out: Path, title: str,
         f"{len(comps)} comparisons of circuit estimates with theory: {counts['abs_z_below_3']} "
         f"have |z| < 3 and {counts['within_budget']} lie within their error budget (3 standard "
         "errors plus the independently estimated systematic errors). "
-        + prose.theory_kinds_text(experiments, members)]
+        + prose.theory_kinds_text(result.experiments, result.members)]
     if failed_names:
         summary_text.append("Failed (see their sections): " + ", ".join(failed_names) + ".")
-    sections.append(Section("Summary", summary_text + _explain(comps)
-                            + terms_above_se_text(comps),
-        tables=[Table("Per experiment", ["experiment", "comparisons", "|z| < 3", "within budget",
-                                         "exact: |z| < 3", "exact: total"], summary_rows)]))
+    return Section("Summary", summary_text + _explain(comps) + terms_above_se_text(comps),
+                   tables=[Table("Per experiment", ["experiment", "comparisons", "|z| < 3",
+                                                    "within budget", "exact: |z| < 3",
+                                                    "exact: total"], summary_rows)])
 
-    circuit_par = [prose.circuit_paragraph([*experiments, *members])]
+
+def _circuit_section(result: StudyResult) -> Section:
+    circuit_par = [prose.circuit_paragraph([*result.experiments, *result.members])]
     tables = []
-    circuits: list = [*result.runs.values(), *member_analyses]
+    circuits: list = [*result.runs.values(), *result.member_analyses.values()]
     for r in circuits:
-        t, _ = fails.attempt("The circuit and its component values", "component table",
-                             lambda r=r: _mapping_table(r), r.exp.name)
+        t, _ = result.failures.attempt("The circuit and its component values",
+                                       "component table", lambda r=r: _mapping_table(r),
+                                       r.exp.name)
         if t is not None:
             tables.append(t)
-    sections.append(Section("The circuit and its component values", circuit_par, tables=tables))
+    return Section("The circuit and its component values", circuit_par, tables=tables)
 
-    if drawer.fig1_section is not None:
-        sections.append(drawer.fig1_section)
-    for exp in experiments:
+
+def _chapter_sections(result: StudyResult, out: Path, opts: RunOptions) -> list[Section]:
+    """The chapter "Beyond the paper": its opening, then one section per member (their
+    figures drawn here, their time added to the chapter's)."""
+    t_fig = time.perf_counter()
+    chapter_sections = []
+    for exp in result.members:
         if exp.name in result.failed:
-            sections.append(_failed_section(exp, result.failed[exp.name]))
+            chapter_sections.append(_failed_section(exp, result.failed[exp.name]))
             continue
-        figs, errs = drawer.figs[exp.name]
-        sections.append(Section(_experiment_title(exp), experiment_section_text(exp),
-                                figures=figs, error="; ".join(errs) if errs else None))
+        ma = result.member_analyses[exp.name]
+        title_ = f"{CHAPTER_TITLE}: {exp.name}"
+        sec = beyond.member_section(
+            ma, out, lambda what, fn, t=title_, n=exp.name: result.failures.attempt(t, what,
+                                                                                    fn, n))
+        chapter_sections.append(sec)
+        result.figures[exp.name] = [f.path for f in sec.figures]
+    result.member_wall += time.perf_counter() - t_fig
+    intro = beyond.chapter_intro(list(result.member_analyses.values()), result.member_wall,
+                                 opts.quick)
+    return [Section(CHAPTER_TITLE, intro), *chapter_sections]
 
-    sections.extend(drawer.oq_section)
-    sections.extend(drawer.measured.sections)
 
-    if members:
-        t_fig = time.perf_counter()
-        chapter_sections = []
-        for exp in members:
-            if exp.name in result.failed:
-                chapter_sections.append(_failed_section(exp, result.failed[exp.name]))
-                continue
-            ma = result.member_analyses[exp.name]
-            title_ = f"{CHAPTER_TITLE}: {exp.name}"
-            sec = beyond.member_section(
-                ma, out, lambda what, fn, t=title_, n=exp.name: fails.attempt(t, what, fn, n))
-            chapter_sections.append(sec)
-            result.figures[exp.name] = [f.path for f in sec.figures]
-        result.member_wall += time.perf_counter() - t_fig
-        sections.append(Section(CHAPTER_TITLE, beyond.chapter_intro(member_analyses,
-                                                                   result.member_wall,
-                                                                   opts.quick)))
-        sections.extend(chapter_sections)
-
-    sections.append(Section("All comparisons and their error budgets", [
-        prose.budget_text([*experiments, *members])],
-        tables=[_comparison_table(comps, "Comparisons")]))
-
-    result.phases.items.append({"phase": "figures and page", "experiment": None,
-                                "thread": "main", "start_s": round(draw0 - result.t0, 3),
-                                "seconds": round(time.perf_counter() - draw0, 3)})
-    wall = time.perf_counter() - result.t0
-    provenance = result.provenance(wall)
+def _provenance_sections(provenance: dict, wall: float) -> list[Section]:
     prov_rows = [[k, json.dumps(v, default=str)[:400]] for k, v in provenance.items()
                  if k not in ("deck_hashes", "phases", "critical_path")]
     crit = {"critical_path_s": provenance["critical_path_s"],
@@ -461,44 +482,40 @@ def write_report(result: StudyResult, drawer: _Drawer, out: Path, title: str,
     prov_rows.insert(next((i + 1 for i, r in enumerate(prov_rows) if r[0] == "critical_path_s"),
                           len(prov_rows)),
                      ["critical path (unlimited cores)", critical_path_text(crit, wall)])
-    sections.append(Section("Provenance", [
-        "Everything needed to reproduce this report: model parameters, seeds, ngspice version, "
-        "the sha256 of every deck (full list in metrics.json), software versions, wall time."],
-        tables=[Table("run provenance", ["item", "value"], prov_rows)]))
-    sections.append(Section("References", [
-        "Equations and figures are cited by their numbers in Baule, Touchette & Cohen "
-        "(2011); docs/equations.md maps the paper's LaTeX labels to them."]
-        # references_html() escapes every text itself and adds only the DOI/arXiv links
-        + [Markup(p) for p in references_html()]))
+    return [
+        Section("Provenance", [
+            "Everything needed to reproduce this report: model parameters, seeds, ngspice "
+            "version, the sha256 of every deck (full list in metrics.json), software versions, "
+            "wall time."],
+            tables=[Table("run provenance", ["item", "value"], prov_rows)]),
+        Section("References", [
+            "Equations and figures are cited by their numbers in Baule, Touchette & Cohen "
+            "(2011); docs/equations.md maps the paper's LaTeX labels to them."]
+            # references_html() escapes every text itself and adds only the DOI/arXiv links
+            + [Markup(p) for p in references_html()])]
 
-    metrics = result.metrics(provenance)
-    # (ensure_ascii=False: a path under a non-UTF-8 locale is written as its own UTF-8 bytes,
-    # not as escaped lone surrogates; files.write_text)
-    write_text(out / "metrics.json", json.dumps(metrics, indent=2, default=str,
-                                                ensure_ascii=False))
 
-    paper_wall, member_wall = result.paper_wall, result.member_wall
+def _intro(result: StudyResult, provenance: dict, wall: float, out: Path,
+           opts: RunOptions) -> list:
+    experiments, members = result.experiments, result.members
     timing = (f"{wall:.0f} s in all; {prose.main_part(experiments)} were complete after "
-              f"{paper_wall:.0f} s, and the chapter '{CHAPTER_TITLE}' took "
-              f"{member_wall:.0f} s of its own threads' time" if members and experiments
+              f"{result.paper_wall:.0f} s, and the chapter '{CHAPTER_TITLE}' took "
+              f"{result.member_wall:.0f} s of its own threads' time" if members and experiments
               else f"{wall:.0f} s")
     software = provenance["software"]
     intro = [f"Generated {provenance['created']} by analogue {software['analogue']} "
-             f"with ngspice {provenance['ngspice_version']} ({'quick' if opts.quick else 'full'} run, "
-             f"{timing}). Model units throughout: velocity, time and work rate of the "
+             f"with ngspice {provenance['ngspice_version']} ({'quick' if opts.quick else 'full'} "
+             f"run, {timing}). Model units throughout: velocity, time and work rate of the "
              f"reduced equation {prose.equation_text([*experiments, *members])} (Baule, "
              "Touchette & Cohen).",
              "Every figure is also a PNG file in this directory; every number is in metrics.json."]
-    if fails.items:
-        intro.append(f"{len(fails.items)} section(s) failed; they are marked below with their "
-                     "errors, and listed in metrics.json under 'failures'.")
+    if result.failures.items:
+        intro.append(f"{len(result.failures.items)} section(s) failed; they are marked below "
+                     "with their errors, and listed in metrics.json under 'failures'.")
     board = _board_link(out, experiments)
     if board is not None:
         intro.append(board)
-    index = write_page(out / "index.html", title, intro, sections)
-    result.page = index
-    _log(f"report written: {index}")
-    return index
+    return intro
 
 
 def _failed_section(exp: Experiment, err: str) -> Section:

@@ -1,10 +1,10 @@
 """The report job's critical path (issue 22, item 1): the wall time it would take with
 unlimited cores, i.e. the longest chain of dependent work, computed from the phase timeline
-the report records (``provenance["phases"]``, :class:`analogue.report.pipeline._Phases`).
+the report records (``provenance["phases"]``, :class:`analogue.study.schedule.Phases`).
 
 Pure functions over the recorded timeline: :func:`longest_chain` on any dependency graph,
-:func:`report_critical_path` with the report's dependencies (as :func:`analogue.report.
-pipeline._build` waits on its futures):
+:func:`report_critical_path` with the report's dependencies (as :func:`analogue.study.run.
+_schedule` waits on its futures):
 
 - roots (need nothing): an experiment's ``exact theory`` and ``bandwidth term``, the ``open
   question``, its ``circuit runs``, each ``family member`` (its wait for the paper's chapters
