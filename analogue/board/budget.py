@@ -34,7 +34,8 @@ from ..study.observables import (
 from .design import BoardDesign
 from .noise_chain import filtered_noise
 
-__all__ = ["SE_MULTIPLIER", "bandwidth_pair", "board_comparisons", "observables_fn"]
+__all__ = ["MIN_JACKKNIFE_GROUPS", "SE_MULTIPLIER", "bandwidth_pair", "board_comparisons",
+           "observables_fn"]
 
 SE_MULTIPLIER = 2.0
 
@@ -70,20 +71,40 @@ def _term(pair: dict, name: str) -> float:
     return abs(d) + SE_MULTIPLIER * se
 
 
+# below this many jackknife groups (twice as many replicas) the run's own error estimate has
+# too few degrees of freedom; the SDE ensemble's error scaled to the run's size is used
+MIN_JACKKNIFE_GROUPS = 8
+
+
 def board_comparisons(experiment: str, design: BoardDesign, board_ens: Ensemble, *, fn,
-                      threshold: float, taus, band: dict, integ: dict | None) -> tuple[list, dict]:
+                      threshold: float, taus, band: dict, integ: dict | None,
+                      model_se: dict | None = None) -> tuple[list, dict]:
     """Comparisons (dicts in the metrics.json schema, with a ``budget`` breakdown) of the
-    board ensemble against exact theory of the requested model; returns (rows, circuit)."""
+    board ensemble against exact theory of the requested model; returns (rows, circuit).
+
+    ``circuit_stderr`` is the jackknife over the board's replicas, or, where that has fewer
+    than :data:`MIN_JACKKNIFE_GROUPS` groups and ``model_se`` gives one, the standard error of
+    a run of this size from an SDE ensemble of the realised model
+    (:func:`analogue.board.job.stderr_at`); ``stderr_method`` says which, and
+    ``jackknife_stderr`` keeps the run's own."""
     model = design.model
     circ = jackknife(fn, board_ens)
+    groups = max(2, min(32, board_ens.replicas // 2))   # what jackknife() used
+    use_model = model_se is not None and groups < MIN_JACKKNIFE_GROUPS
     ex = exact_stationary(model, threshold=threshold, taus=taus)
     real0 = design.realised.replace(epsilon=0.0)
     ex_r0 = exact_stationary(real0, threshold=threshold, taus=taus)
     ex_r = exact_stationary(design.realised, threshold=threshold, taus=taus)
     rows = []
-    for k, (val, se) in circ.items():
+    for k, (val, se_jk) in circ.items():
         if k.startswith("diffusion"):
             continue  # needs far longer runs than the board job makes (reported, not compared)
+        if use_model and model_se and model_se.get(k):
+            se = model_se[k]
+            method = (f"SDE ensemble of the realised model scaled to {board_ens.replicas} "
+                      f"replicas (the run's jackknife has {groups} groups)")
+        else:
+            se, method = se_jk, f"jackknife over the board's replicas ({groups} groups)"
         terms = {"rounding": ex_r0[k] - ex[k], "smoothing": ex_r[k] - ex_r0[k],
                  "bandwidth": _term(band, k), "integration": _term(integ or {}, k)}
         total = sum(abs(v) for v in terms.values())
@@ -92,7 +113,8 @@ def board_comparisons(experiment: str, design: BoardDesign, board_ens: Ensemble,
         stat = Z_LIMIT * se
         dominant = max(terms, key=lambda t: abs(terms[t])) if total > stat else "statistical"
         rows.append({"experiment": experiment, "observable": k, "circuit": float(val),
-                     "circuit_stderr": float(se), "theory": float(ex[k]), "theory_kind": "exact",
+                     "circuit_stderr": float(se), "stderr_method": method,
+                     "jackknife_stderr": float(se_jk), "theory": float(ex[k]), "theory_kind": "exact",
                      "z": float(z) if math.isfinite(z) else None,
                      "within_budget": bool(abs(diff) <= stat + total),
                      "budget": {**{t: float(v) for t, v in terms.items()}, "total": float(total),

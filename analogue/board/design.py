@@ -68,7 +68,7 @@ class BoardSpec:
     velocity (None: from sigma_volts and machine_unit); time_scale: seconds per model time unit;
     capacitance: mass capacitor (F, an E12 value); opamp: macromodel name of the integrator and
     the Bessel buffer (``OPA2140``, the default: its guaranteed 120 uV offset is inside the
-    limit the observables set, 327 uV on the stick design,
+    limit the observables set, 466 uV on the stick design,
     :func:`analogue.board.tolerance.offset_limit`; ``OPA2197``; ``TL072``, whose 10 mV is
     not; or their ``_worst`` sets);
     servo_opamp: the current sources' servos, whose inputs sit ``v_set`` from a rail (a

@@ -17,7 +17,8 @@ Steps (each result carries its seeds and sizes):
    enable low, a transient started by the reset switch (the OTA alternative was dropped,
    issue 21: it puts up to 10 V across an input rated for 5 V, and with a divider that fits
    its width is no better than the bridge's);
-6. schematic.svg, bom.csv, board.net (KiCad), board.cir, metrics.json, index.html.
+6. schematic.svg, bom.csv, board.net and board.kicad_sch (KiCad), board.cir, metrics.json,
+   index.html.
 """
 from __future__ import annotations
 
@@ -40,12 +41,13 @@ from . import budget, calibration, tolerance
 from .bench import bench_checks
 from .bom import write_bom
 from .kicad import write_kicad_netlist
+from .kicad_sch import write_kicad_schematic
 from .design import BoardSpec, design_board
 from .netlist import build_board_deck, nominal_instance
 from .runner import noise_directory, run_board
 from .schematic import draw_schematic
 
-__all__ = ["FULL", "QUICK", "JobSettings", "run_board_job", "theory_observables"]
+__all__ = ["FULL", "QUICK", "JobSettings", "run_board_job", "stderr_at", "theory_observables"]
 
 
 @dataclass(frozen=True)
@@ -168,8 +170,11 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
     log("board: noise-chain design study (DAC rate, Bessel corner)")
     study = bandwidth_study(model, fn, seed=plan.board_pair, replicas=min(128, st.pair_replicas),
                             t_end=min(20.0, st.t_end), v0=list(exp.v0))
+    # the run's own statistical error from a 256-replica SDE ensemble of its size where the
+    # run is too small for its own jackknife (the quick job's 4 replicas: one degree of freedom)
+    se_run = stderr_at(design, fn, seed=plan.board_pair, replicas=st.replicas, t_end=st.t_end)
     rows, _circ = budget.board_comparisons(exp.name, design, ens, fn=fn, threshold=thr, taus=taus,
-                                          band=band, integ=integ)
+                                          band=band, integ=integ, model_se=se_run)
 
     # ------------------------------------------------------------------ 4. sensitivities
     log("board: sensitivities (exact theory, linearised)")
@@ -234,6 +239,7 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
     matched["offset_limit"] = tolerance.offset_limit(design, grads, se_ref, MATCH_FRACTION, tol)
     write_bom(design, out / "bom.csv", matched=tuple(matched["bom_refs"]))
     write_kicad_netlist(design, out / "board.net", matched=tuple(matched["bom_refs"]))
+    write_kicad_schematic(design, out / "board.kicad_sch", matched=tuple(matched["bom_refs"]))
     deck = build_board_deck(design, nominal, v0=[float(exp.v0[0])], t_end=exp.t_end,
                             sample_dt=SAMPLE_DT, seed=seed, noise_dir=out)
     # the deck names its DAC file without a directory (ngspice lower-cases paths): it lies
@@ -382,15 +388,38 @@ CLASS_PARTS = {"resistors": ("R1", "R2", "R3", "R4", "R5"), "references": ("VR1"
 MATCH_FRACTION = 0.5
 
 
+STDERR_POOL = 256
+
+
+def stderr_at(design, fn, *, seed: int, replicas: int, t_end: float, pool: int = STDERR_POOL
+              ) -> dict:
+    """The statistical standard error of every observable of ``fn`` in a run of ``replicas``
+    replicas of length ``t_end`` of the realised model: the jackknife of a seeded SDE ensemble
+    of ``max(pool, replicas)`` replicas of that length (white noise), scaled by
+    ``sqrt(pool/replicas)``: the replicas are independent and the observables pool them with
+    equal weights, so the error goes as 1/sqrt(replicas) (exactly for the means and
+    probabilities, to first order for the variances).  A jackknife of the run itself has
+    ``replicas/2`` groups: one degree of freedom at 4 replicas (the quick job), where it gave
+    0.001 on a stick fraction whose error is about 0.02, and a 32-replica one varies by tens of
+    per cent with the seed."""
+    from ..montecarlo import simulate_sde
+    n = max(int(pool), int(replicas))
+    v0 = sample_stationary(design.realised, n, seed)
+    ens = simulate_sde(design.realised, v0=v0, t_end=t_end, replicas=n, seed=seed,
+                       sample_dt=SAMPLE_DT)
+    scale = math.sqrt(n / replicas)
+    # 64 groups: the error estimate's own relative error ~1/sqrt(2 x 63) = 9 % (32 groups:
+    # 13 %, measured 415-505 uV for the offset limit across three seeds; 128 groups cost 25 s
+    # on the full job's length, measured)
+    jk = budget.jackknife(fn, ens, groups=64)
+    return {k: float(se) * scale for k, (_v, se) in jk.items()}
+
+
 def reference_stderr(design, fn, *, seed: int, settings: JobSettings = FULL) -> dict:
     """The statistical standard error of every compared observable in the *full* job's nominal
-    run (``settings``: its replicas and length), from a seeded SDE ensemble of the realised
-    model (white noise; the same in --quick and full runs, so the matching advice is too)."""
-    from ..montecarlo import simulate_sde
-    v0 = sample_stationary(design.realised, settings.replicas, seed)
-    ens = simulate_sde(design.realised, v0=v0, t_end=settings.t_end, replicas=settings.replicas,
-                       seed=seed, sample_dt=SAMPLE_DT)
-    return {k: float(se) for k, (_v, se) in budget.jackknife(fn, ens).items()}
+    run (``settings``: its replicas and length), :func:`stderr_at` (the same in --quick and
+    full runs, so the matching advice is too)."""
+    return stderr_at(design, fn, seed=seed, replicas=settings.replicas, t_end=settings.t_end)
 
 
 def recommend_matching(sens: dict, se_ref: dict, fraction: float = MATCH_FRACTION) -> dict:

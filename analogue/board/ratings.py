@@ -5,9 +5,16 @@ inverting input nodes, role); :func:`common_mode_margins` measures, over a trans
 with every node (``build_board_deck(..., save_all=True)``), how far each op-amp's inputs stay
 inside the *guaranteed* input common-mode range of its part (the ``_worst`` set): a negative
 margin is a part outside its datasheet range, where a TL07x inverts its output.
+:func:`part_stresses` reads every other absolute maximum rating a simulated run can reach
+(MOSFET voltages and dissipation, resistor power, diode reverse voltage, switch channels
+inside their supplies, op-amp output current), :func:`worst_stresses` merges the bench modes,
+and :func:`unpowered_inputs` checks, on the parts list, that every DAQ input reaches its first
+IC pin through enough resistance to keep that pin inside its rating with the supply off.
 """
 from __future__ import annotations
 
+import heapq
+import math
 import re
 
 import numpy as np
@@ -72,9 +79,6 @@ def unpowered_inputs(parts) -> list[dict]:
     diode drop from its unpowered rails, against the pin's absolute maximum
     (:data:`PIN_CURRENT_LIMIT`).  A pin on the connector's own net has R = 0 and an unbounded
     current (limited only by the instrument, which a design must not rely on)."""
-    import heapq
-    import math
-
     edges: dict[str, list] = {}
     pins_on: dict[str, list] = {}
     for p in parts:
@@ -164,7 +168,7 @@ def part_stresses(design: BoardDesign, board: BoardInstance, deck_text: str, plo
                      "unit": unit, "ok": bool(abs(worst) <= limit + 1e-9)})
 
     for m in _M.finditer(top):
-        name, d, g, s, kind = m.groups()
+        _name, d, g, s, kind = m.groups()
         part, vgs_max, vds_max, p_max = MOSFET_LIMITS[kind]
         top_side = kind == "pmosx"
         r_s = board.values["R_S_top" if top_side else "R_S_bot"]

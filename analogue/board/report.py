@@ -107,7 +107,8 @@ def write_report(out: Path, exp, design, metrics: dict) -> Path:
     sections.append(Section("Schematic and bill of materials", paragraphs=[
         Markup('Vector schematic (overview and a parts sheet with every designator): '
                '<a href="schematic.svg">schematic.svg</a>; KiCad netlist (Pcbnew: File, Import, '
-               'Netlist): <a href="board.net">board.net</a>; SPICE deck: '
+               'Netlist): <a href="board.net">board.net</a>; KiCad schematic (every part on net '
+               'labels): <a href="board.kicad_sch">board.kicad_sch</a>; SPICE deck: '
                '<a href="board.cir">board.cir</a>; BOM: <a href="bom.csv">bom.csv</a>.')],
         figures=figs, tables=[Table("Bill of materials (one channel)", bom[0], bom[1:])]))
 
@@ -131,7 +132,9 @@ def write_report(out: Path, exp, design, metrics: dict) -> Path:
         "model minus requested, exact theory), smoothing (bridge tanh width, exact theory), "
         f"bandwidth (SDE pair coloured minus white, {st['pair_replicas']} replicas, |d| + 2 se), "
         f"integration (reltol 1e-3 against 1e-4 on the same noise, {st['integ_replicas']} "
-        "replicas), statistical = 3 standard errors (jackknife over replicas)."),
+        "replicas), statistical = 3 standard errors: "
+        + (metrics["comparisons"][0].get("stderr_method", "jackknife over replicas")
+           if metrics["comparisons"] else "jackknife over replicas") + "."),
         _trajectory_text(metrics.get("trajectory_check"))],
         tables=[Table("Nominal board vs exact theory", ["observable", "board", "stderr", "theory",
                                                         "z", "rounding", "smoothing", "bandwidth",

@@ -236,7 +236,7 @@ def offset_limit(design: BoardDesign, grads: dict, se_ref: dict, fraction: float
     ``se_ref[k]`` (the matching rule of :func:`analogue.board.job.recommend_matching`,
     applied to the worst case instead of the spread).  ``guaranteed_V``: the part's
     guaranteed offset plus its guaranteed drift over the warmest bench temperature of
-    ``tol`` (measured on the stick design: limit 327 uV, set by P(v>0); OPA2140 127 uV,
+    ``tol`` (measured on the stick design: limit 466 uV, set by P(v>0); OPA2140 127 uV,
     TL072 10.2 mV)."""
     tol = Tolerances() if tol is None else tol
     nom = nominal_instance(design)

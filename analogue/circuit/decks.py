@@ -71,6 +71,8 @@ __all__ = [
     "value_limits",
 ]
 
+#: the name a run_decks call without one shows on its progress bar or lines
+DEFAULT_LABEL = "ngspice decks"
 log = logging.getLogger("analogue.circuit.simulate")  # the name its messages always had
 store_log = logging.getLogger("analogue.circuit.store")
 
@@ -476,11 +478,150 @@ def _completed(futures):
         yield from done
 
 
+def _as_runner(runner: Runner | None, store: Any, workers: int | None, scheduler: Any,
+               progress: bool | None, timeout: float, label: str, executor: Any) -> Runner:
+    """The Runner of a :func:`run_decks` call: ``runner``, or one made of the keywords of
+    earlier versions (validated by the Runner), never both."""
+    if runner is None:
+        return Runner(store=store, workers=workers, scheduler=scheduler, progress=progress,
+                      timeout=timeout, label=label, executor=executor)
+    if not isinstance(runner, Runner):
+        raise TypeError(f"runner must be an analogue.Runner, got {type(runner).__name__}")
+    given = [k for k, v, default in (
+        ("store", store, None), ("workers", workers, None), ("scheduler", scheduler, None),
+        ("progress", progress, None), ("timeout", timeout, DEFAULT_TIMEOUT),
+        ("label", label, DEFAULT_LABEL), ("executor", executor, None)) if v != default]
+    if given:
+        raise TypeError(f"run_decks: pass either runner= or the run keywords "
+                        f"({', '.join(given)}), not both")
+    return runner if runner.label is not None else runner.replace(label=label)
+
+
+def _tasks(decks: Sequence[Deck], times: np.ndarray, v0: np.ndarray, *, timeout: float,
+           group: str, limits: Mapping[str, float] | None) -> list[BatchTask]:
+    """One :class:`BatchTask` per deck, each with its slice of ``v0``."""
+    tasks, start = [], 0
+    for b, deck in enumerate(decks):
+        n = int(deck.replicas)
+        vec = deck.vectors
+        tasks.append(BatchTask(index=b, text=deck.text, v_names=tuple(vec["v"]),
+                               x_names=tuple(vec["x"]) if vec.get("x") else None,
+                               to_model_v=float(deck.to_model_v), to_model_x=float(deck.to_model_x),
+                               time_scale=float(deck.time_scale), times=times,
+                               v0=np.asarray(v0[start:start + n], dtype=float),
+                               timeout=timeout, group=group,
+                               noise_names=tuple(vec["noise"]) if vec.get("noise") else None,
+                               noise_dt=float(getattr(deck, "noise_dt", 0.0) or 0.0),
+                               to_model_noise=float(getattr(deck, "to_model_noise", 1.0)),
+                               xs_names=tuple(vec["x_spring"]) if vec.get("x_spring") else None,
+                               xs_initial=float(getattr(deck, "x_spring_initial", 0.0)),
+                               files=tuple(str(f) for f in getattr(deck, "noise_files", ())),
+                               limits=tuple(sorted((limits or {}).items()))))
+        start += n
+    if start != len(v0):
+        raise ValueError(f"v0 has {len(v0)} entries but the decks hold {start} replicas")
+    return tasks
+
+
+_ARRAYS = ("v", "x", "noise", "x_spring")
+
+
+def _from_store(run_store, tasks: list[BatchTask], keys: list[str], version: str) -> list:
+    """Each task's stored result (checked against the task; a damaged entry is quarantined
+    by the store and counts as missing), or None."""
+    results: list = [None] * len(tasks)
+    if run_store is None:
+        return results
+    try:
+        run_store.clean_tmp()
+    except OSError:
+        pass
+    for task, key in zip(tasks, keys):
+        hit = run_store.get(key, check=lambda a, m, task=task: _entry_problem(task, version, a, m))
+        if hit is not None:
+            arrays, meta = hit
+            results[task.index] = {**{k: arrays[k] for k in _ARRAYS if k in arrays},
+                                   "info": meta.get("info", {})}
+    return results
+
+
+def _where(runner: Runner) -> str:
+    """"local", "dask" or the executor's type name (for messages and ``info``)."""
+    if runner.executor is not None:
+        return "dask" if is_client(runner.executor) else type(runner.executor).__name__
+    return "local" if runner.scheduler is None else "dask"
+
+
+def _run_pending(todo: list[BatchTask], results: list, *, runner: Runner, workers: int,
+                 run_store, keys: list[str], version: str, group: str) -> None:
+    """Run ``todo`` on the runner's executor, checking each result before it is stored (as
+    each deck finishes: an interrupted call resumes from the store) and put in ``results``.
+    SIGINT/SIGTERM/SIGHUP, a failure or a cancelled deck kill the run's ngspice process
+    groups (here or on the Dask workers) and unwind, finished decks kept in the store."""
+    where = _where(runner)
+    with _ng.interrupt_guard():
+        ex, closer, client = _executor(workers, runner.scheduler, len(todo), runner.executor)
+        # decks done of the total and the time left (bar, or a line every 30 s)
+        assert runner.label is not None
+        shown = DeckProgress(progress_mode(runner.progress, len(todo)), runner.label,
+                             len(todo), workers)
+        futures: dict = {}
+        failed = True
+        store_ok = True
+        try:
+            futures = {ex.submit(run_batch, t): t for t in todo}
+            for fut in _completed(futures):
+                task = futures[fut]
+                out = fut.result()
+                problem = _result_problem(task, out)
+                if problem is None and not isinstance(out.get("info"), Mapping):
+                    problem = "it carries no info dict"
+                if problem is not None:
+                    # checked before it is stored or returned, whoever ran it
+                    who = {"local": "ngspice", "dask": "the Dask worker"}.get(
+                        where, f"the executor {where}")
+                    raise _ng.NgspiceError(f"deck {task.index}: what {who} returned is "
+                                           f"not a result of the deck ({problem}); nothing "
+                                           f"of it was stored")
+                results[task.index] = out
+                worker_version = out["info"].get("ngspice_version")
+                if run_store is not None and worker_version != version:
+                    # The key names this machine's ngspice; a worker with another version
+                    # would file its numbers under the wrong key.
+                    log.warning("deck %d ran on ngspice %s, not %s: not stored", task.index,
+                                worker_version, version)
+                elif run_store is not None and store_ok:
+                    arrays = {k: out[k] for k in _ARRAYS if k in out}
+                    try:
+                        run_store.put(keys[task.index], {**arrays, "t": task.times},
+                                      _batch_meta(task, version, out["info"]))
+                    except OSError as exc:
+                        # Read-only or full: the results are still good; say so once.
+                        store_ok = False
+                        store_log.warning(
+                            "analogue: run store %s is not writable (%s): results are "
+                            "returned but not stored", run_store.root,
+                            " ".join(f"{type(exc).__name__}: {exc}".split())[:200])
+                shown.update(out["info"].get("wall_time"))
+            failed = False
+        finally:
+            if failed:
+                for f in futures:
+                    f.cancel()
+                if client is None:
+                    _ng.terminate_group(group)  # our own ngspice processes still running
+                else:
+                    _stop_remote(client, group)  # theirs, on the Dask workers
+            shown.close()
+            if closer is not None:
+                closer()
+
+
 def run_decks(decks: Sequence[Deck], times: ArrayLike, v0: ArrayLike, *,
               store: str | PathLike[str] | bool | None = None, workers: int | None = None,
               scheduler: str | None = None, progress: bool | None = None,
               timeout: float = DEFAULT_TIMEOUT, records: dict[str, Any] | None = None,
-              label: str = "ngspice decks", executor: Any = None,
+              label: str = DEFAULT_LABEL, executor: Any = None,
               limits: Mapping[str, float] | None = None, runner: Runner | None = None
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, dict[str, Any]]:
     """Run (or load from the store) a list of decks and stack their replicas.
@@ -504,145 +645,34 @@ def run_decks(decks: Sequence[Deck], times: ArrayLike, v0: ArrayLike, *,
     floats, finite, within ``limits``) before it is stored or returned: anything else is an
     NgspiceError naming the deck, and nothing of it is stored.
     """
-    if runner is not None:
-        given = [k for k, v, default in (
-            ("store", store, None), ("workers", workers, None), ("scheduler", scheduler, None),
-            ("progress", progress, None), ("timeout", timeout, DEFAULT_TIMEOUT),
-            ("label", label, "ngspice decks"), ("executor", executor, None)) if v != default]
-        if not isinstance(runner, Runner):
-            raise TypeError(f"runner must be an analogue.Runner, got {type(runner).__name__}")
-        if given:
-            raise TypeError(f"run_decks: pass either runner= or the run keywords "
-                            f"({', '.join(given)}), not both")
-        store, workers, scheduler = runner.store, runner.workers, runner.scheduler
-        progress, timeout, executor = runner.progress, runner.timeout, runner.executor
-        label = runner.label if runner.label is not None else label
+    runner = _as_runner(runner, store, workers, scheduler, progress, timeout, label, executor)
+    label = runner.label or label
     times = np.asarray(times, dtype=float)
     v0 = np.asarray(v0, dtype=float)
-    if workers is None:
-        workers = usable_cpus()
-    workers = checks.integer("workers", workers, minimum=1)
-    timeout = checks.positive("timeout", timeout)
-    check_scheduler(scheduler)
-    check_executor(executor)
-    if executor is not None and scheduler is not None:
-        raise ValueError("pass either scheduler= (a Dask address) or executor=, not both")
-    run_store = open_store(store)
+    n_workers = runner.workers if runner.workers is not None else usable_cpus()
+    run_store = open_store(runner.store)
     version = _ng.ngspice_version()  # also: a missing ngspice fails here, with the hint
-    tasks, keys, offsets = [], [], [0]
     group = uuid.uuid4().hex
-    for b, deck in enumerate(decks):
-        n = int(deck.replicas)
-        offsets.append(offsets[-1] + n)
-        vec = deck.vectors
-        x_names = tuple(vec["x"]) if vec.get("x") else None
-        noise_names = tuple(vec["noise"]) if vec.get("noise") else None
-        tasks.append(BatchTask(index=b, text=deck.text, v_names=tuple(vec["v"]), x_names=x_names,
-                               to_model_v=float(deck.to_model_v), to_model_x=float(deck.to_model_x),
-                               time_scale=float(deck.time_scale), times=times,
-                               v0=np.asarray(v0[offsets[b]:offsets[b + 1]], dtype=float),
-                               timeout=timeout, group=group, noise_names=noise_names,
-                               noise_dt=float(getattr(deck, "noise_dt", 0.0) or 0.0),
-                               to_model_noise=float(getattr(deck, "to_model_noise", 1.0)),
-                               xs_names=tuple(vec["x_spring"]) if vec.get("x_spring") else None,
-                               xs_initial=float(getattr(deck, "x_spring_initial", 0.0)),
-                               files=tuple(str(f) for f in getattr(deck, "noise_files", ())),
-                               limits=tuple(sorted((limits or {}).items()))))
-        keys.append(batch_key(deck.text, times, version))
+    tasks = _tasks(decks, times, v0, timeout=runner.timeout, group=group, limits=limits)
+    keys = [batch_key(t.text, times, version) for t in tasks]
     note_keys(keys)  # an experiment's index (analogue store ls) lists every entry it used
-    if offsets[-1] != len(v0):
-        raise ValueError(f"v0 has {len(v0)} entries but the decks hold {offsets[-1]} replicas")
 
-    results: list = [None] * len(tasks)
-    from_store = 0
-    if run_store is not None:
-        try:
-            run_store.clean_tmp()
-        except OSError:
-            pass
-        for b, key in enumerate(keys):
-            task = tasks[b]
-            hit = run_store.get(
-                key, check=lambda a, m, task=task: _entry_problem(task, version, a, m))
-            if hit is not None:
-                arrays, meta = hit
-                results[b] = {**{k: arrays[k] for k in ("v", "x", "noise", "x_spring")
-                                 if k in arrays},
-                              "info": meta.get("info", {})}
-                from_store += 1
+    results = _from_store(run_store, tasks, keys, version)
+    from_store = sum(r is not None for r in results)
     todo = [t for t in tasks if results[t.index] is None]
-    if executor is not None:
-        where = "dask" if is_client(executor) else type(executor).__name__
-    else:
-        where = "local" if scheduler is None else "dask"
+    where = _where(runner)
     log.info("analogue.simulate: %d decks, %d from the store, %d to run (%s, %s)", len(tasks),
              from_store, len(todo), where,
-             f"{workers} ngspice processes" if where == "local"
-             else repr(executor if executor is not None else scheduler))
+             f"{n_workers} ngspice processes" if where == "local"
+             else repr(runner.executor if runner.executor is not None else runner.scheduler))
     t0 = _time.perf_counter()
     if todo:
-        # SIGINT/SIGTERM/SIGHUP kill the ngspice groups and unwind through the finally
-        # below (temporary directories removed, finished decks kept in the store).
-        with _ng.interrupt_guard():
-            ex, closer, client = _executor(workers, scheduler, len(todo), executor)
-            # decks done of the total and the time left (bar, or a line every 30 s)
-            shown = DeckProgress(progress_mode(progress, len(todo)), label, len(todo),
-                                 workers)
-            futures = {}
-            failed = True
-            store_ok = True
-            try:
-                futures = {ex.submit(run_batch, t): t for t in todo}
-                for fut in _completed(futures):
-                    task = futures[fut]
-                    out = fut.result()
-                    problem = _result_problem(task, out)
-                    if problem is None and not isinstance(out.get("info"), Mapping):
-                        problem = "it carries no info dict"
-                    if problem is not None:
-                        # checked before it is stored or returned, whoever ran it
-                        who = {"local": "ngspice", "dask": "the Dask worker"}.get(
-                            where, f"the executor {where}")
-                        raise _ng.NgspiceError(f"deck {task.index}: what {who} returned is "
-                                               f"not a result of the deck ({problem}); nothing "
-                                               f"of it was stored")
-                    results[task.index] = out
-                    worker_version = out["info"].get("ngspice_version")
-                    if run_store is not None and worker_version != version:
-                        # The key names this machine's ngspice; a worker with another version
-                        # would file its numbers under the wrong key.
-                        log.warning("deck %d ran on ngspice %s, not %s: not stored", task.index,
-                                    worker_version, version)
-                    elif run_store is not None and store_ok:
-                        # Written as each deck finishes: an interrupted call resumes from here.
-                        arrays = {k: out[k] for k in ("v", "x", "noise", "x_spring") if k in out}
-                        try:
-                            run_store.put(keys[task.index], {**arrays, "t": times},
-                                   _batch_meta(task, version, out["info"]))
-                        except OSError as exc:
-                            # Read-only or full: the results are still good; say so once.
-                            store_ok = False
-                            store_log.warning(
-                                "analogue: run store %s is not writable (%s): results are "
-                                "returned but not stored", run_store.root,
-                                " ".join(f"{type(exc).__name__}: {exc}".split())[:200])
-                    shown.update(out["info"].get("wall_time"))
-                failed = False
-            finally:
-                if failed:
-                    for f in futures:
-                        f.cancel()
-                    if client is None:
-                        _ng.terminate_group(group)  # our own ngspice processes still running
-                    else:
-                        _stop_remote(client, group)  # theirs, on the Dask workers
-                shown.close()
-                if closer is not None:
-                    closer()
+        _run_pending(todo, results, runner=runner, workers=n_workers, run_store=run_store,
+                     keys=keys, version=version, group=group)
     wall = _time.perf_counter() - t0
     if todo:
         log.info("analogue.simulate: %d decks ran in %.2f s", len(todo), wall)
-    if progress_mode(progress, len(todo)) == "line":
+    if progress_mode(runner.progress, len(todo)) == "line":
         print(f"{label}: {len(tasks)} decks ({from_store} from the store, {len(todo)} run) in "
               f"{wall:.1f} s", file=sys.stderr, flush=True)
     v = np.vstack([r["v"] for r in results]) if results else np.empty((0, times.size))

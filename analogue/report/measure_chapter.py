@@ -155,12 +155,19 @@ def _fp_text(a: measure.MeasureAnalysis, comps: list[Comparison]) -> str:
         bits.append(f"P(T <= {th.values.t_prob:.3g}) = {c.theory:.3f} exact, {c.circuit:.3f} "
                     f"+- {c.circuit_stderr:.3f} circuit")
         parts.append(", ".join(bits))
-    m = a.theory.model
-    why = ("Noise makes the mean time to rest shorter than t_a in the stick regime (a path may "
-           "reach v = 0 early, and the mean weighs the early ones)" if m.regime == "stick" else
-           "Noise makes rest possible at all where the noise-free path slides on to v_ss, and "
-           "shortens the crossing of paths started below 0")
-    return f"{a.experiment}: " + "; ".join(parts) + f". {why}."
+    ratios = [th.mean / th.t_a for th in a.theory.first_passage.values()
+              if th.values.mean_label is not None and math.isfinite(th.t_a)]
+    stays = [th for th in a.theory.first_passage.values() if not math.isfinite(th.t_a)]
+    why = []
+    if ratios:
+        why.append("with noise the mean time to rest is "
+                   + " and ".join(f"{r:.2f}" for r in ratios)
+                   + " of the noise-free stick time")
+    if stays:
+        why.append("where the noise-free path slides on to v_ss, only the noise brings the "
+                   "object to rest")
+    parts.append("; ".join(why))
+    return f"{a.experiment}: " + "; ".join(p for p in parts if p) + "."
 
 
 def _transport_text(a: measure.MeasureAnalysis, paper_comps: list[Comparison]) -> str:

@@ -118,16 +118,18 @@ def report(experiment, out=None, *, quick: bool = False, opts: RunOptions | None
     path or an :class:`~analogue.circuit.experiments.Experiment`; ``out``: the report
     directory (default ``report/<name>``); ``quick``: the quick sizes (ignored when ``opts``,
     a :class:`~analogue.study.settings.RunOptions`, is given: its own ``quick`` counts);
-    ``runner``: reserved for :class:`analogue.Runner` (None until the circuit layer has it).
+    ``runner``: how the decks run, an :class:`analogue.Runner` (its store, workers, scheduler,
+    timeout, progress: :meth:`~analogue.study.settings.RunOptions.from_runner`).
 
     Returns the :class:`~analogue.study.run.StudyResult`: its ``comparisons``, ``figures``
     (experiment -> PNG paths), ``page`` (``index.html``), ``failures``, the runs
     (``by_role(name)``).  A section that failed is in ``failures`` (and on the page); with
     ``raise_incomplete`` it raises :class:`ReportIncomplete` instead, as the command line
     does."""
+    if runner is not None and opts is not None:
+        raise TypeError("pass either runner= (an analogue.Runner) or opts=, not both")
     if runner is not None:
-        raise TypeError("runner: not supported yet (analogue.Runner is not in this version); "
-                        "pass opts=RunOptions(...) instead")
+        opts = RunOptions.from_runner(runner, quick=quick)
     exp = _load(experiment)  # validated before anything runs
     out = Path(out) if out is not None else Path("report") / exp.name
     opts = opts if opts is not None else RunOptions(quick=quick, progress=False)
@@ -283,6 +285,7 @@ def _experiment_title(exp) -> str:
     return f"Experiment '{exp.name}': {exp.model.regime} regime"
 
 
+FIG1_TITLE = "Paper Fig. 1: deterministic motion"
 OPEN_QUESTION_TITLE = "The paper's open question: is the jump of I(w) at w = 0 real?"
 
 
@@ -328,14 +331,18 @@ class _Drawer(StudyHooks):
     def main_complete(self, result: StudyResult) -> None:
         all_runs = list(result.runs.values())
         if all_runs:
-            fig1_runs = [r for r in all_runs if r.exp.name in FIG1_EXPERIMENTS
-                         and prose.is_paper_experiment(r.exp)] or all_runs
+            paper = [r for r in all_runs if r.exp.name in FIG1_EXPERIMENTS
+                     and prose.is_paper_experiment(r.exp)]
+            fig1_runs = paper or all_runs
+            # the paper's figure number only over the paper's own experiments (issue 20
+            # item 3: a user's report read "Paper Fig. 1" over its own runs)
+            title = FIG1_TITLE if paper else "Deterministic motion (noise off)"
             with result.phases("figures: Fig. 1"):
                 fig, err = result.failures.attempt(
-                    "Paper Fig. 1: deterministic motion", "figure",
+                    title, "figure",
                     lambda: Figure(*figures.fig_deterministic(fig1_runs, self.out)))
-            self.fig1_section = Section("Paper Fig. 1: deterministic motion",
-                                        figures=[fig] if fig is not None else [], error=err)
+            self.fig1_section = Section(title, figures=[fig] if fig is not None else [],
+                                        error=err)
             if fig is not None:
                 result.figures["Fig. 1"] = [fig.path]
         _log(f"{prose.main_part(result.experiments)} are complete "

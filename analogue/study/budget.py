@@ -18,6 +18,7 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
@@ -117,9 +118,9 @@ def terms_above_se_text(comps, limit: float = 1.0) -> list[str]:
 
 # Replicas per chunk of a held/white pair (held_noise_pair_chunks): the rows of the noise are
 # drawn chunk after chunk from the pair's one stream (the same numbers as one draw of all
-# rows), and each chunk is integrated on its own, so that a process pool runs them on as many
-# cores as it has, with results bit for bit those of one loop over every row (the loop is
-# row-wise).  Fixed, not derived from the core count: the result never depends on it.
+# rows), and each chunk is integrated on its own, so that an executor (the report's threads:
+# the loop's numpy arithmetic runs outside the GIL) runs them on as many cores as it has, with
+# results bit for bit those of one loop over every row (the loop is row-wise).  Fixed, not derived from the core count: the result never depends on it.
 # 1024 keeps the per-step numpy overhead small against the arithmetic (2048 rows per loop):
 # the quick work experiment's transition pairs (4096 replicas, 19 200 steps) are 4 chunks each.
 PAIR_CHUNK = 1024
@@ -127,23 +128,24 @@ PAIR_CHUNK = 1024
 
 def _pair_chunk(model: Model, v0, z: np.ndarray, per_hold: int, dt: float, sample_dt: float,
                 t_end: float) -> tuple:
-    """One chunk of a held/white pair (a worker process's task): ``simulate_sde_held_pair``
-    on the rows ``z``, returned without the white run's noise (``z`` itself, which the caller
-    holds: not sent back), with this process's CPU seconds."""
+    """One chunk of a held/white pair (an executor's task): ``simulate_sde_held_pair`` on
+    the rows ``z``, returned without the white run's noise (``z`` itself, which the caller
+    holds: never sent back from a worker process), with the CPU seconds of the thread that
+    ran it."""
     import time
 
-    c0 = time.process_time()
+    c0 = time.thread_time()
     held, white = simulate_sde_held_pair(model, v0=v0, t_end=t_end, replicas=z.shape[0],
                                          noise=z, noise_hold=per_hold, dt=dt,
                                          sample_dt=sample_dt)
     white = Ensemble(white.t, white.v, white.x, white.meta, None)
-    return held, white, time.process_time() - c0
+    return held, white, time.thread_time() - c0
 
 
 def held_noise_pair_chunks(model: Model, *, v0, t_end: float, replicas: int, seed: int,
                            noise_dt: float, sample_dt: float, executor=None, timing=None):
     """:func:`held_noise_pair` in chunks of :data:`PAIR_CHUNK` replicas, each submitted to
-    ``executor`` (a ``concurrent.futures`` executor, e.g. a process pool; None: run here) as
+    ``executor`` (a ``concurrent.futures`` executor: threads or processes; None: run here) as
     soon as its noise is drawn.  Returns a function that waits for the chunks and returns
     ``(held, white)``, bit for bit :func:`held_noise_pair`'s.  ``timing``: a list that gets
     ``(seconds drawing the noise in this thread, [CPU seconds of each chunk])`` when they are
@@ -172,8 +174,9 @@ def held_noise_pair_chunks(model: Model, *, v0, t_end: float, replicas: int, see
         z = rng.standard_normal((hi - lo, n_hold * per_hold))
         v0_c = v0 if np.ndim(v0) == 0 else v_all[lo:hi]
         args = (model, v0_c, z, per_hold, dt, sample_dt, t_end)
-        parts.append((z, executor.submit(_pair_chunk, *args) if executor is not None
-                      else _pair_chunk(*args)))
+        result: Any = (executor.submit(_pair_chunk, *args) if executor is not None
+                       else _pair_chunk(*args))
+        parts.append((z, result))
     t_draw = time.thread_time() - t_draw
 
     def collect() -> tuple[Ensemble, Ensemble]:

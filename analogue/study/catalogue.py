@@ -95,9 +95,9 @@ def model_class(model: Model) -> str:
         raise TypeError(f"model must be an analogue.Model, got {type(model).__name__}")
     if model.is_paper:
         return PAPER
-    if model.spring > 0:
+    if model.dimension == 2:  # the spring's (x, v) (analogue.variants)
         return SPRING_MEMBER
-    if model.shot is not None and not math.isfinite(model.gamma):
+    if model.noise_kind.pure_kicks:
         return SHOT_MEMBER
     return GAUSSIAN_MEMBER
 
@@ -190,7 +190,7 @@ def _amplitude(s: StationarySample, tau=None) -> float:
 
 def _kick_force(m: Model) -> float:
     """Mean acceleration of the kicks, rate <z> (0 without shot noise or with two-sided kicks)."""
-    return m.shot.mean_force if m.shot is not None else 0.0
+    return m.noise_kind.mean_force
 
 
 def _force_balance(s: StationarySample, tau=None) -> float:

@@ -114,7 +114,7 @@ def bandwidth_terms(exp: Experiment, settings: ReportSettings, *,
     jackknife differences: the budget's bandwidth term, bit for bit what :func:`analyse`
     computes when not given it.  ``settings``: the report settings the runs use
     (``exp.report.for_options(opts)``).  ``executor``: where the pairs' chunks of replicas
-    run (:func:`~analogue.study.budget.held_noise_pair_chunks`; the report passes a process
+    run (:func:`~analogue.study.budget.held_noise_pair_chunks`; the report passes a thread
     pool of the usable cores), each pair's chunks queued before the previous pair is waited
     for; the numbers do not depend on it (bit for bit the same with any executor or none).
     ``timing`` of the result: seconds drawing the noise and computing the jackknives in this

@@ -20,7 +20,10 @@ The ``waiting for ...`` phases are not work and are left out.  With unlimited co
 experiment's circuit runs take their work before the decks (tolerance and deck-size
 calibrations) plus their longest single deck (``circuit`` timing recorded by
 :func:`analogue.study.runs.run_experiment_runs`); without that record, or where it exceeds
-the phase, the phase's own duration.  A family member's phase counts whole (its decks are
+the phase, the phase's own duration.  An experiment's bandwidth term likewise takes the seconds its thread spent
+drawing the noise and computing the jackknives plus the CPU seconds of its longest Monte
+Carlo chunk (:func:`analogue.study.comparisons.bandwidth_terms`; the chunks are independent,
+one core each with unlimited cores).  A family member's phase counts whole (its decks are
 not recorded apart): an upper bound for its share.  Every duration is a measured one on the
 machine that ran the job, so the result is that machine's per-core speed with unlimited
 cores, not a prediction for another machine.
@@ -101,11 +104,29 @@ def circuit_unlimited_s(phase_seconds: float, timing: Mapping | None) -> float:
     return min(phase_seconds, float(before) + float(longest))
 
 
-def report_graph(phases: Sequence[Mapping], circuit: Mapping | None = None) -> dict:
+def bandwidth_unlimited_s(phase_seconds: float, timing: Mapping | None) -> float:
+    """An experiment's bandwidth term with unlimited cores: its thread's own seconds (noise
+    draw, jackknives) plus its longest Monte Carlo chunk, at most the phase's measured
+    duration; the phase's duration without a timing record."""
+    if not timing:
+        return phase_seconds
+    parts = [timing.get(k) for k in ("draw_s", "jackknife_s", "longest_chunk_s")]
+    if any(p is None for p in parts):
+        return phase_seconds
+    total = 0.0
+    for p in parts:
+        total += float(p)  # type: ignore[arg-type]  # (None excluded above)
+    return min(phase_seconds, total)
+
+
+def report_graph(phases: Sequence[Mapping], circuit: Mapping | None = None,
+                 bandwidth: Mapping | None = None) -> dict:
     """The report's dependency graph (module docstring) from its phase timeline: key
     ``(phase, experiment)`` -> ``(seconds, deps)``.  A phase recorded twice under one key
-    (none today) counts its total.  ``circuit``: experiment -> its circuit timing record."""
+    (none today) counts its total.  ``circuit``: experiment -> its circuit timing record;
+    ``bandwidth``: experiment -> its bandwidth terms' timing record."""
     circuit = circuit or {}
+    bandwidth = bandwidth or {}
     secs: dict = {}
     for p in phases:
         if p["phase"].startswith(WAITING_PREFIX):
@@ -115,6 +136,8 @@ def report_graph(phases: Sequence[Mapping], circuit: Mapping | None = None) -> d
     for key in list(secs):
         if key[0] == CIRCUIT:
             secs[key] = circuit_unlimited_s(secs[key], circuit.get(key[1]))
+        elif key[0] == BANDWIDTH:
+            secs[key] = bandwidth_unlimited_s(secs[key], bandwidth.get(key[1]))
     runs = [k for k in secs if k[0] == CIRCUIT]
     nodes: dict = {}
     for key, s in secs.items():
@@ -137,11 +160,12 @@ def report_graph(phases: Sequence[Mapping], circuit: Mapping | None = None) -> d
     return nodes
 
 
-def report_critical_path(phases: Sequence[Mapping], circuit: Mapping | None = None) -> dict:
+def report_critical_path(phases: Sequence[Mapping], circuit: Mapping | None = None,
+                         bandwidth: Mapping | None = None) -> dict:
     """``{"critical_path_s": seconds, "chain": [{"phase", "experiment", "seconds"}, ...]}``:
     the report job's wall time with unlimited cores (module docstring), from its recorded
-    phases and circuit timings."""
-    nodes = report_graph(phases, circuit)
+    phases, circuit and bandwidth timings."""
+    nodes = report_graph(phases, circuit, bandwidth)
     length, chain = longest_chain(nodes)
     return {"critical_path_s": round(length, 3),
             "chain": [{"phase": k[0], "experiment": k[1], "seconds": round(nodes[k][0], 3)}

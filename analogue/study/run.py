@@ -38,7 +38,8 @@ from .members import CHAPTER_TITLE, MemberAnalysis, analyse_member, is_member_ex
 from .metrics import Comparison, validate_metrics
 from .runs import ExperimentRuns, run_experiment_runs
 from .schedule import (CIRCUIT_THREADS, MEMBER_THREADS, SCHEDULER_CIRCUIT_THREADS, Failures,
-                       Phases, Workers, circuit_cost, result_of, say)
+                       Phases, Workers, circuit_cost, member_cost, monte_carlo_pool, result_of,
+                       say)
 from .settings import RunOptions
 from .theory_curves import (CURVE_GROUPS, ExperimentTheory, FigureCurves, experiment_theory,
                             figure_curves)
@@ -76,8 +77,8 @@ class StudyHooks:
         """A task of :meth:`background` is done (or, at the end, waited for)."""
 
     def main_complete(self, result: StudyResult) -> None:
-        """Every experiment on the paper's model is compared and drawn; the family members'
-        circuit work starts after this returns."""
+        """Every experiment on the paper's model is compared and drawn (the family members'
+        circuit work started when the paper's circuit runs were done)."""
 
 
 @dataclass
@@ -99,6 +100,8 @@ class StudyResult:
     # the chapter "What experiments measure" (study.measure), filled by the page's hooks:
     # experiment -> MeasureAnalysis; its comparisons are the study's too
     measured: dict = field(default_factory=dict)
+    # experiment -> how its bandwidth terms' Monte Carlo chunks ran (BandwidthTerms.timing)
+    bandwidth_timing: dict = field(default_factory=dict)
     paper_wall: float = 0.0       # seconds from the start until main_complete
     member_wall: float = 0.0      # the members' threads' time (the page adds its drawing)
     # filled by the page: experiment (or figure group) -> PNG paths; the page itself
@@ -144,7 +147,7 @@ class StudyResult:
         provs.update({name: a.provenance for name, a in self.member_analyses.items()})
         software = _software()
         circuit_timing = {k: p.get("timing") for k, p in provs.items() if p.get("timing")}
-        crit = report_critical_path(self.phases.items, circuit_timing)
+        crit = report_critical_path(self.phases.items, circuit_timing, self.bandwidth_timing)
         return {
             "parameters": {k: p["parameters"] for k, p in provs.items()},
             "model_effective": {k: p["model_effective"] for k, p in provs.items()},
@@ -164,6 +167,9 @@ class StudyResult:
             "critical_path_s": crit["critical_path_s"],
             "critical_path": crit["chain"],
             "circuit_timing": circuit_timing,
+            # the bandwidth terms' Monte Carlo chunks: noise draw and jackknives in the theory
+            # thread, chunk count, total and longest CPU seconds (comparisons.bandwidth_terms)
+            "bandwidth_timing": self.bandwidth_timing,
             # when the paper's chapters (its experiments, Fig. 1, the open question) were
             # complete, from the start; the chapter "Beyond the paper" runs after their circuit
             # runs, beside their comparisons and figures
@@ -227,14 +233,16 @@ def run_study(experiments: Iterable, *, members: Iterable = (), opts: RunOptions
     members among them are analysed as members, and so are those of ``members``).
 
     ``opts`` says how the circuits run (:class:`~analogue.study.settings.RunOptions`; default:
-    local, quick when ``quick``); ``quick`` overrides ``opts.quick``.  ``runner`` is accepted
-    for :class:`analogue.Runner` once the circuit layer has it, and must be None until then.
+    local, quick when ``quick``); ``quick`` overrides ``opts.quick``.  ``runner``: how the
+    decks run, an :class:`analogue.Runner` (:meth:`RunOptions.from_runner`) in place of
+    ``opts``.
     ``hooks`` (:class:`StudyHooks`): what the caller does while the study runs.  Failures of
     single experiments are recorded in the result, never raised; an interrupt is raised after
     every ngspice process was killed."""
     if runner is not None:
-        raise TypeError("runner: not supported yet (analogue.Runner is not in this version); "
-                        "pass opts=RunOptions(...) instead")
+        if opts is not None:
+            raise TypeError("pass either runner= (an analogue.Runner) or opts=, not both")
+        opts = RunOptions.from_runner(runner, quick=bool(quick))
     opts = opts or RunOptions(quick=bool(quick))
     if quick is not None and quick != opts.quick:
         opts = replace(opts, quick=quick)
@@ -254,13 +262,15 @@ def run_study(experiments: Iterable, *, members: Iterable = (), opts: RunOptions
         circuit = Workers(result.phases, "circuit",
                           SCHEDULER_CIRCUIT_THREADS if opts.scheduler else CIRCUIT_THREADS)
         family = Workers(result.phases, "members", MEMBER_THREADS)
+        mc = monte_carlo_pool()
         try:
-            _schedule(result, opts, hooks or StudyHooks(), pool, circuit, family)
+            _schedule(result, opts, hooks or StudyHooks(), pool, circuit, family, mc)
             return result
         except BaseException:
             # an interrupt (failures are caught in _schedule): nothing new starts in either
             # pool, then every ngspice process is killed until their threads end
             family.close()
+            mc.shutdown(wait=False, cancel_futures=True)
             circuit.abort()
             family.abort()
             raise
@@ -268,10 +278,11 @@ def run_study(experiments: Iterable, *, members: Iterable = (), opts: RunOptions
             circuit.close()
             family.close()
             pool.close()
+            mc.shutdown(wait=False, cancel_futures=True)
 
 
 def _schedule(result: StudyResult, opts: RunOptions, hooks: StudyHooks, pool: Workers,
-              circuit: Workers, family: Workers) -> None:
+              circuit: Workers, family: Workers, mc=None) -> None:
     """The schedule (issue 10: the paper's chapters first, every core busy):
 
     - circuit runs longest first: the longest experiment's runs finish early, and its long
@@ -280,9 +291,10 @@ def _schedule(result: StudyResult, opts: RunOptions, hooks: StudyHooks, pool: Wo
       runs queued behind slip ended at 73 s, its comparisons and curves at 90 s);
     - the theory thread takes the experiments in the same order: each experiment's exact
       theory, then its bandwidth term (held/white Monte Carlo pairs: no circuit data), so
-      that both are ready when its runs are; the hooks' background tasks last;
-    - the family members' circuit work waits until the paper's chapters are complete
-      (every paper run compared, every figure drawn), then has both cores."""
+      that both are ready when its runs are; the hooks' background tasks last; the
+      bandwidth terms' Monte Carlo chunks run on the threads of ``mc`` (every core);
+    - the family members' circuit work starts once the paper's circuit runs are done (the
+      cores ngspice used are free), beside the paper's last comparisons and figures."""
     experiments, phases, fails = result.experiments, result.phases, result.failures
     order = sorted(range(len(experiments)), key=lambda i: -circuit_cost(experiments[i], opts))
     theory_f: dict = {}
@@ -295,20 +307,26 @@ def _schedule(result: StudyResult, opts: RunOptions, hooks: StudyHooks, pool: Wo
                                                                                 progress=say))
         band_f[i] = pool.submit("bandwidth term (held/white Monte Carlo)", exp.name,
                                 lambda exp=exp, s=settings: bandwidth_terms(exp, s,
-                                                                            progress=say))
+                                                                            progress=say,
+                                                                            executor=mc))
     background = {phase: pool.submit(phase, None, fn) for phase, fn in hooks.background().items()}
     runs_f = {i: circuit.submit("circuit runs", experiments[i].name,
                                 lambda exp=experiments[i]: runs_task(exp, opts))
               for i in order}
-    # the members start once the paper's chapters are complete (runs compared, figures and
-    # Fig. 1 drawn), not when the paper's runs are: measured on the quick paper, two members'
-    # ngspice beside the last experiment's figures made those take 6.3 s of wall time for
-    # ~2.4 CPU-s, and the paper's chapters ended 8.5 s after its last run
+    # the members start once the paper's circuit runs are done, when ngspice leaves the cores
+    # (issue 22: more cores, less waiting).  Before, they waited for the paper's chapters
+    # (figures and Fig. 1 drawn): on 2 cores that kept the paper's chapters 8.5 s shorter
+    # (two members' ngspice made the last experiment's figures take 6.3 s of wall for
+    # ~2.4 CPU-s) but left the cores to the main thread alone for those seconds, and on a
+    # larger machine all but one idle
     paper_done: Future = Future()
-    members_f = [family.submit_after([*runs_f.values(), paper_done],
-                                     "family member (circuit and theory)", exp.name,
-                                     lambda exp=exp: member_task(exp, opts))
-                 for exp in result.members]
+    members_f: list = [None] * len(result.members)
+    for j in sorted(range(len(result.members)),
+                    key=lambda j: -member_cost(result.members[j])):   # longest first
+        members_f[j] = family.submit_after([*runs_f.values()],
+                                           "family member (circuit and theory)",
+                                           result.members[j].name,
+                                           lambda exp=result.members[j]: member_task(exp, opts))
     runs_by_index: dict = {}
     analyses_by_index: dict = {}
     # The hooks draw in this thread as soon as an experiment's theory curves are in, while
@@ -364,6 +382,7 @@ def _schedule(result: StudyResult, opts: RunOptions, hooks: StudyHooks, pool: Wo
             with phases("waiting for theory", runs.exp.name):
                 theory: ExperimentTheory = result_of(th_f)
                 bandwidth: BandwidthTerms = result_of(bw_f)
+            result.bandwidth_timing[runs.exp.name] = bandwidth.timing
             with phases("comparisons", runs.exp.name):
                 return analyse(runs, theory=theory, bandwidth=bandwidth, progress=say)
         analysis, err = fails.attempt(section, "comparison with theory", compare_, exp.name)

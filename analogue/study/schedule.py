@@ -19,7 +19,7 @@ import queue
 import threading
 import time
 import traceback
-from concurrent.futures import Future
+from concurrent.futures import Future, ThreadPoolExecutor
 from contextlib import contextmanager, nullcontext
 
 from threadpoolctl import threadpool_limits
@@ -27,10 +27,12 @@ from threadpoolctl import threadpool_limits
 from ..circuit.experiments import Experiment
 from ..circuit import ngspice
 from ..circuit.simulate import POLL_S
+from ..cores import usable_cpus
 from .settings import RunOptions
 
 __all__ = ["Failures", "Phases", "Workers", "result_of", "say", "error_text", "circuit_cost",
-           "CIRCUIT_THREADS", "SCHEDULER_CIRCUIT_THREADS", "MEMBER_THREADS"]
+           "CIRCUIT_THREADS", "SCHEDULER_CIRCUIT_THREADS", "MEMBER_THREADS", "monte_carlo_pool",
+           "member_cost", "MEMBER_SECONDS"]
 
 log = logging.getLogger("analogue.report.pipeline")
 
@@ -127,7 +129,7 @@ class Workers:
       shared the cores, so the longest one (work, queued first) ended last anyway, at 108 s
       of the quick paper, and its theory curves trailed after it;
     - the **members** threads: the family members' analyses (circuit and theory), queued
-      once the paper's chapters are complete (:meth:`submit_after`).  Two threads: a member's runs are
+      once the paper's circuit runs are done (:meth:`submit_after`).  Two threads: a member's runs are
       few decks, which alone leave a core idle.
 
     The threads are daemons: an interrupt does not wait for a task under way (see
@@ -224,6 +226,34 @@ class Workers:
             for t in self.threads:
                 t.join(0.05)
         ngspice.terminate_all()
+
+
+# The standard members' analyses (circuit runs and their references), seconds measured on the
+# quick paper (2-core machine, load 1.7-3.3, two member threads).  Only their order is used:
+# the members are queued longest first.  In the order of MEMBERS (cubic, stribeck, spring,
+# shot) the spring started third and ran alone on one thread for its last 11 s (the job's
+# members took 33 s; longest first would make it about 29 s).  The spring's cost is its Monte
+# Carlo reference (the position feeds back into the force at every step), not its decks, so
+# circuit_cost (replica-time) does not order the members.
+MEMBER_SECONDS = {"spring": 22.7, "cubic": 15.2, "stribeck": 10.5, "shot": 6.7}
+
+
+def member_cost(exp) -> float:
+    """The queueing key of a family member (:data:`MEMBER_SECONDS`; 0 for one not measured:
+    queued after those)."""
+    return MEMBER_SECONDS.get(exp.name, 0.0)
+
+
+def monte_carlo_pool():
+    """The threads that run the bandwidth terms' Monte Carlo chunks
+    (:func:`analogue.study.comparisons.bandwidth_terms`, issue 22): one per usable core.
+    Threads, not processes: a chunk's loop is numpy arithmetic on 2048-row arrays, which runs
+    outside the GIL, and its noise (160 MB per chunk of the quick work experiment's transition
+    pairs) stays in this process.  Measured on the shared 2-core machine (load ~10), the
+    quick work experiment's terms: a spawned process pool pickled ~2.5 GB of noise through
+    pipes (system CPU of the whole quick paper 17.6 -> 34.0 s); two threads took the same
+    CPU as one loop (9.8 against 9.1-11.3 s), bit for bit the same numbers."""
+    return ThreadPoolExecutor(max_workers=usable_cpus(), thread_name_prefix="analogue-mc")
 
 
 # the threads of the paper's circuit runs and of the family members' analyses (see

@@ -43,6 +43,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from .. import checks
+from ..circuit.runner import Runner
 
 __all__ = ["RunOptions", "ReportSettings", "report_settings_from_dict",
            "QUICK_DIVISOR", "MIN_STATIONARY_REPLICAS", "MIN_CHECK_REPLICAS",
@@ -81,6 +82,24 @@ class RunOptions:
         if self.timeout is not None:
             kw["timeout"] = self.timeout
         return kw
+
+    @classmethod
+    def from_runner(cls, runner: Runner, *, quick: bool = False) -> RunOptions:
+        """The report's options from an :class:`analogue.Runner`: its store, workers, Dask
+        scheduler, timeout and progress.  The report sizes its decks, names its runs and pools
+        its decks itself, so a runner's ``replicas_per_deck``, ``label`` or ``executor`` is
+        refused (ValueError naming it) rather than silently dropped."""
+        if not isinstance(runner, Runner):
+            raise TypeError(f"runner must be an analogue.Runner, got {type(runner).__name__}")
+        for name in ("replicas_per_deck", "label", "executor"):
+            if getattr(runner, name) is not None:
+                raise ValueError(f"runner.{name}={getattr(runner, name)!r}: a report chooses "
+                                 f"its runs' {name.replace('_', ' ')} itself; leave it None")
+        store = runner.store
+        return cls(workers=runner.workers, scheduler=runner.scheduler,
+                   store=None if store is None or store is True else
+                   (store if store is False else Path(store)),  # type: ignore[arg-type]
+                   quick=quick, progress=bool(runner.progress), timeout=runner.timeout)
 
     def scaled(self, replicas: int) -> int:
         if not self.quick:

@@ -110,3 +110,20 @@ def test_fig1_waits_for_every_circuit_run():
     crit = report_critical_path(tl)
     assert crit["critical_path_s"] == pytest.approx(8.5)     # 7 + 1 + 0.5
     assert "8.5 s (50% of the wall time 17.0 s)" in critical_path_text(crit, 17.0)
+
+
+def test_bandwidth_term_counts_its_thread_and_longest_chunk():
+    """With unlimited cores the bandwidth term's Monte Carlo chunks run at once: its draw and
+    jackknives plus its longest chunk, never more than the phase took."""
+    tl = [_ph("bandwidth term (held/white Monte Carlo)", "e", 20.0, "theory"),
+          _ph("circuit runs", "e", 5.0, "circuit"), _ph("comparisons", "e", 1.0),
+          _ph("figures and page", None, 0.5)]
+    assert report_critical_path(tl)["critical_path_s"] == pytest.approx(21.5)
+    band = {"e": {"draw_s": 2.0, "jackknife_s": 1.0, "longest_chunk_s": 3.0}}
+    crit = report_critical_path(tl, None, band)
+    assert crit["critical_path_s"] == pytest.approx(7.5)      # 2 + 1 + 3, + 1 + 0.5
+    assert crit["chain"][0]["seconds"] == pytest.approx(6.0)
+    band["e"]["longest_chunk_s"] = 30.0                        # capped at the phase's 20 s
+    assert report_critical_path(tl, None, band)["critical_path_s"] == pytest.approx(21.5)
+    assert report_critical_path(tl, None, {"e": {"draw_s": 1.0}})["critical_path_s"] == \
+        pytest.approx(21.5)                                    # incomplete record: the phase

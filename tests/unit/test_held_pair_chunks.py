@@ -54,7 +54,7 @@ def test_chunks_are_one_loop_bit_for_bit(monkeypatch, v0):
 
 
 def test_chunks_in_worker_processes(monkeypatch):
-    """The report's pool: spawned processes with one BLAS thread each."""
+    """Processes (a Dask-like executor) work too: spawned, one BLAS thread each."""
     monkeypatch.setattr(budget, "PAIR_CHUNK", 3)
     want = _one_loop(0.2, 7)
     ctx = multiprocessing.get_context("spawn")

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import subprocess
 import sys
 
@@ -75,6 +76,11 @@ def test_report_returns_the_study(tmp_path, monkeypatch):
     assert set(res.by_role("mine")) >= {"stationary", "noise_free", "check_transition",
                                         "check_stationary"}
     assert not res.failures.items and "comparisons" in repr(res)
+    # a user's report claims no section of the paper's (issue 20 item 3: it read "Paper Fig. 1:
+    # deterministic motion" over the user's own noise-free runs)
+    titles = re.findall(r"<h2[^>]*>(.*?)</h2>", res.page.read_text())
+    assert "Deterministic motion (noise off)" in titles
+    assert not [t for t in titles if "paper" in t.lower()], titles
     with pytest.raises(KeyError, match="no runs"):
         res.by_role("other")
 
@@ -113,8 +119,28 @@ def test_the_command_line_uses_the_same_function(tmp_path, monkeypatch):
     assert f"report: {tmp_path / 'o' / 'index.html'}" in r.output
 
 
-def test_runner_is_refused_until_the_circuit_layer_has_one(tmp_path):
-    with pytest.raises(TypeError, match="runner"):
-        analogue.report("stick", out=tmp_path, runner=object())
-    with pytest.raises(TypeError, match="runner"):
-        S.run_study([], runner=object())
+def test_a_runner_says_how_the_report_runs(tmp_path, monkeypatch):
+    """analogue.report(..., runner=analogue.Runner(...)): its store, workers, timeout and
+    progress reach every circuit run of the study; what the report chooses itself (deck size,
+    labels, its own deck pool) is refused by name, before anything runs."""
+    seen = []
+
+    def runs(exp, opts, settings=None):
+        seen.append(opts)
+        raise RuntimeError("stop")
+    monkeypatch.setattr(S, "run_experiment_runs", runs)
+    runner = analogue.Runner(store=tmp_path / "store", workers=3, timeout=99.0, progress=False)
+    res = analogue.report(_exp("mine", 6.0, 5), out=tmp_path / "r", quick=True, runner=runner)
+    assert res.failed == {"mine": "RuntimeError: stop"}
+    (opts,) = seen
+    assert (opts.store, opts.workers, opts.timeout, opts.progress, opts.quick) == \
+        (tmp_path / "store", 3, 99.0, False, True)
+    assert opts.simulate_kwargs()["store"] == tmp_path / "store"
+    for bad in (dict(replicas_per_deck=8), dict(label="x")):
+        with pytest.raises(ValueError, match=f"runner.{next(iter(bad))}"):
+            analogue.report("stick", out=tmp_path / "n", runner=analogue.Runner(**bad))
+    with pytest.raises(TypeError, match="either runner"):
+        S.run_study([], runner=runner, opts=S.RunOptions())
+    with pytest.raises(TypeError, match="analogue.Runner"):
+        analogue.report("stick", out=tmp_path / "n", runner=object())
+    assert not (tmp_path / "n").exists()

@@ -48,14 +48,15 @@ def _mc_runs(exp, replicas=250, stationary=32):
 def stick():
     exp = load_experiment(standard_circuit("stick"))
     theory = M.measure_theory(exp, exp.report.for_options(QUICK))
-    return exp, theory, M.analyse_measure(_mc_runs(exp), theory)
+    runs = _mc_runs(exp)
+    return exp, theory, M.analyse_measure(runs, theory), runs
 
 
 @pytest.mark.slow
 def test_rows_within_budget_on_the_circuits_law(stick):
     """9 rows (5 bands, per v0 the mean and P(T <= t_a)): every one within its budget,
     every budget finite."""
-    exp, theory, a = stick
+    exp, theory, a, runs = stick
     comps = a.comparisons
     assert [c.observable for c in comps[:5]] == [M.band_label(lo, hi) for lo, hi in
                                                  zip(M.BANDS[:-1], M.BANDS[1:])]
@@ -72,7 +73,7 @@ def test_theory_values_and_terms(stick):
     """The theory values are the exact S band averages and the exact first-passage law; the
     sampling term of a band is E[Welch] - S (exact), of a mean the sampling bias bound; the
     hold lowers the stick spectrum (held minus white < 0 in the lowest band, beyond its SE)."""
-    exp, theory, a = stick
+    exp, theory, a, runs = stick
     sp = theory.spectrum
     rows = {r.label: r for r in a.rows}
     lo, hi = M.BANDS[0], M.BANDS[1]
@@ -118,3 +119,30 @@ def test_first_passage_values_count_censored_paths_at_the_record_end():
                   [1.0, 0.8, 0.6, 0.4, 0.2]])     # never: counted at 2.0
     vals = M.FirstPassageValues("mean", "P", 1.0)(Ensemble(t, v, np.zeros_like(v)))
     assert vals == {"P": 0.5, "mean": pytest.approx((0.75 + 2.0) / 2)}
+
+
+@pytest.mark.slow
+def test_chapter_section_from_the_numbers(stick, tmp_path):
+    """The chapter's page section: its table has every row, its text quotes the exact
+    numbers (mean time to rest / t_a = 1.477/1.609 and 1.123/1.170), its figures exist."""
+    from concurrent.futures import Future
+    exp, theory, a, runs = stick
+    f: Future = Future()
+    f.set_result(theory)
+    failures = []
+
+    def attempt(section, stage, fn, experiment=None):
+        try:
+            return fn(), None
+        except Exception as exc:  # recorded, as the pipeline's Failures does
+            failures.append((section, stage, exc))
+            return None, str(exc)
+    res = measure_chapter.chapter([runs], {exp.name: f}, tmp_path, attempt)
+    assert not failures
+    sec = res.sections[0]
+    assert sec.title == measure_chapter.CHAPTER_TITLE and sec.error is None
+    assert len(sec.tables[0].rows) == len(a.rows) == 9
+    text = " ".join(str(p) for p in sec.paragraphs)
+    assert "0.92 and 0.96 of the noise-free stick time" in text
+    assert "sticking rate 1.31" in text
+    assert {p.path.name for p in sec.figures} == {"spectra_stick.png", "first_passage_stick.png"}
