@@ -37,9 +37,9 @@ from .critical_path import report_critical_path
 from .members import CHAPTER_TITLE, MemberAnalysis, analyse_member, is_member_experiment
 from .metrics import Comparison, validate_metrics
 from .runs import ExperimentRuns, run_experiment_runs
-from .schedule import (CIRCUIT_THREADS, MEMBER_THREADS, SCHEDULER_CIRCUIT_THREADS, Failures,
-                       Phases, Workers, circuit_cost, member_cost, monte_carlo_pool, result_of,
-                       say)
+from .schedule import (CIRCUIT_THREADS, MEMBER_THREADS, NOW, SCHEDULER_CIRCUIT_THREADS,
+                       Failures, Phases, Workers, circuit_cost, member_cost, monte_carlo_pool,
+                       result_of, say)
 from .settings import RunOptions
 from .theory_curves import (CURVE_GROUPS, ExperimentTheory, FigureCurves, experiment_theory,
                             figure_curves)
@@ -375,7 +375,7 @@ def _schedule(result: StudyResult, opts: RunOptions, hooks: StudyHooks, pool: Wo
         # the data-dependent theory curves (work densities on the circuit's bins...) run in the
         # background while this experiment's comparisons and the next one's circuit run
         cf = pool.submit("theory curves", exp.name,
-                         lambda runs=runs: figure_curves(runs, progress=say))
+                         lambda runs=runs: figure_curves(runs, progress=say), priority=NOW)
         say(f"{exp.name}: comparing with theory")
 
         def compare_(runs=runs, th_f=th_f, bw_f=bw_f):

@@ -13,7 +13,9 @@ shown the report job's progress (analogue.cli).
 """
 from __future__ import annotations
 
+import itertools
 import logging
+import math
 import os
 import queue
 import threading
@@ -30,8 +32,8 @@ from ..circuit.simulate import POLL_S
 from ..cores import usable_cpus
 from .settings import RunOptions
 
-__all__ = ["Failures", "Phases", "Workers", "result_of", "say", "error_text", "circuit_cost",
-           "CIRCUIT_THREADS", "SCHEDULER_CIRCUIT_THREADS", "MEMBER_THREADS", "monte_carlo_pool",
+__all__ = ["Failures", "Phases", "Workers", "NOW", "LATER", "result_of", "say", "error_text",
+           "circuit_cost", "CIRCUIT_THREADS", "SCHEDULER_CIRCUIT_THREADS", "MEMBER_THREADS", "monte_carlo_pool",
            "member_cost", "MEMBER_SECONDS"]
 
 log = logging.getLogger("analogue.report.pipeline")
@@ -114,13 +116,24 @@ class Phases:
         return out
 
 
+#: Workers priorities: ``NOW`` for work whose data are in and whose result is waited for,
+#: ``LATER`` (the default) for work queued ahead of its need
+NOW, LATER = 0, 1
+
+
 class Workers:
-    """Background threads that run tasks in submission order, each as a phase of the report
-    (issue 10, item 4: keep every core busy from start to end).
+    """Background threads that run tasks in submission order within a priority (``submit(...,
+    priority=)``: lower first; default :data:`LATER`), each as a phase of the report (issue
+    10, item 4: keep every core busy from start to end).
 
     - the **theory** thread (one): the theory needs no circuit data, so it runs while ngspice
       runs; BLAS/LAPACK are limited to one thread while a task runs (threadpoolctl), so it adds
-      one runnable thread, not one per core;
+      one runnable thread, not one per core.  An experiment's data-dependent theory curves
+      are queued :data:`NOW` (issue 22): its runs are in and its figures wait for them,
+      while the circuit-free tasks queued from the start are needed only when later runs
+      arrive (measured on the quick paper at load ~10: the work experiment's curves waited
+      107 s behind the other experiments' bandwidth terms and the measurement chapter's
+      theory, and the paper's chapters ended 41 s after them);
     - the **circuit** thread (one): every experiment's circuit runs, queued from the start
       (longest first), so that ngspice never waits for the main thread's comparisons of the
       previous experiment.  One thread: an experiment's runs keep ``workers`` ngspice
@@ -137,7 +150,8 @@ class Workers:
 
     def __init__(self, phases: Phases, name: str, threads: int = 1, blas_limit: bool = False):
         self.phases, self.name, self.blas_limit = phases, name, blas_limit
-        self.queue: queue.Queue = queue.Queue()
+        self.queue: queue.PriorityQueue = queue.PriorityQueue()
+        self._seq = itertools.count()     # submission order within a priority
         self._lock = threading.Lock()
         self._closed = False
         self.threads = [threading.Thread(target=self._run, daemon=True,
@@ -148,7 +162,7 @@ class Workers:
 
     def _run(self):
         while True:
-            item = self.queue.get()
+            _, _, item = self.queue.get()
             if item is None:
                 return
             fut, phase, experiment, fn = item
@@ -164,17 +178,18 @@ class Workers:
             except BaseException as exc:  # handed to whoever waits for the result
                 fut.set_exception(exc)
 
-    def submit(self, phase: str, experiment: str | None, fn) -> Future:
+    def submit(self, phase: str, experiment: str | None, fn, priority: int | None = None
+               ) -> Future:
         fut: Future = Future()
-        self._put((fut, phase, experiment, fn))
+        self._put((fut, phase, experiment, fn), LATER if priority is None else priority)
         return fut
 
-    def _put(self, item) -> None:
+    def _put(self, item, priority: int = 1) -> None:
         with self._lock:   # nothing is queued behind close()'s end markers: cancelled instead
             if self._closed:
                 item[0].cancel()
             else:
-                self.queue.put(item)
+                self.queue.put((priority, next(self._seq), item))
 
     def submit_after(self, after: list, phase: str, experiment: str | None, fn) -> Future:
         """Like :meth:`submit`, but queued only once every future in ``after`` is done
@@ -199,7 +214,7 @@ class Workers:
     def _cancel_pending(self) -> None:
         while True:               # whatever has not started is cancelled
             try:
-                item = self.queue.get_nowait()
+                _, _, item = self.queue.get_nowait()
             except queue.Empty:
                 break
             if item is not None:
@@ -212,7 +227,7 @@ class Workers:
             self._closed = True
             self._cancel_pending()
             for _ in self.threads:
-                self.queue.put(None)
+                self.queue.put((math.inf, next(self._seq), None))
 
     def abort(self, wait: float = 10.0) -> None:
         """After an interrupt: nothing new starts, and the ngspice processes of the tasks under

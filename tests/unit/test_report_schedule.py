@@ -216,3 +216,23 @@ def test_members_are_queued_longest_first(monkeypatch):
     assert started == sorted(names, key=lambda n: -SCH.MEMBER_SECONDS[n])
     assert started[0] == "spring"
     assert [e.name for e in result.members] == names
+
+
+def test_theory_thread_takes_data_dependent_work_first():
+    """A task queued NOW (an experiment's theory curves: its runs are in, its figures wait)
+    runs before the circuit-free tasks queued LATER ahead of their need; within a priority,
+    in submission order."""
+    gate = threading.Event()
+    order: list = []
+    pool = SCH.Workers(SCH.Phases(), "theory", 1)
+    try:
+        first = pool.submit("exact theory", "a", lambda: gate.wait(30))
+        later = [pool.submit("bandwidth term", n, lambda n=n: order.append(n)) for n in "bc"]
+        now = [pool.submit("theory curves", n, lambda n=n: order.append(n), priority=SCH.NOW)
+               for n in "xy"]
+        gate.set()
+        for f in (first, *later, *now):
+            f.result(timeout=30)
+    finally:
+        pool.close()
+    assert order == ["x", "y", "b", "c"]
