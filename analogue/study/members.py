@@ -430,7 +430,15 @@ def _band(exp: Experiment, fns: dict, v0, t_end: float, replicas: int, seed: int
     if not math.isfinite(exp.model.gamma):
         return {}
     noise_dt = m.noise_dt
-    t_end = noise_dt * round(t_end / noise_dt)
+    # whole samples of whole holds: the pair samples every round(sample_dt / noise_dt) holds
+    # (budget.held_noise_pair_chunks), and a run of 333 holds of 0.003 sampled every 7 holds
+    # was refused ("t_end must be a whole multiple of sample_dt"; a cubic member at tau_m = 2).
+    # A run that already is whole samples keeps its length, bit for bit.
+    holds = round(t_end / noise_dt)
+    per_sample = max(1, round(sample_dt / noise_dt))
+    if holds % per_sample:
+        holds = per_sample * max(1, round(holds / per_sample))
+    t_end = noise_dt * holds
     held, white = held_noise_pair(m.model_effective, v0=v0, t_end=t_end, replicas=replicas,
                                   seed=seed, noise_dt=noise_dt, sample_dt=sample_dt)
     for e in (held, white):

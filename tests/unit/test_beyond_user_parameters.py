@@ -187,3 +187,17 @@ def test_spring_first_swing_is_the_same_in_other_velocity_units(tmp_path):
     assert got["myspring"][half] == pytest.approx(got["spring"][half], abs=0.02)
     amp = "amplitude (first swing)"
     assert got["myspring"][amp] == pytest.approx(c * got["spring"][amp], rel=0.02)
+
+
+def test_bandwidth_pair_of_a_hold_that_does_not_divide_the_run(tmp_path):
+    """Found by tests/integration/test_random_experiments.py (a cubic member with tau_m = 2):
+    the pair's run length is rounded to whole holds, but the pair samples every
+    round(sample_dt / hold) holds, and 333 holds of 0.003 are no whole number of 7-hold
+    samples: 'ValueError: t_end=... must be a whole multiple of sample_dt=...'.  The run is
+    now rounded to whole samples (unchanged where it already was)."""
+    exp = _copy("cubic", tmp_path, "cubic_hold", circuit={"noise_dt": 0.003})
+    assert exp.mapping().noise_dt == pytest.approx(0.003)
+    fns = {"mean v": lambda e: float(e.v.mean())}
+    band = beyond._band(exp, fns, 0.0, 1.0, 8, 1, sample_dt=0.02)
+    d, se = band["mean v"]
+    assert math.isfinite(d) and math.isfinite(se)
