@@ -234,7 +234,10 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
 
     # ------------------------------------------------------------------ 6. outputs
     draw_schematic(design, out / "schematic.svg")
-    se_ref = reference_stderr(design, fn, seed=plan.board_pair)
+    # the full job's observables (its burn-in), so that --quick and full runs give the same
+    # reference error, matching advice, offset limit and BOM
+    fn_full = budget.observables_fn(model, burn_in=FULL.burn_in, threshold=thr, taus=taus)
+    se_ref = reference_stderr(design, fn_full, seed=plan.board_pair)
     matched = recommend_matching(sens, se_ref)
     matched["offset_limit"] = tolerance.offset_limit(design, grads, se_ref, MATCH_FRACTION, tol)
     write_bom(design, out / "bom.csv", matched=tuple(matched["bom_refs"]))

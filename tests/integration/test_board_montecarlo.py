@@ -101,6 +101,17 @@ def test_board_job_writes_every_output(tmp_path):
     # 0.02): with 4 replicas it comes from the SDE ensemble scaled to the run, and a 4 x 4 tau_m
     # run's error exceeds the full job's (32 x 40 tau_m)
     ref = metrics["matching"]["reference_stderr"]
+    # the reference error (matching advice, U1's offset limit, the BOM) is the full job's
+    # whatever this run's sizes: TINY's burn-in (1) is not FULL's (2)
+    from analogue.board import budget
+    from analogue.board.job import FULL, reference_stderr
+    from analogue.circuit.experiments import load_experiment
+    from analogue.study.seeds import SeedPlan
+    assert TINY.burn_in != FULL.burn_in
+    thr = 0.1 * STICK.velocity_scale
+    fn_full = budget.observables_fn(STICK, burn_in=FULL.burn_in, threshold=thr, taus=(1.0,))
+    want = reference_stderr(DESIGN, fn_full, seed=SeedPlan(load_experiment("stick").seed).board_pair)
+    assert ref == pytest.approx(want, rel=1e-12)
     for c in metrics["comparisons"]:
         assert c["stderr_method"].startswith("SDE ensemble"), c
         assert c["circuit_stderr"] > 2.0 * ref[c["observable"]], c

@@ -9,7 +9,7 @@ from analogue import Model
 from analogue.board import budget, opamp, tolerance
 from analogue.board.components import board_components
 from analogue.board.design import BoardSpec, design_board
-from analogue.board.job import MATCH_FRACTION, reference_stderr, theory_observables
+from analogue.board.job import FULL, MATCH_FRACTION, reference_stderr, theory_observables
 from analogue.circuit.experiments import load_experiment
 from analogue.study.seeds import SeedPlan
 
@@ -20,7 +20,7 @@ THR = 0.1 * STICK.velocity_scale
 @pytest.fixture(scope="module")
 def limit_inputs():
     design = design_board(STICK, v0=[2.0, -2.0])
-    fn = budget.observables_fn(STICK, burn_in=2.0, threshold=THR, taus=(1.0,))
+    fn = budget.observables_fn(STICK, burn_in=FULL.burn_in, threshold=THR, taus=(1.0,))
     # the board job's own seed for it: the page and this test print the same limit
     seed = SeedPlan(load_experiment("stick").seed).board_pair
     se = reference_stderr(design, fn, seed=seed)
