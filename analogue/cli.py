@@ -445,8 +445,8 @@ def figures(out):
 def sweep(experiment, vary, out, workers, scheduler, store, timeout, quick, progress):
     """Sweep EXPERIMENT (a name or a TOML path) over model parameters: the circuit and the
     exact theory at every point (drift, variance, P(v>0), stick fraction, D_x, work rate,
-    mean first-passage time to rest, with standard errors and budgets) in DIR/sweep.nc;
-    resumable from the run store."""
+    mean first-passage time to rest, with standard errors and budgets) in sweep.nc in the
+    --out directory, with the figures; resumable from the run store."""
     import logging as _logging
     from .study.sweep import parse_vary_text, plan_sweep
     from .study.sweep import sweep as run_sweep
