@@ -501,6 +501,15 @@ def _integration(meta: Mapping[str, Any], se: float) -> float:
     return float(ratio) * se if math.isfinite(se) else math.nan
 
 
+def _whole_holds(t_end: float, hold: float, sample_dt: float) -> float:
+    """``t_end`` rounded down to a whole number of the Monte Carlo pair's sampling steps,
+    ``hold * round(sample_dt / hold)`` (:func:`~analogue.study.budget.held_noise_pair` steps
+    whole holds and samples every few: a hold chosen from the model, e.g. 0.0032 at gamma =
+    50, need not divide the run's length)."""
+    step = hold * max(1, round(sample_dt / hold))
+    return step * math.floor(t_end / step + 1e-9)
+
+
 def _runner(runner: Runner | None, given: Mapping[str, Any]) -> Runner:
     """The sweep's Runner: ``runner``, or one made of the run keywords ``given`` (those not
     None); both at once is a TypeError, as for :func:`analogue.simulate`."""
@@ -595,10 +604,12 @@ def _point(plan: SweepPlan, i: int, runner: Runner) -> dict[str, Any]:
     held, white = held_noise_pair(
         model_eff, v0=sample_stationary(model_eff, n_mc,
                                         np.random.SeedSequence(band_seed, spawn_key=(0,))),
-        t_end=settings.stationary_t_end, replicas=n_mc, seed=band_seed, noise_dt=stat_hold,
-        sample_dt=exp.sample_dt)
+        t_end=_whole_holds(settings.stationary_t_end, stat_hold, exp.sample_dt), replicas=n_mc,
+        seed=band_seed, noise_dt=stat_hold, sample_dt=exp.sample_dt)
     band = jackknife_difference(fn_band, held, white)
-    held, white = held_noise_pair(model_eff, v0=plan.fp_v0, t_end=exp.t_end, replicas=n_mc,
+    held, white = held_noise_pair(model_eff, v0=plan.fp_v0,
+                                  t_end=_whole_holds(exp.t_end, stat_hold, exp.sample_dt),
+                                  replicas=n_mc,
                                   seed=fp_seed, noise_dt=stat_hold,
                                   sample_dt=exp.sample_dt)
     band.update(jackknife_difference(_fp_values, held, white))

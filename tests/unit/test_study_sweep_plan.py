@@ -131,3 +131,24 @@ def test_runner_or_run_keywords_not_both(tmp_path):
     with pytest.raises(ValueError, match="not a directory"):
         (tmp_path / "f").write_text("")
         S.sweep("stick", {"a": [0.2]}, quick=True, out=tmp_path / "f")
+
+
+def test_monte_carlo_pair_runs_on_holds_that_do_not_divide_the_run():
+    """At gamma = 50 the circuit's hold is chosen from the model (0.0097, stationary 0.0032),
+    which divides neither the stationary length (50) nor t_end (8): the held/white pair of
+    the bandwidth term failed there ("t_end=50.0 must be a whole number of noise hold
+    times"), after the point's circuit runs.  It now runs on whole holds."""
+    from analogue.study.budget import held_noise_pair
+    from analogue.study.settings import stationary_noise_dt
+    plan = S.plan_sweep("stick", {"gamma": [50.0]}, quick=True)
+    hold = stationary_noise_dt(plan.mappings[0].noise_dt, plan.settings)
+    t_end = plan.exp.t_end
+    assert abs(t_end / hold - round(t_end / hold)) > 1e-6     # the case
+    with pytest.raises(ValueError, match="whole number of noise hold"):
+        held_noise_pair(plan.mappings[0].model_effective, v0=2.0, t_end=t_end, replicas=2,
+                        seed=1, noise_dt=hold, sample_dt=plan.exp.sample_dt)
+    t = S._whole_holds(t_end, hold, plan.exp.sample_dt)
+    assert t_end - 0.011 < t <= t_end
+    held, white = held_noise_pair(plan.mappings[0].model_effective, v0=2.0, t_end=t,
+                                  replicas=2, seed=1, noise_dt=hold, sample_dt=plan.exp.sample_dt)
+    assert held.v.shape == white.v.shape
