@@ -21,6 +21,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+from matplotlib.ticker import FuncFormatter
 
 from ..estimators.scaling import local_exponent
 from ..files import atomic_path
@@ -32,6 +33,14 @@ FORMATS = ("png", "svg")
 # the exponents marked on the local-exponent panel (analogue.theory.bias_transport)
 _LIMITS = ((3.0, "pure dry friction (3)"), (1.0, "viscous (1)"))
 _MEASURED = 1.61   # Goohpattader, Mettu & Chaudhury, Langmuir 2009
+
+
+def _two_five(x: float, _pos=None) -> str:
+    """Minor tick labels of a log axis at 2 and 5 times a power of ten only."""
+    if not x > 0:
+        return ""
+    mantissa = x / 10.0 ** np.floor(np.log10(x) + 1e-9)
+    return f"{x:g}" if round(mantissa) in (2, 5) and abs(mantissa - round(mantissa)) < 1e-6 else ""
 
 
 def _curves(ds, axis: str):
@@ -74,7 +83,7 @@ def _errorbars(ax, x, ds, obs: str, sel: dict, colour, label: str, scale=None):
     ax.errorbar(xs, y, yerr=3 * se + budget, fmt="none", ecolor=colour, elinewidth=0.6,
                 alpha=0.5)
     ax.errorbar(xs, y, yerr=se, fmt="o", ms=4, color=colour, capsize=2,
-                label=f"circuit{' ' + label if label else ''}")
+                label=f"circuit{' ' + label if label else ''} (1 SE; thin: 3 SE + budget)")
 
 
 def mobility_figure(ds, out: str | Path) -> list[Path]:
@@ -140,6 +149,8 @@ def diffusion_figure(ds, out: str | Path) -> list[Path]:
     bx.annotate("measured 1.61 (Goohpattader et al. 2009)", (noise.min(), _MEASURED),
                 fontsize=6, color="tab:red", xytext=(2, 2), textcoords="offset points")
     bx.set_xscale("log")
+    for axis in (ax.xaxis, bx.xaxis):   # minor labels of a short log range overlap: 2 and 5
+        axis.set_minor_formatter(FuncFormatter(_two_five))
     bx.set_xlabel("noise intensity D = 1/gamma (model units)")
     bx.set_ylabel("local exponent d ln D_x / d ln D")
     return _write(fig, out, "diffusion")
