@@ -19,6 +19,7 @@ from ..study.members import (CHAPTER_TITLE, CHECK_REPLICAS, MEMBERS, MemberAnaly
                              MemberSizes, analyse_member, is_member_experiment, member_runs,
                              member_sizes, rate_function_data, stick_window, weak_noise_law,
                              work_tau)
+from ..study import catalogue as C
 from ..study.metrics import Comparison
 from .html import Table
 from . import family_figures as FF
@@ -56,6 +57,8 @@ def _num(x: float) -> str:
 def _member_kind(m: Model) -> str:
     """Which extension a member's text describes (the spring first: a spring member has the
     spring's analysis, Monte Carlo reference and no exact P(v = 0), whatever its noise)."""
+    if C.model_class(m) == C.MONTE_CARLO_MEMBER:
+        return "coloured"   # the noise without exact theory (analogue.variants.coloured)
     return ("spring" if m.spring > 0 else "shot" if m.shot is not None
             else "stribeck" if m.stribeck is not None else "cubic")
 
@@ -88,6 +91,8 @@ def physics_text(m: Model) -> str:
                      f"{_num(m.static_friction)}) does not stop at v = 0: the object slides "
                      "between kicks, and the stationary law has no atom at v = 0.")
         return text
+    if kind == "coloured":
+        return coloured_text(m)
     if kind == "spring":
         return (f"A linear spring (spring = {_num(m.spring)}) on the object turns the steady "
                 f"slide into stick-slip oscillations: released from x0 = {_num(m.x0)} the object "
@@ -113,6 +118,26 @@ def physics_text(m: Model) -> str:
             "the paper's law at the same Delta.")
 
 
+def coloured_text(m: Model) -> str:
+    """Coloured noise (analogue.variants.coloured), with the member's tau_c, gamma, tau_m."""
+    tau_c = m.noise_kind.tau_c  # type: ignore[attr-defined]
+    text = (f"Coloured noise instead of white: the plate's force is white noise of intensity "
+            f"1/gamma (gamma = {_num(m.gamma)}) passed through a low-pass of correlation time "
+            f"tau_c = {_num(tau_c)} (an Ornstein-Uhlenbeck force, <eta(t) eta(t')> = "
+            f"exp(-|t - t'|/tau_c)/(gamma tau_c), variance {_num(1 / (m.gamma * tau_c))}; "
+            f"tau_c/tau_m = {_num(tau_c / m.tau_m)}). The state (v, eta) is two-dimensional "
+            "and not a gradient system: exp(-gamma U) is not its stationary law and there is no "
+            "exact theory here, so the reference is the Monte Carlo of the same model, started "
+            "where the circuit starts. In the circuit the held Gaussian source feeds an RC "
+            "low-pass (R_ou C_ou = tau_c) whose voltage drives the noise current.")
+    cf = m.noise_kind.closed_form_variance(m)
+    if cf is not None:
+        text += (f" At Delta = 0 the model is linear and Var v = tau_m^2/(gamma (tau_m + "
+                 f"tau_c)) = {_num(cf)}, against tau_m/gamma = {_num(m.tau_m / m.gamma)} for "
+                 "white noise.")
+    return text
+
+
 def _fmt(c: Comparison) -> str:
     return (f"{c.observable}: circuit {c.circuit:.4g} +- {c.circuit_stderr:.2g}, "
             f"{'Monte Carlo' if 'Monte Carlo' in c.note else 'exact'} {c.theory:.4g}, "
@@ -133,6 +158,11 @@ def member_text(a: MemberAnalysis) -> list[str]:
                     f"(|v| < {stick_window(a.exp):.3g}, where the exact law has "
                     f"{next((c.theory for c in a.comparisons if c.observable == 'P(v=0)'), float('nan')):.4f}) "
                     f"is {f['p_zero_measured']:.4f}.")
+    elif key == "coloured":
+        text.append(f"Monte Carlo stationary mean {f['mc_mean']:.4f} and variance "
+                    f"{f['mc_variance']:.4f} ({f['mc_replicas']} replicas), against the exact "
+                    f"{f['white_mean']:.4f} and {f['white_variance']:.4f} for white noise of the "
+                    "same gamma: the filter takes the noise's fast part away.")
     elif key == "spring":
         text.append(f"First swing after the release: half period {f['circuit_half_period']:.3f} "
                     f"(circuit) vs {f['mc_half_period']:.3f} (Monte Carlo), amplitude "
@@ -193,7 +223,7 @@ def member_table(a: MemberAnalysis):
                      abs(b.bandwidth), abs(b.integration), abs(b.element), abs(b.sampling),
                      c.within_budget, c.note])
         classes.append("ok" if c.within_budget else "fail")
-    ref = "Monte Carlo" if a.exp.model.spring > 0 else "exact"
+    ref = "Monte Carlo" if C.reference_is_monte_carlo(a.exp.model) else "exact"
     return Table(f"{a.exp.name}: circuit against {ref}",
                  ["observable", "circuit", "SE", ref, "z", "smoothing", "bandwidth",
                   "integration", "circuit element", "sampling", "within budget", "note"], rows,
@@ -226,7 +256,8 @@ def _is_paper_chapter(analyses: list) -> bool:
         return False
 
 
-_KIND_WORDS = {"shot": "shot noise", "spring": "a spring", "stribeck": "velocity weakening "
+_KIND_WORDS = {"shot": "shot noise", "spring": "a spring",
+               "coloured": "coloured (Ornstein-Uhlenbeck) noise", "stribeck": "velocity weakening "
                "(Stribeck) friction", "cubic": "cubic viscous friction"}
 _ELEMENT_TERMS = {"cubic": "cubic network approximation", "spring": "inductor series resistance",
                   "shot": "shot pulse width and edges"}
@@ -253,11 +284,13 @@ def chapter_intro(analyses: list, wall: float, quick: bool) -> list[str]:
         first = (f"Members of the model family in this report: {names}. Each runs on its own "
                  "circuit")
     refs = []
-    if any(k != "spring" for k in kinds):
+    if any(k not in ("spring", "coloured") for k in kinds):
         refs.append("the exact finite-noise numerics of its one-dimensional law (Fokker-Planck"
                     + (", or Kolmogorov-Feller for shot noise" if "shot" in kinds else "") + ")")
     if "spring" in kinds:
         refs.append("for the spring, the Monte Carlo")
+    if "coloured" in kinds:
+        refs.append("for coloured noise (no exact theory yet), the Monte Carlo")
     first += " and is held against " + " or, ".join(refs) + "."
     sizes = ("quick sizes: small replica counts, short runs" if quick else
              "full sizes: each member's own [experiment] replicas and [report] stationary "
@@ -281,6 +314,9 @@ def chapter_intro(analyses: list, wall: float, quick: bool) -> list[str]:
                        + (", an atom at rest when the object sticks between kicks" if any(
                            k == "shot" and not math.isfinite(a.exp.model.gamma)
                            for a, k in zip(analyses, kinds)) else "") + ")")
+    if "coloured" in kinds:
+        survive.append("coloured noise breaks it too (the noise has a memory: the state "
+                       "(v, eta) is two-dimensional; the Monte Carlo is the reference)")
     if "spring" in present:
         survive.append("the spring makes the state two-dimensional (no closed stationary law; "
                        "the Monte Carlo is the reference)")

@@ -47,8 +47,8 @@ def fig_member_stationary(a, out: Path):
     width = edges[1] - edges[0]
     ax.stairs(counts / (s.size * width), edges, color="tab:orange", lw=1.2,
               label=f"circuit ({s.size} samples)" + (f", |v| >= {thr:g}" if has_atom else ""))
-    ax.plot(d["v"], d["density"], "k-", lw=1.2, label="exact (continuous part)" if has_atom
-            else "exact")
+    ax.plot(d["v"], d["density"], "k-", lw=1.2, label=d.get("reference_label") or (
+        "exact (continuous part)" if has_atom else "exact"))
     if "paper_density" in d:
         ax.plot(d["v"], d["paper_density"], "--", color="tab:blue", lw=1.0, label=d["paper_label"])
     if "weak_noise_density" in d:
@@ -69,7 +69,8 @@ def fig_member_stationary(a, out: Path):
     ax.set_title(f"Stationary law — {name}", fontsize=10)
     path = save(fig, out / f"beyond_stationary_{name}.png")
     cap = (f"{name}: stationary velocity law, circuit histogram after the burn-in against the "
-           "exact law (family numerics)")
+           + (f"{d['reference_label']} histogram (no exact theory for this noise)"
+              if d.get("reference_label") else "exact law (family numerics)"))
     if has_atom:
         cap += ("; the object sticks with probability P(v = 0) (grey bar: an atom, not a "
                 "density), the histogram shows the moving part only")

@@ -55,9 +55,18 @@ def main_part(experiments) -> str:
 
 
 # ------------------------------------------------------------------------- the model
+def _tau_c(m) -> float | None:
+    """The correlation time of a coloured-noise model (analogue.variants.coloured), or None."""
+    return getattr(m.noise_kind, "tau_c", None)
+
+
 def _noise_words(m) -> str:
     parts = []
-    if math.isfinite(m.gamma):
+    if _tau_c(m) is not None:
+        parts.append(f"gamma = {_num(m.gamma)}, tau_c = {_num(_tau_c(m))} (coloured noise: white "
+                     f"noise of intensity 1/gamma = {_num(1 / m.gamma)} through a low-pass of "
+                     "correlation time tau_c, an Ornstein-Uhlenbeck force)")
+    elif math.isfinite(m.gamma):
         parts.append(f"gamma = {_num(m.gamma)} (Gaussian velocity noise of intensity "
                      f"1/gamma = {_num(1 / m.gamma)})")
     else:
@@ -187,7 +196,9 @@ def circuit_paragraph(experiments) -> str:
         parts.append("an inductor from v to ground (the spring; its current is the position)")
     if any(math.isfinite(m.gamma) for m in models):
         parts.append("a held Gaussian noise current (ngspice trrandom, reproducible with "
-                     ".options seed; the vibrating plate)")
+                     ".options seed; the vibrating plate)"
+                     + (", for coloured noise through an RC low-pass R_ou C_ou = tau_c"
+                        if any(_tau_c(m) is not None for m in models) else ""))
     if any(m.shot is not None for m in models):
         parts.append("shot-noise kicks drawn in numpy from the deck seed and delivered as "
                      "narrow flat-topped current pulses (PWL source)")
@@ -218,12 +229,14 @@ def theory_kinds_text(experiments, members) -> str:
     if members:
         models = [e.model for e in members]
         refs = []
-        if any(m.spring == 0 and m.shot is None for m in models):
+        if any(m.spring == 0 and m.shot is None and _tau_c(m) is None for m in models):
             refs.append("the Fokker-Planck numerics of the member's own law")
         if any(m.spring == 0 and m.shot is not None for m in models):
             refs.append("the Kolmogorov-Feller numerics for shot noise")
         if any(m.spring > 0 for m in models):
             refs.append("the Monte Carlo for a spring")
+        if any(m.spring == 0 and _tau_c(m) is not None for m in models):
+            refs.append("the Monte Carlo for coloured noise (no exact theory yet)")
         out.append("For the family's members the reference is " + ", ".join(refs) + ".")
     return " ".join(out)
 
@@ -260,8 +273,10 @@ def equation_text(experiments) -> str:
     if any(m.spring for m in models):
         terms.append("- spring x")
     terms.append("+ a")
-    if any(math.isfinite(m.gamma) for m in models):
+    if any(math.isfinite(m.gamma) and _tau_c(m) is None for m in models):
         terms.append("+ xi/m")
+    if any(_tau_c(m) is not None for m in models):
+        terms.append("+ eta (coloured: d eta = -eta dt/tau_c + sqrt(2/gamma) dW/tau_c)")
     if any(m.shot is not None for m in models):
         terms.append("+ shot kicks")
     return "dv/dt = " + " ".join(terms)

@@ -160,9 +160,9 @@ def held_noise_pair_chunks(model: Model, *, v0, t_end: float, replicas: int, see
         raise ValueError(f"t_end={t_end!r} must be a whole number of noise hold times {noise_dt!r}")
     sample_dt = noise_dt * max(1, round(sample_dt / noise_dt))
     rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(7,)))
-    if model.shot is not None:
+    if not model.noise_kind.paper:   # kicks or coloured noise: simulate_sde's own loop
         z = rng.standard_normal((replicas, n_hold * per_hold))
-        pair = _held_pair_with_kicks(model, v0=v0, t_end=t_end, replicas=replicas, seed=seed,
+        pair = _held_pair_given(model, v0=v0, t_end=t_end, replicas=replicas, seed=seed,
                                      z=z, per_hold=per_hold, dt=dt, sample_dt=sample_dt)
         return lambda: pair
     v_all, v0_meta = _given_v0(v0, replicas, f"a number or an array of shape ({replicas},)")
@@ -215,11 +215,12 @@ def held_noise_pair(model: Model, *, v0, t_end: float, replicas: int, seed: int,
                                   noise_dt=noise_dt, sample_dt=sample_dt, executor=executor)()
 
 
-def _held_pair_with_kicks(model: Model, *, v0, t_end, replicas, seed, z, per_hold, dt,
-                          sample_dt) -> tuple[Ensemble, Ensemble]:
-    """Shot + Gaussian noise (the fused loop is Gaussian-only): two runs whose kicks come from
-    one seed, so that the pair differs by the hold alone (a shot + Gaussian member's report
-    failed on the fused loop's refusal)."""
+def _held_pair_given(model: Model, *, v0, t_end, replicas, seed, z, per_hold, dt,
+                     sample_dt) -> tuple[Ensemble, Ensemble]:
+    """Noise other than white Gaussian alone (the fused loop is Gaussian-only): shot +
+    Gaussian noise, two runs whose kicks come from one seed, so that the pair differs by the
+    hold alone (a shot + Gaussian member's report failed on the fused loop's refusal);
+    coloured noise, the filter's white input held (analogue.variants.coloured)."""
     n_hold = z.shape[1] // per_hold
     kicks = int(np.random.SeedSequence(seed, spawn_key=(8,)).generate_state(1)[0])
     kw = dict(v0=v0, t_end=t_end, replicas=replicas, dt=dt, sample_dt=sample_dt, seed=kicks)

@@ -6,10 +6,11 @@ Adding an observable is one :class:`Kind` in :data:`KINDS`: the report's estimat
 (:func:`transition_values`, :func:`stationary_values`), its exact and weak-noise values
 (:func:`transition_theory`, :func:`stationary_theory`) and its label all follow from it.
 Each kind names the model classes it applies to (:func:`model_class`: the paper's model, a
-one-dimensional family member with Gaussian noise, pure shot noise, the spring), so the
+one-dimensional family member with Gaussian noise, pure shot noise, the spring, a noise kind
+without exact theory such as coloured noise), so the
 chapter "Beyond the paper" (:mod:`analogue.report.beyond`) reads its observables
 (:func:`member_observables`), their estimators, exact readings, Monte Carlo reference (the
-spring) and circuit-element budget terms from the same table; adding a model class is one
+spring, coloured noise) and circuit-element budget terms from the same table; adding a model class is one
 class name on the kinds it shares.
 
 Labels (the ``observable`` field of ``metrics.json``) are stable: ``"<kind> at t=<t> from
@@ -40,9 +41,9 @@ from ..estimators.transport import diffusion_leave_group_out
 from ..estimators.resampling import subset
 
 __all__ = ["KINDS", "Kind", "Observable", "TRANSITION", "STATIONARY", "density_moments",
-           "PAPER", "GAUSSIAN_MEMBER", "SHOT_MEMBER", "SPRING_MEMBER", "member_stick_window",
+           "PAPER", "GAUSSIAN_MEMBER", "SHOT_MEMBER", "SPRING_MEMBER", "MONTE_CARLO_MEMBER", "member_stick_window",
            "LawMoments", "law_moments", "transition_laws", "StationarySample", "StationaryTheory", "first_swing",
-           "model_class", "member_observables", "reference_of", "stationary_sample",
+           "model_class", "member_observables", "reference_of", "reference_is_monte_carlo", "stationary_sample",
            "transition_observables", "stationary_observables", "transition_values",
            "stationary_values", "StationaryValues", "transition_theory", "stationary_theory", "transition_label", "stationary_label",
            "kind_of", "find", "planned_comparisons", "estimate", "element_error", "no_exact",
@@ -57,8 +58,13 @@ PAPER = "paper"                      # the paper's model: exact and weak-noise t
 GAUSSIAN_MEMBER = "gaussian member"  # 1-D family member with Gaussian noise (cubic, Stribeck)
 SHOT_MEMBER = "shot member"          # 1-D, pure shot noise (gamma = inf): an atom at v = 0
 SPRING_MEMBER = "spring member"      # state (x, v): the Monte Carlo is the reference
+# 1-D, a noise kind with no exact solver (coloured noise, analogue.variants.coloured): the
+# Monte Carlo of the same model is the reference
+MONTE_CARLO_MEMBER = "monte carlo member"
 _MEMBERS = frozenset({GAUSSIAN_MEMBER, SHOT_MEMBER})
 _ALL_1D = frozenset({PAPER, GAUSSIAN_MEMBER, SHOT_MEMBER})
+# the classes whose reference is the Monte Carlo (reference_of)
+_MC_REFERENCE = frozenset({SPRING_MEMBER, MONTE_CARLO_MEMBER})
 
 # the member's stick window holds the circuit's stuck state eps atanh(|a|/Delta(0)) with this
 # margin (shot.toml: 4 x 0.0042 = 0.017, inside its 0.1 velocity-scale window 0.05)
@@ -89,7 +95,8 @@ def member_stick_window(model: Model, *, stick_threshold: float, epsilon: float 
 
 def model_class(model: Model) -> str:
     """The class of ``model`` that decides its observables and reference: ``PAPER``,
-    ``SPRING_MEMBER`` (spring > 0), ``SHOT_MEMBER`` (shot noise without Gaussian noise) or
+    ``SPRING_MEMBER`` (spring > 0), ``MONTE_CARLO_MEMBER`` (a noise kind without an exact
+    solver: coloured noise), ``SHOT_MEMBER`` (shot noise without Gaussian noise) or
     ``GAUSSIAN_MEMBER`` (any other 1-D member)."""
     if not isinstance(model, Model):
         raise TypeError(f"model must be an analogue.Model, got {type(model).__name__}")
@@ -97,6 +104,8 @@ def model_class(model: Model) -> str:
         return PAPER
     if model.dimension == 2:  # the spring's (x, v) (analogue.variants)
         return SPRING_MEMBER
+    if model.noise_kind.exact_solver is None:
+        return MONTE_CARLO_MEMBER
     if model.noise_kind.pure_kicks:
         return SHOT_MEMBER
     return GAUSSIAN_MEMBER
@@ -406,7 +415,7 @@ KINDS: tuple[Kind, ...] = (
          exact=lambda m: m.mean, weak_noise=lambda m: m.mean, compare_weak_noise=True,
          theory_se=lambda m, n: math.sqrt(max(m.variance, 0.0) / n),
          description="mean velocity at t from v0; SE: the larger of the replica jackknife and "
-                     "the exact law's sqrt(sigma^2/n)", classes=_ALL_1D),
+                     "the exact law's sqrt(sigma^2/n)", classes=_ALL_1D | {MONTE_CARLO_MEMBER}),
     Kind("var v", TRANSITION, ("t", "v0"), lambda v: float(np.var(v, ddof=1)),
          exact=lambda m: m.variance, weak_noise=lambda m: m.variance,
          # (any law has mu4 >= sigma^4: the max only guards grid round-off)
@@ -414,11 +423,11 @@ KINDS: tuple[Kind, ...] = (
                                                    max(m.fourth, m.variance ** 2), n),
          description="velocity variance at t from v0 (unbiased over replicas); SE: the larger "
                      "of the replica jackknife and the exact law's sqrt(Var s^2) = "
-                     "sqrt(mu4/n - sigma^4 (n-3)/(n(n-1)))", classes=_ALL_1D),
+                     "sqrt(mu4/n - sigma^4 (n-3)/(n(n-1)))", classes=_ALL_1D | {MONTE_CARLO_MEMBER}),
     Kind("P(v<0)", TRANSITION, ("t", "v0"), lambda v: float(np.mean(v < 0)),
          exact=lambda m: m.p_negative, weak_noise=lambda m: m.p_negative, probability=True,
          description="probability of a negative velocity at t from v0",
-         classes=frozenset({PAPER, GAUSSIAN_MEMBER}), window=lambda thr: (-math.inf, 0.0)),
+         classes=frozenset({PAPER, GAUSSIAN_MEMBER, MONTE_CARLO_MEMBER}), window=lambda thr: (-math.inf, 0.0)),
     Kind("histogram chi2/dof", TRANSITION, ("t", "v0"), lambda v, grid, f: _chi2_per_dof(v, grid, f),
          exact=lambda m=None: 1.0, fit_test=True,
          description="Pearson chi^2 per degree of freedom of the circuit velocities at t "
@@ -434,15 +443,15 @@ KINDS: tuple[Kind, ...] = (
     # stationary run (eq. (6), eqs. (3), (52), Green-Kubo); in label order
     Kind("mean v", STATIONARY, (), lambda s, tau=None: float(s.v.mean()),
          exact=lambda th, tau=None: th.moments.mean, description="stationary mean velocity",
-         classes=_ALL_1D | {SPRING_MEMBER}, element=_mean_v_element),
+         classes=_ALL_1D | _MC_REFERENCE, element=_mean_v_element),
     Kind("var v", STATIONARY, (), lambda s, tau=None: float(s.v.var()),
          exact=lambda th, tau=None: th.moments.variance,
-         description="stationary velocity variance", classes=_ALL_1D | {SPRING_MEMBER},
+         description="stationary velocity variance", classes=_ALL_1D | _MC_REFERENCE,
          element=_relative(*_ONE_D_TERMS, "spring_leak_var_v")),
     Kind("P(v>0)", STATIONARY, (), lambda s, tau=None: float(np.mean(s.v > 0)),
          exact=lambda th, tau=None: th.moments.p_positive, probability=True,
          description="stationary probability of a positive velocity",
-         classes=frozenset({PAPER, GAUSSIAN_MEMBER}), element=_ONE_D,
+         classes=frozenset({PAPER, GAUSSIAN_MEMBER, MONTE_CARLO_MEMBER}), element=_ONE_D,
          window=lambda thr: (0.0, math.inf)),
     Kind("stick fraction", STATIONARY, (),
          lambda s, tau=None: float(np.mean(np.abs(s.v) < s.threshold)), exact=_stick_theory,
@@ -450,7 +459,7 @@ KINDS: tuple[Kind, ...] = (
          description="stationary P(|v| < threshold), threshold = report.stick_threshold "
                      "sqrt(tau_m/gamma) (family members: study.catalogue."
                      "member_stick_window)",
-         classes=frozenset({PAPER, GAUSSIAN_MEMBER}), element=_ONE_D,
+         classes=frozenset({PAPER, GAUSSIAN_MEMBER, MONTE_CARLO_MEMBER}), element=_ONE_D,
          window=lambda thr: (-thr, thr)),
     Kind("diffusion D_x", STATIONARY, (), _diffusion,
          exact=lambda th, tau=None: th.moments.diffusion,
@@ -596,11 +605,17 @@ def member_observables(model: Model, *, v0: float | None = None, times=()) -> li
     return out
 
 
+def reference_is_monte_carlo(model: Model) -> bool:
+    """Whether ``model``'s rows are held against the Monte Carlo (the spring; a noise kind
+    without exact theory, coloured noise), not exact numerics."""
+    return model_class(model) in _MC_REFERENCE
+
+
 def reference_of(o: Observable, model: Model) -> str:
     """``"exact"`` (finite-noise numerics, or an identity's exact value) or ``"monte carlo"``
-    (spring members: no exact law of the state (x, v))."""
+    (spring members: no exact law of the state (x, v); coloured noise: no exact theory yet)."""
     k = o.entry
-    if k.identity or (model_class(model) != SPRING_MEMBER and k.exact is not no_exact):
+    if k.identity or (not reference_is_monte_carlo(model) and k.exact is not no_exact):
         return "exact"
     return "monte carlo"
 

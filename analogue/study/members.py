@@ -372,7 +372,7 @@ def member_runs(exp: Experiment, opts=None, *, quick: bool | None = None,
                        per_deck=CHECK_REPLICAS)
         return MemberRuns(exp, sizes, quick, transition=circ, check=chk,
                           seeds={"transition": seed, "check_transition": seed})
-    v0_stat = family.sample_stationary(m, sizes.stationary_replicas, plan.member_stationary_v0)
+    v0_stat = _stationary_start(exp, sizes, plan)
     tick(f"{name}: stationary circuit run ({sizes.stationary_replicas} x "
          f"{sizes.stationary_t_end:g})")
     stat = _circuit(exp, v0=v0_stat, t_end=sizes.stationary_t_end,
@@ -395,6 +395,15 @@ def member_runs(exp: Experiment, opts=None, *, quick: bool | None = None,
         seeds["transition"] = plan.member_transition
     return MemberRuns(exp, sizes, quick, transition=trans, check=chk, stationary=stat,
                       seeds=seeds)
+
+
+def _stationary_start(exp: Experiment, sizes: MemberSizes, plan: SeedPlan) -> np.ndarray:
+    """The stationary run's start states: draws from the exact stationary law of the noise's
+    start model (the member itself; coloured noise: white noise of the same gamma, which the
+    burn-in forgets and the Monte Carlo reference shares)."""
+    m = exp.model
+    return family.sample_stationary(m.noise_kind.start_model(m), sizes.stationary_replicas,
+                                    plan.member_stationary_v0)
 
 
 def _measured(pairs: dict, label: str) -> float:
@@ -451,7 +460,8 @@ def _band(exp: Experiment, fns: dict, v0, t_end: float, replicas: int, seed: int
 def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = None,
                    progress=None) -> MemberAnalysis:
     """Run the member's circuit (quick sizes by default in the chapter) and compare it with
-    its exact theory (1-D) or its Monte Carlo (spring)."""
+    its exact theory (1-D), or with its Monte Carlo (the spring; a noise without exact theory:
+    coloured noise), the analysis of its class (catalogue.model_class)."""
     t0 = time.perf_counter()
     if isinstance(exp, str):
         exp = load_experiment(standard_circuit(exp) if exp in MEMBERS else exp)
@@ -459,80 +469,99 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
         raise ValueError(f"experiment {exp.name!r} is the paper's model, not a family member")
     quick = bool(getattr(opts, "quick", True)) if quick is None else quick
     sizes = member_sizes(exp, quick)
-    tick = progress or (lambda *_: None)
-    m = exp.model
-    m_eff = exp.mapping().model_effective
     res = MemberAnalysis(exp, sizes)
-    burn = exp.burn_in
-    plan = SeedPlan(exp.seed)             # every seed below (analogue.study.seeds)
-    seed = plan.member_circuit
-    name = exp.name
-
-    thr = stick_window(exp)
+    setting = _Setting(exp, sizes, SeedPlan(exp.seed), stick_window(exp),
+                       progress or (lambda *_: None))
     runs = member_runs(exp, opts, quick=quick, progress=progress)
     res.runs = runs
+    _ANALYSES.get(C.model_class(exp.model), _analyse_exact)(setting, runs, res)
+    res.wall_time = time.perf_counter() - t0
+    return res
 
-    if m.spring > 0:
-        assert runs.transition is not None   # the spring's release run
-        circ, chk = _analysed(exp, runs.transition), _analysed(exp, runs.check)
-        first = _xs_subset(circ, np.arange(CHECK_REPLICAS))
-        tick(f"{name}: Monte Carlo reference ({sizes.mc_replicas} replicas)")
-        mc = simulate_sde(m, v0=0.0, t_end=sizes.stationary_t_end, replicas=sizes.mc_replicas,
-                          seed=plan.member_monte_carlo, sample_dt=sizes.sample_dt)
-        mc.meta["_x0"] = m.x0
-        mc_eff = simulate_sde(m_eff, v0=0.0, t_end=sizes.stationary_t_end,
-                              replicas=sizes.mc_replicas, seed=plan.member_monte_carlo,
-                              sample_dt=sizes.sample_dt)
-        mc_eff.meta["_x0"], mc_eff.meta["_model_eff"] = m.x0, m_eff
-        obs = C.member_observables(m)
-        fns = _estimators(exp, obs, thr)
-        integ = _paired(fns, chk, first)
-        bias = exp.mapping().bias
-        for o in obs:
-            fn, label = fns[o.label], o.label
-            c, se = _jk(fn, circ)
-            if C.reference_of(o, m) == "exact":
-                # an identity: exactly 0 in the stationary state; the same average on the
-                # Monte Carlo (finite time after the release) bounds its departure
-                mc_val = fn(mc_eff)
-                ref = float(o.entry.exact())
-                b = Budget(sampling=abs(mc_val), integration=_measured(integ, label),
-                           element=C.element_error(o, bias, m, ref))
-                note = "sampling = the same average on the Monte Carlo (finite time after release). "
-            else:
-                ref, se_r = _jk(fn, mc)
-                smooth = fn(mc_eff) - ref   # same noise: epsilon's effect, paired
-                se = math.hypot(se, se_r)
-                b = Budget(smoothing=smooth, element=C.element_error(o, bias, m, ref),
-                           integration=_measured(integ, label))
-                note = (f"reference: Monte Carlo ({sizes.mc_replicas} replicas, same release); "
-                        "SE = circuit and Monte Carlo SEs in quadrature. ")
-            res.comparisons.append(compare(name, label, c, se, ref, "exact", b,
-                                           note + o.entry.description))
-        th, ah = C.first_swing(circ.t, circ.v, _position(circ), thr)
-        tm, am = C.first_swing(mc.t, mc.v, _position(mc), thr)
-        k = math.sqrt(m.spring)
-        res.facts.update(omega_undamped_half_period=math.pi / k,
-                         circuit_half_period=float(np.nanmean(th)),
-                         mc_half_period=float(np.nanmean(tm)),
-                         circuit_amplitude=float(np.nanmean(ah)), mc_amplitude=float(np.nanmean(am)),
-                         coulomb_loss=2 * m.delta / m.spring)
-        res.figures["spring_series"] = {
-            "t": circ.t, "x": _position(circ)[:4], "v": circ.v[:4],
-            "x_mc_mean": _position(mc).mean(axis=0), "v_mc_mean": mc.v.mean(axis=0),
-            "x_circ_mean": _position(circ).mean(axis=0), "burn_in": burn,
-            "stick_band": m.delta / m.spring}
-        res.figures["spring_stationary"] = {
-            "x_circ": _position(circ)[:, circ.t >= burn].ravel(),
-            "x_mc": _position(mc)[:, mc.t >= burn].ravel(),
-            "v_circ": _after(circ, burn).ravel(), "v_mc": _after(mc, burn).ravel()}
-        res.provenance = _prov(exp, circ, sizes, {"circuit": seed,
-                                                  "monte_carlo": plan.member_monte_carlo,
-                                                  "plan": plan.describe()})
-        res.wall_time = time.perf_counter() - t0
-        return res
 
-    # ---------------------------------------------------------------- 1-D members
+@dataclass(frozen=True)
+class _Setting:
+    """What every member analysis reads: the experiment, its sizes, its seeds
+    (analogue.study.seeds), its stick window and the progress callback."""
+
+    exp: Experiment
+    sizes: MemberSizes
+    plan: SeedPlan
+    thr: float
+    tick: Callable
+
+
+def _analyse_spring(s: _Setting, runs: MemberRuns, res: MemberAnalysis) -> None:
+    """The spring (state (x, v)): the release run against the Monte Carlo, and the stationary
+    identities."""
+    exp, sizes, plan, thr, tick = s.exp, s.sizes, s.plan, s.thr, s.tick
+    m, m_eff, burn, seed, name = (exp.model, exp.mapping().model_effective, exp.burn_in,
+                                  plan.member_circuit, exp.name)
+
+    assert runs.transition is not None   # the spring's release run
+    circ, chk = _analysed(exp, runs.transition), _analysed(exp, runs.check)
+    first = _xs_subset(circ, np.arange(CHECK_REPLICAS))
+    tick(f"{name}: Monte Carlo reference ({sizes.mc_replicas} replicas)")
+    mc = simulate_sde(m, v0=0.0, t_end=sizes.stationary_t_end, replicas=sizes.mc_replicas,
+                      seed=plan.member_monte_carlo, sample_dt=sizes.sample_dt)
+    mc.meta["_x0"] = m.x0
+    mc_eff = simulate_sde(m_eff, v0=0.0, t_end=sizes.stationary_t_end,
+                          replicas=sizes.mc_replicas, seed=plan.member_monte_carlo,
+                          sample_dt=sizes.sample_dt)
+    mc_eff.meta["_x0"], mc_eff.meta["_model_eff"] = m.x0, m_eff
+    obs = C.member_observables(m)
+    fns = _estimators(exp, obs, thr)
+    integ = _paired(fns, chk, first)
+    bias = exp.mapping().bias
+    for o in obs:
+        fn, label = fns[o.label], o.label
+        c, se = _jk(fn, circ)
+        if C.reference_of(o, m) == "exact":
+            # an identity: exactly 0 in the stationary state; the same average on the
+            # Monte Carlo (finite time after the release) bounds its departure
+            mc_val = fn(mc_eff)
+            ref = float(o.entry.exact())
+            b = Budget(sampling=abs(mc_val), integration=_measured(integ, label),
+                       element=C.element_error(o, bias, m, ref))
+            note = "sampling = the same average on the Monte Carlo (finite time after release). "
+        else:
+            ref, se_r = _jk(fn, mc)
+            smooth = fn(mc_eff) - ref   # same noise: epsilon's effect, paired
+            se = math.hypot(se, se_r)
+            b = Budget(smoothing=smooth, element=C.element_error(o, bias, m, ref),
+                       integration=_measured(integ, label))
+            note = (f"reference: Monte Carlo ({sizes.mc_replicas} replicas, same release); "
+                    "SE = circuit and Monte Carlo SEs in quadrature. ")
+        res.comparisons.append(compare(name, label, c, se, ref, "exact", b,
+                                       note + o.entry.description))
+    th, ah = C.first_swing(circ.t, circ.v, _position(circ), thr)
+    tm, am = C.first_swing(mc.t, mc.v, _position(mc), thr)
+    k = math.sqrt(m.spring)
+    res.facts.update(omega_undamped_half_period=math.pi / k,
+                     circuit_half_period=float(np.nanmean(th)),
+                     mc_half_period=float(np.nanmean(tm)),
+                     circuit_amplitude=float(np.nanmean(ah)), mc_amplitude=float(np.nanmean(am)),
+                     coulomb_loss=2 * m.delta / m.spring)
+    res.figures["spring_series"] = {
+        "t": circ.t, "x": _position(circ)[:4], "v": circ.v[:4],
+        "x_mc_mean": _position(mc).mean(axis=0), "v_mc_mean": mc.v.mean(axis=0),
+        "x_circ_mean": _position(circ).mean(axis=0), "burn_in": burn,
+        "stick_band": m.delta / m.spring}
+    res.figures["spring_stationary"] = {
+        "x_circ": _position(circ)[:, circ.t >= burn].ravel(),
+        "x_mc": _position(mc)[:, mc.t >= burn].ravel(),
+        "v_circ": _after(circ, burn).ravel(), "v_mc": _after(mc, burn).ravel()}
+    res.provenance = _prov(exp, circ, sizes, {"circuit": seed,
+                                              "monte_carlo": plan.member_monte_carlo,
+                                              "plan": plan.describe()})
+
+
+def _analyse_exact(s: _Setting, runs: MemberRuns, res: MemberAnalysis) -> None:
+    """A 1-D member with an exact solver: every row against the exact finite-noise numerics
+    of :mod:`analogue.theory.family`."""
+    exp, sizes, plan, thr, tick = s.exp, s.sizes, s.plan, s.thr, s.tick
+    m, m_eff, burn, seed, name = (exp.model, exp.mapping().model_effective, exp.burn_in,
+                                  plan.member_circuit, exp.name)
     assert runs.stationary is not None   # 1-D members have one
     stat, chk = _analysed(exp, runs.stationary), _analysed(exp, runs.check)
     trans = None if runs.transition is None else _analysed(exp, runs.transition)
@@ -635,8 +664,103 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
         "stationary": seed, "transition": plan.member_transition,
         "stationary_v0": plan.member_stationary_v0, "band_v0": plan.member_band_v0,
         "band": plan.member_band, "plan": plan.describe()})
-    res.wall_time = time.perf_counter() - t0
-    return res
+
+
+def _analyse_monte_carlo(s: _Setting, runs: MemberRuns, res: MemberAnalysis) -> None:
+    """A 1-D member without exact theory (coloured noise, catalogue.MONTE_CARLO_MEMBER): every
+    row against the Monte Carlo of the same model (:func:`monte_carlo_reference`, from the
+    circuit's own start states: the stationary run's draws, the transition run's v0).  SE: the
+    circuit's and the Monte Carlo's replica jackknives in quadrature; smoothing: the Monte
+    Carlo at the circuit's epsilon minus the reference on the same noise (paired); bandwidth:
+    the held-input minus white-input Monte Carlo on common increments (:func:`_band`);
+    integration: the stationary run's first deck re-run 100x tighter; element: the catalogue's
+    terms."""
+    exp, sizes, plan, thr, tick = s.exp, s.sizes, s.plan, s.thr, s.tick
+    m, m_eff, name = exp.model, exp.mapping().model_effective, exp.name
+    assert runs.stationary is not None   # 1-D members have one
+    stat, chk = _analysed(exp, runs.stationary), _analysed(exp, runs.check)
+    trans = None if runs.transition is None else _analysed(exp, runs.transition)
+    v00 = float(exp.v0[0])
+    times = [float(t) for t in exp.histogram_times] if trans is not None else []
+    obs = C.member_observables(m, v0=v00, times=times)
+    stat_obs = [o for o in obs if o.run == C.STATIONARY]
+    trans_obs = [o for o in obs if o.run == C.TRANSITION]
+    integ = _paired(_estimators(exp, stat_obs, thr), chk,
+                    _xs_subset(stat, np.arange(CHECK_REPLICAS)))
+    bias = exp.mapping().bias
+    v0_stat = _stationary_start(exp, sizes, plan)   # the stationary run's start states
+    tick(f"{name}: Monte Carlo reference ({sizes.mc_replicas} replicas)")
+    groups = [(stat_obs, stat, _resampled(v0_stat, sizes.mc_replicas), sizes.stationary_t_end)]
+    if trans is not None:
+        groups.append((trans_obs, trans, v00, max(times)))
+    stationary: dict = {}
+    for run_obs, ens, v0, T in groups:
+        fns = _estimators(exp, run_obs, thr)
+        kw = dict(v0=v0, t_end=T, replicas=sizes.mc_replicas, seed=plan.member_monte_carlo,
+                  sample_dt=sizes.sample_dt)
+        mc, mc_eff = monte_carlo_reference(m, **kw), monte_carlo_reference(m_eff, **kw)
+        band = _band(exp, fns, _resampled(v0_stat, 128) if ens is stat else v00, T,
+                     128 if ens is stat else 256, plan.member_band, sample_dt=sizes.sample_dt)
+        for o in run_obs:
+            c, se = _jk(fns[o.label], ens)
+            ref, se_r = _jk(fns[o.label], mc)
+            se = math.hypot(se, se_r)
+            if o.entry.probability and (o.run == C.TRANSITION or c in (0.0, 1.0)):
+                n = ens.replicas   # as the exact members: an estimate of 0 or 1 still errs
+                p = (c * n + 1) / (n + 2)
+                se = max(se, math.sqrt(p * (1 - p) / n))
+            b = Budget(smoothing=fns[o.label](mc_eff) - ref, bandwidth=_measured(band, o.label),
+                       integration=_measured(integ, o.label) if ens is stat else 0.0,
+                       element=C.element_error(o, bias, m, ref))
+            note = (f"reference: Monte Carlo ({sizes.mc_replicas} replicas, the circuit's start "
+                    "states; no exact theory for this noise); SE = circuit and Monte Carlo SEs "
+                    "in quadrature. " + o.entry.description)
+            if ens is trans:
+                note += "; integration checked on the stationary run only"
+            res.comparisons.append(compare(name, o.label, c, se, ref, "exact", b, note))
+            if ens is stat:
+                stationary[o.label] = ref
+        if ens is stat:
+            # figure data: the circuit's and the Monte Carlo's stationary histograms
+            vs, vm = _after(stat, exp.burn_in).ravel(), _after(mc, exp.burn_in).ravel()
+            edges = np.linspace(min(vs.min(), vm.min()), max(vs.max(), vm.max()), 122)
+            dens, _ = np.histogram(vm, bins=edges, density=True)
+            res.figures["stationary"] = {
+                "v": 0.5 * (edges[1:] + edges[:-1]), "density": dens, "atom": 0.0,
+                "samples": vs, "threshold": thr, "label": name,
+                "atom_measured": float(np.mean(np.abs(vs) < thr)),
+                "reference_label": f"Monte Carlo ({vm.size} samples)"}
+    white = family.stationary_moments(m.replace(noise=None))   # white noise, the same gamma
+    res.facts.update(mc_mean=stationary["mean v"], mc_variance=stationary["var v"],
+                     white_mean=white.mean, white_variance=white.variance,
+                     mc_replicas=sizes.mc_replicas,
+                     closed_form_variance=m.noise_kind.closed_form_variance(m))
+    res.provenance = _prov(exp, stat, sizes, {
+        "stationary": plan.member_circuit, "transition": plan.member_transition,
+        "stationary_v0": plan.member_stationary_v0, "monte_carlo": plan.member_monte_carlo,
+        "band": plan.member_band, "plan": plan.describe()})
+
+
+def monte_carlo_reference(model: Model, *, v0, t_end: float, replicas: int, seed: int,
+                          sample_dt: float) -> Ensemble:
+    """The Monte Carlo reference of a member without exact theory
+    (:func:`analogue.montecarlo.simulate_sde`, seeded), with the analysis' ``meta`` keys."""
+    mc = simulate_sde(model, v0=v0, t_end=t_end, replicas=replicas, seed=seed,
+                      sample_dt=sample_dt)
+    mc.meta["_x0"], mc.meta["_model_eff"] = model.x0, model
+    return mc
+
+
+def _resampled(v0: np.ndarray, n: int) -> np.ndarray:
+    """``n`` start states cycling through the circuit's ``v0`` (the reference starts where
+    the circuit started)."""
+    return np.resize(np.asarray(v0, float), n)
+
+
+# the analysis of each member class (catalogue.model_class); the others: _analyse_exact
+_ANALYSES: dict[str, Callable[[_Setting, MemberRuns, MemberAnalysis], None]] = {
+    C.SPRING_MEMBER: _analyse_spring, C.MONTE_CARLO_MEMBER: _analyse_monte_carlo}
+
 
 
 def weak_noise_law(m: Model, v: np.ndarray, exact: np.ndarray) -> dict:

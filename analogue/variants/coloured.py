@@ -30,7 +30,9 @@ factor of the exact covariance of the step's noise (Gauss-Legendre on ``[0, dt]`
 smooth kernels ``g = s e^{-alpha s} phi((alpha - beta) s)``, ``phi(x) = expm1(x)/x``, which has
 no cancellation when tau_c is near tau_m).  At Delta = 0 it is exact (no time-step error); the
 test compares it with the closed form within standard errors.  Two standard normals per
-replica and step from the seeded stream; ``noise=`` (given Gaussian increments) is refused.
+replica and step from the seeded stream.  Given noise (``noise=``, ``noise_hold=``: the filter's
+white input held over a step or a hold, as the circuit holds it) is integrated exactly with the
+input held (:meth:`OrnsteinUhlenbeck._held_input`): the report's held-noise pair (bandwidth).
 
 Circuit (:meth:`OrnsteinUhlenbeck.replica_elements`): the white source of the Gaussian member
 (``trrandom`` on node ``nz``, model units) feeds an RC low-pass ``R_ou`` (nz -> ou), ``C_ou``
@@ -104,6 +106,19 @@ class OrnsteinUhlenbeck(Noise):
         """Stationary ``Var eta = 1/(gamma tau_c)``."""
         return 1.0 / (self.gamma * self.tau_c)
 
+    def closed_form_variance(self, model: Any) -> float | None:
+        """:func:`stationary_velocity_variance` where the model is linear (Delta = 0, no cubic,
+        Stribeck or spring term), else None."""
+        linear = (model.delta == 0 and model.cubic == 0 and model.stribeck is None
+                  and model.dimension == 1)
+        return stationary_velocity_variance(model.tau_m, self.gamma, self.tau_c) if linear else None
+
+    def start_model(self, model: Any) -> Any:
+        """The white-noise model of the same gamma (no exact stationary law here): the start
+        states of a stationary run, which circuit and Monte Carlo reference share and the
+        burn-in forgets (analogue.study.members)."""
+        return model.replace(noise=None)
+
     def dt_limit(self, dt: float) -> float:
         # resolve the correlation time (the force is held over a step)
         return min(dt, self.tau_c / 50.0)
@@ -138,8 +153,7 @@ class OrnsteinUhlenbeck(Noise):
                 default: Callable[..., tuple[np.ndarray, np.ndarray, int]]
                 ) -> tuple[np.ndarray, np.ndarray, int]:
         if parts is not None:
-            raise ValueError("noise= (given Gaussian increments) drives white noise only; the "
-                             "Ornstein-Uhlenbeck force draws its own (leave noise=None)")
+            return self._held_input(model, v, n_steps, per, dt, parts)
         c = self.step_coefficients(model.tau_m, dt)
         rows = v.size
         n_out = n_steps // per + 1
@@ -157,6 +171,43 @@ class OrnsteinUhlenbeck(Noise):
             v_new = (c["r"] * v + c["push"] * force + c["couple"] * eta
                      + c["l21"] * xi[0] + c["l22"] * xi[1])
             eta = c["rc"] * eta + c["l11"] * xi[0]
+            x += 0.5 * dt * (v + v_new)
+            v = v_new
+            if (k + 1) % per == 0:
+                v_out[:, (k + 1) // per] = v
+                x_out[:, (k + 1) // per] = x
+        return v_out, x_out, 0
+
+    def _held_input(self, model: Any, v: np.ndarray, n_steps: int, per: int, dt: float,
+                    parts: Any) -> tuple[np.ndarray, np.ndarray, int]:
+        """Given noise (``simulate_sde(noise=..., noise_hold=...)``): the filter's white input
+        held constant over each step (and over ``noise_hold`` steps), as the circuit's
+        ``trrandom`` holds it over ``noise_dt``: ``u = sqrt(2/(gamma dt)) z`` (so that ``u dt``
+        is the Wiener increment ``sqrt(2 dt/gamma) z``).  With ``u`` and the friction held, the
+        step is exact: ``eta' = rc eta + (1 - rc) u``, ``v' = r v + push force + couple eta +
+        (push - couple) u`` (``push - couple = int_0^dt e^{-alpha(dt-s)} (1 - e^{-beta s}) ds``).
+        Held over one step this is the OU force up to a relative ``Var v`` error of about
+        ``dt^2/(12 tau_m tau_c)`` (the held input's spectrum ``sinc^2(omega dt/2)`` through the
+        two low-passes); the report's bandwidth term pairs it with a hold of ``noise_dt``."""
+        ((noise, hold),) = parts
+        c = self.step_coefficients(model.tau_m, dt)
+        held = c["push"] - c["couple"]
+        amp = math.sqrt(2.0 / (self.gamma * dt))
+        rows = v.size
+        n_out = n_steps // per + 1
+        v_out = np.empty((rows, n_out))
+        x_out = np.empty((rows, n_out))
+        v = v.copy()
+        v_out[:, 0], x_out[:, 0] = v, 0.0
+        x = np.zeros(rows)
+        eta = np.zeros(rows)
+        law, restoring = model.friction, model.restoring
+        for k in range(n_steps):
+            force = model.a - law.dry(v)
+            force = restoring.add_force(law.add_drift(force, v), model.x0 + x)
+            u = amp * noise[:, k // hold]
+            v_new = c["r"] * v + c["push"] * force + c["couple"] * eta + held * u
+            eta = c["rc"] * eta + (1.0 - c["rc"]) * u
             x += 0.5 * dt * (v + v_new)
             v = v_new
             if (k + 1) % per == 0:

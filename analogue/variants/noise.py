@@ -110,6 +110,16 @@ class Noise:
     def typical_speed(self, v_typ: float) -> float:
         return v_typ
 
+    def closed_form_variance(self, model: Any) -> float | None:
+        """The stationary ``Var v`` of ``model`` in a closed form of this noise's own, or None
+        (the exact numerics of analogue.theory give it where an exact solver exists)."""
+        return None
+
+    def start_model(self, model: Any) -> Any:
+        """The model whose exact stationary law gives a stationary run its start states
+        (analogue.study.members): ``model`` itself where this noise has an exact solver."""
+        return model
+
     def widen_range(self, lo: float, hi: float, tau_m: float, level: float) -> tuple[float, float]:
         """The circuit's velocity range ``(lo, hi)`` widened by how far the noise's kicks
         reach (analogue.circuit.mapping.velocity_range; ``level``: jumps of ``level`` means)."""

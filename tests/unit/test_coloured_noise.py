@@ -49,8 +49,6 @@ def test_model_binds_round_trips_and_refuses():
         Model(1.0, 0.5, 0.2, 10.0, noise="ou")
     with pytest.raises(ValueError, match="exp\\(-gamma U\\)"):
         m.stationary_pdf(0.0)
-    with pytest.raises(ValueError, match="noise="):
-        simulate_sde(m, v0=0.0, t_end=1.0, replicas=2, dt=0.01, noise=np.zeros((2, 100)))
     assert default_dt(m) <= 0.5 / 50
 
 
@@ -70,6 +68,30 @@ def test_stationary_variance_at_zero_friction_is_the_closed_form(tau_c):
     assert abs(var - expected) < 4 * se_var
     # and it is not the white-noise value tau_m/gamma = 0.1 (the test can tell them apart)
     assert abs(var - 0.1) > 4 * se_var
+
+
+def test_given_noise_holds_the_filters_input_and_meets_the_closed_form_at_zero_friction():
+    """Given increments (the held-noise pair of the report's bandwidth term) drive the
+    filter's input, held over each step: at Delta = 0, dt = 0.02 its stationary variance is the
+    closed form tau_m^2/(gamma (tau_m + tau_c)) (relative bias dt^2/(12 tau_m tau_c) = 2e-4,
+    far below the 4 SE tolerance of ~6 %); held over 5 steps the same increments give another
+    path (a different force), and a wrong shape is refused."""
+    tau_c = 0.4
+    m = _ou(tau_c)
+    n = 1500
+    t_end, dt = 9.0, 0.02
+    z = np.random.default_rng(3).standard_normal((n, round(t_end / dt)))
+    e = simulate_sde(m, v0=0.3, t_end=t_end, replicas=n, dt=dt, sample_dt=1.0, noise=z)
+    mean, se_mean, var, se_var = _stationary(e, 5.0)
+    assert abs(mean - 0.3) < 4 * se_mean
+    assert abs(var - stationary_velocity_variance(1.0, 10.0, tau_c)) < 4 * se_var
+    held = z.reshape(n, -1, 5).mean(axis=2)
+    h = simulate_sde(m, v0=0.3, t_end=t_end, replicas=n, dt=dt, sample_dt=1.0, noise=held,
+                     noise_hold=5)
+    assert not np.array_equal(h.v[:, 1:], e.v[:, 1:])
+    assert np.corrcoef(h.v[:, -1], e.v[:, -1])[0, 1] > 0.9   # common increments
+    with pytest.raises(ValueError, match="noise must have shape"):
+        simulate_sde(m, v0=0.0, t_end=1.0, replicas=2, dt=0.01, noise=np.zeros((2, 99)))
 
 
 def test_short_correlation_time_recovers_white_noise_at_zero_friction():
