@@ -62,8 +62,9 @@ def _tau_c(m) -> float | None:
 
 def _noise_words(m) -> str:
     parts = []
-    if _tau_c(m) is not None:
-        parts.append(f"gamma = {_num(m.gamma)}, tau_c = {_num(_tau_c(m))} (coloured noise: white "
+    tau_c = _tau_c(m)
+    if tau_c is not None:
+        parts.append(f"gamma = {_num(m.gamma)}, tau_c = {_num(tau_c)} (coloured noise: white "
                      f"noise of intensity 1/gamma = {_num(1 / m.gamma)} through a low-pass of "
                      "correlation time tau_c, an Ornstein-Uhlenbeck force)")
     elif math.isfinite(m.gamma):

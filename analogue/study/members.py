@@ -690,15 +690,16 @@ def _analyse_monte_carlo(s: _Setting, runs: MemberRuns, res: MemberAnalysis) -> 
     bias = exp.mapping().bias
     v0_stat = _stationary_start(exp, sizes, plan)   # the stationary run's start states
     tick(f"{name}: Monte Carlo reference ({sizes.mc_replicas} replicas)")
-    groups = [(stat_obs, stat, _resampled(v0_stat, sizes.mc_replicas), sizes.stationary_t_end)]
+    groups: list[tuple] = [(stat_obs, stat, _resampled(v0_stat, sizes.mc_replicas),
+                            sizes.stationary_t_end)]
     if trans is not None:
         groups.append((trans_obs, trans, v00, max(times)))
     stationary: dict = {}
     for run_obs, ens, v0, T in groups:
         fns = _estimators(exp, run_obs, thr)
-        kw = dict(v0=v0, t_end=T, replicas=sizes.mc_replicas, seed=plan.member_monte_carlo,
-                  sample_dt=sizes.sample_dt)
-        mc, mc_eff = monte_carlo_reference(m, **kw), monte_carlo_reference(m_eff, **kw)
+        mc, mc_eff = (monte_carlo_reference(model, v0=v0, t_end=T, replicas=sizes.mc_replicas,
+                                            seed=plan.member_monte_carlo,
+                                            sample_dt=sizes.sample_dt) for model in (m, m_eff))
         band = _band(exp, fns, _resampled(v0_stat, 128) if ens is stat else v00, T,
                      128 if ens is stat else 256, plan.member_band, sample_dt=sizes.sample_dt)
         for o in run_obs:
