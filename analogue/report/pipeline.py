@@ -37,8 +37,10 @@ from ..study.budget import terms_above_se_text
 from ..study.comparisons import ExperimentAnalysis
 from ..study.critical_path import critical_path_text
 from ..study.members import CHAPTER_TITLE, MEMBERS, MemberRuns
-from ..study.run import StudyHooks, StudyResult, load as _load, run_study
-from ..study.runs import ExperimentRuns, run_experiment_runs
+# run_experiment (``analogue run``) runs circuits only: the study's; importable from here as before
+from ..study.run import (MemberRunSummary, RunSummary, StudyHooks, StudyResult, load as _load,  # noqa: F401
+                         run_experiment, run_study)
+from ..study.runs import ExperimentRuns
 from ..study.schedule import Failures, result_of, say as _log
 from ..study.settings import RunOptions
 from . import beyond, figures, measure_chapter, prose
@@ -57,48 +59,6 @@ class ReportIncomplete(RuntimeError):
         what = "; ".join(f"{f['section']}: {f['error']}" for f in failures)
         super().__init__(f"report written to {index} with {len(failures)} failed "
                          f"section(s): {what}")
-
-
-@dataclass
-class RunSummary:
-    runs: ExperimentRuns
-
-    def summary(self) -> str:
-        p = self.runs.provenance()
-        reps = ", ".join(f"{k}: {v}" for k, v in p["replicas"].items())
-        return (f"{p['experiment']}: runs stored ({reps}); ngspice {p['ngspice_version']}; "
-                f"{p['wall_time_s']:.1f} s")
-
-
-@dataclass
-class MemberRunSummary:
-    """The circuit runs of a family member (:func:`analogue.study.members.member_runs`): the
-    very runs ``analogue report`` reads for it (same decks and seeds, from the store)."""
-
-    runs: MemberRuns
-    wall_time: float
-
-    def summary(self) -> str:
-        runs = self.runs.by_role()
-        reps = ", ".join(f"{role}: {e.replicas} x {float(e.t[-1] - e.t[0]):g}"
-                         for role, e in runs.items())
-        version = next(iter(runs.values())).meta.get("ngspice_version")
-        name, quick = self.runs.exp.name, self.runs.quick
-        return (f"{name}: runs stored ({reps}; the {'quick' if quick else 'full'} size of "
-                f"'analogue report {name}'); ngspice {version}; {self.wall_time:.1f} s")
-
-
-def run_experiment(name, opts: RunOptions) -> RunSummary | MemberRunSummary:
-    """Run (or load from the store) every circuit run of one experiment: a paper-model
-    experiment's runs (:func:`analogue.study.runs.run_experiment_runs`), or a family
-    member's (:func:`analogue.study.members.member_runs`: the runs its report reads)."""
-    exp = _load(name)
-    _log(f"{exp.name}: running the circuit (stored runs are reused)")
-    if beyond_analysis.is_member_experiment(exp):
-        t0 = time.perf_counter()
-        runs = beyond_analysis.member_runs(exp, opts, progress=_log)
-        return MemberRunSummary(runs, time.perf_counter() - t0)
-    return RunSummary(run_experiment_runs(exp, opts))
 
 
 def build_experiment_report(name, out, opts: RunOptions) -> Path:

@@ -34,7 +34,8 @@ from ..circuit.simulate import POLL_S
 from ..ensemble import Ensemble
 from .comparisons import BandwidthTerms, ExperimentAnalysis, analyse, bandwidth_terms
 from .critical_path import report_critical_path
-from .members import CHAPTER_TITLE, MemberAnalysis, analyse_member, is_member_experiment
+from .members import (CHAPTER_TITLE, MemberAnalysis, MemberRuns, analyse_member,
+                      is_member_experiment, member_runs)
 from .metrics import Comparison, validate_metrics
 from .runs import ExperimentRuns, run_experiment_runs
 from .schedule import (CIRCUIT_THREADS, MEMBER_THREADS, NOW, SCHEDULER_CIRCUIT_THREADS,
@@ -45,7 +46,8 @@ from .theory_curves import (CURVE_GROUPS, ExperimentTheory, FigureCurves, experi
                             figure_curves)
 from .. import __version__
 
-__all__ = ["StudyResult", "StudyHooks", "run_study", "load", "experiment_section_title"]
+__all__ = ["StudyResult", "StudyHooks", "run_study", "load", "experiment_section_title",
+           "run_experiment", "RunSummary", "MemberRunSummary"]
 
 
 def load(name_or_exp) -> Experiment:
@@ -416,3 +418,45 @@ def _schedule(result: StudyResult, opts: RunOptions, hooks: StudyHooks, pool: Wo
     result.member_wall = sum(p["seconds"] for p in phases.items
                              if p["phase"] == "family member (circuit and theory)")
 
+
+# ------------------------------------------------------------------------ runs alone
+@dataclass
+class RunSummary:
+    runs: ExperimentRuns
+
+    def summary(self) -> str:
+        p = self.runs.provenance()
+        reps = ", ".join(f"{k}: {v}" for k, v in p["replicas"].items())
+        return (f"{p['experiment']}: runs stored ({reps}); ngspice {p['ngspice_version']}; "
+                f"{p['wall_time_s']:.1f} s")
+
+
+@dataclass
+class MemberRunSummary:
+    """The circuit runs of a family member (:func:`analogue.study.members.member_runs`): the
+    very runs ``analogue report`` reads for it (same decks and seeds, from the store)."""
+
+    runs: MemberRuns
+    wall_time: float
+
+    def summary(self) -> str:
+        runs = self.runs.by_role()
+        reps = ", ".join(f"{role}: {e.replicas} x {float(e.t[-1] - e.t[0]):g}"
+                         for role, e in runs.items())
+        version = next(iter(runs.values())).meta.get("ngspice_version")
+        name, quick = self.runs.exp.name, self.runs.quick
+        return (f"{name}: runs stored ({reps}; the {'quick' if quick else 'full'} size of "
+                f"'analogue report {name}'); ngspice {version}; {self.wall_time:.1f} s")
+
+
+def run_experiment(name, opts: RunOptions) -> RunSummary | MemberRunSummary:
+    """Run (or load from the store) every circuit run of one experiment: a paper-model
+    experiment's runs (:func:`analogue.study.runs.run_experiment_runs`), or a family
+    member's (:func:`analogue.study.members.member_runs`: the runs its report reads)."""
+    exp = load(name)
+    say(f"{exp.name}: running the circuit (stored runs are reused)")
+    if is_member_experiment(exp):
+        t0 = time.perf_counter()
+        runs = member_runs(exp, opts, progress=say)
+        return MemberRunSummary(runs, time.perf_counter() - t0)
+    return RunSummary(run_experiment_runs(exp, opts))
