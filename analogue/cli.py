@@ -365,12 +365,20 @@ def _reach_scheduler(address: str, timeout: float = 5.0) -> None:
                            f"the Dask scheduler running there?") from None
 
 
-def _options(workers, scheduler, store, timeout, quick, progress):
+def _options(workers, scheduler, store, timeout, quick, progress, sweeps=False):
     from .report.plan import RunOptions
     if scheduler is not None:
         _reach_scheduler(scheduler)
     return RunOptions(workers=workers, scheduler=scheduler, store=store, quick=quick,
-                      progress=progress, timeout=timeout)
+                      progress=progress, timeout=timeout, sweeps=sweeps)
+
+
+def _sweeps_option(f):
+    return click.option(
+        "--sweeps", is_flag=True,
+        help="Add the two sweep curves of the chapter 'What experiments measure' (the stick "
+             "experiment's drift against a and D_x against the noise strength: 8 more "
+             "circuit points at quick size, about 5 minutes on 2 cores).")(f)
 
 
 @main.command()
@@ -391,7 +399,8 @@ def run(experiment, workers, scheduler, store, timeout, quick, progress):
               callback=_out_dir_option, default=None,
               help="Report directory (default report/<name>).")
 @_run_options
-def report(experiment, out, workers, scheduler, store, timeout, quick, progress):
+@_sweeps_option
+def report(experiment, out, workers, scheduler, store, timeout, quick, progress, sweeps):
     """Build the report of EXPERIMENT (a name or a TOML path: yours) from stored runs (runs
     what is missing)."""
     from .circuit.experiments import load_experiment
@@ -399,7 +408,8 @@ def report(experiment, out, workers, scheduler, store, timeout, quick, progress)
     exp = load_experiment(experiment)  # validated before anything runs
     out = out or Path("report") / exp.name
     index = pipeline.build_experiment_report(exp, out, _options(workers, scheduler, store,
-                                                                timeout, quick, progress))
+                                                                timeout, quick, progress,
+                                                                sweeps))
     click.echo(f"report: {index}")
 
 
@@ -408,13 +418,14 @@ def report(experiment, out, workers, scheduler, store, timeout, quick, progress)
               callback=_out_dir_option, default=Path("report"),
               show_default=True, help="Where the report goes.")
 @_run_options
-def paper(out, workers, scheduler, store, timeout, quick, progress):
+@_sweeps_option
+def paper(out, workers, scheduler, store, timeout, quick, progress, sweeps):
     """The main job: the paper's experiments (stick, slip, work; never your own files - use
     `report` for those), the paper's Figs. 1-9 with circuit data, metrics.json and the error
     budget, in one self-contained report."""
     from .report import pipeline
     index = pipeline.build_paper_report(out, _options(workers, scheduler, store, timeout, quick,
-                                                      progress))
+                                                      progress, sweeps))
     click.echo(f"report: {index}")
 
 

@@ -12,16 +12,19 @@ reads the runs the experiments' sections made and runs no deck of its own.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from markupsafe import Markup, escape
 
 from ..plots.measure import draw_first_passage, draw_spectra
+from ..plots.sweep import diffusion_figure, mobility_figure
 from ..study import measure
 from ..theory.bias_transport import diffusion_exponent
 from .html import Figure, Section, Table
-from ..study.metrics import Comparison
+from ..study.metrics import Budget, Comparison, compare
+from ..study.sweep import BUDGET_TERMS, sweep
 from .prose import is_paper_experiment
 
 __all__ = ["CHAPTER_TITLE", "MEASURE_EXPERIMENTS", "THEORY_PHASE", "wants", "theory_tasks",
@@ -189,19 +192,84 @@ def _transport_text(a: measure.MeasureAnalysis, paper_comps: list[Comparison]) -
     return out
 
 
-SWEEP_NOTE = ("The issue's curves (the mobility against the force a, and D_x against the noise "
-              "strength on log-log axes with its local exponent) are the sweep's: `analogue "
-              "sweep` (analogue.study.sweep) was not in this version when the chapter was "
-              "written, so this page gives them at the experiments' own parameters only (the "
-              "exact mobility, Einstein-like ratio and local exponent below).")
+#: The chapter's two sweep curves (issue 23 item 2), on the paper's stick experiment at quick
+#: size (:func:`analogue.study.sweep.sweep`): ``name -> (vary, observable, figure)``.  Four
+#: points each: the drift across the stick-slip threshold a = Delta = 0.7, and D_x over a
+#: factor 8 of noise strength.
+SWEEPS: dict[str, tuple[dict, str, Callable]] = {
+    "mobility": ({"a": (0.0, 1.2, 4)}, "mean_v", mobility_figure),
+    "diffusion": ({"gamma": (5.0, 40.0, 4, "log")}, "D_x", diffusion_figure),
+}
+SWEEP_EXPERIMENT = "stick"
+_SWEEP_LABEL = {"mean_v": "drift <v>", "D_x": "diffusion D_x"}
+
+
+def sweep_comparisons(ds, obs: str, experiment: str) -> list[Comparison]:
+    """One comparison per point of a one-dimensional sweep dataset (:func:`analogue.study.
+    sweep.sweep`): its circuit value, stderr, exact value and budget terms, as in the
+    dataset (the same criterion as every row: :func:`analogue.study.metrics.compare`)."""
+    (axis,) = [d for d in ds[obs].dims]
+    out = []
+    for i, x in enumerate(ds[axis].values):
+        terms = {t: float(v) for t, v in zip(BUDGET_TERMS, ds[f"{obs}_budget_terms"].values[i])}
+        value, se = float(ds[obs].values[i]), float(ds[f"{obs}_stderr"].values[i])
+        theory = float(ds[f"{obs}_theory"].values[i])
+        if not (math.isfinite(value) and math.isfinite(se) and math.isfinite(theory)):
+            continue
+        out.append(compare(experiment, f"sweep: {_SWEEP_LABEL[obs]} at {axis}={x:.4g}", value,
+                           se, theory, "exact", Budget(**terms),
+                           "analogue.study.sweep at quick size: its own stationary run at this "
+                           "point (budget as the dataset's: smoothing, held/white bandwidth, "
+                           "the tolerance chooser's integration estimate)"))
+    return out
+
+
+def run_sweeps(exp, opts, out: Path, attempt) -> tuple[list, list, list[str]]:
+    """The two sweep curves of the chapter for ``exp`` (the paper's stick experiment):
+    ``(comparisons, figures, errors)``; each sweep's circuit runs go through the run store
+    like every other (``opts``: store, workers, scheduler, timeout)."""
+    comps, figs, errors = [], [], []
+    for name, (vary, obs, figure) in SWEEPS.items():
+        ds, err = attempt(CHAPTER_TITLE, f"sweep: {name}", lambda vary=vary: sweep(
+            exp, vary, quick=True, store=opts.store, workers=opts.workers,
+            scheduler=opts.scheduler, timeout=opts.timeout, progress=False), exp.name)
+        if ds is None:
+            errors.append(f"sweep {name}: {err}")
+            continue
+        comps += sweep_comparisons(ds, obs, exp.name)
+        paths, err = attempt(CHAPTER_TITLE, f"figure: {name}",
+                             lambda ds=ds, figure=figure: figure(ds, out), exp.name)
+        if paths is None:
+            errors.append(f"figure {name}: {err}")
+            continue
+        png = next(p for p in paths if str(p).endswith(".png"))
+        n_ok = sum(c.within_budget for c in comps if c.observable.startswith(
+            f"sweep: {_SWEEP_LABEL[obs]}"))
+        axis = next(iter(vary))
+        caption = (f"{exp.name}: {_SWEEP_LABEL[obs]} against {axis} at {ds.sizes[axis]} points "
+                   f"(circuit, quick size; {n_ok} within budget) and the exact theory"
+                   + (", with the local exponent d ln D_x / d ln D below (Goohpattader, Mettu "
+                      "& Chaudhury measured 1.61)" if obs == "D_x" else
+                      "; the stick-slip threshold is a = Delta"))
+        figs.append(Figure(png, caption))
+    return comps, figs, errors
+
+
+SWEEP_NOTE = ("The issue's curves over a parameter (the mobility: drift against the force a; "
+              "D_x against the noise strength on log-log axes with its local exponent) are the "
+              "sweep's (analogue.study.sweep): each point is its own circuit run, so they are "
+              "drawn here only when asked for (analogue report/paper --sweeps: 8 points of "
+              "the stick experiment at quick size, measured 143 s for 4 points under load); "
+              "at the experiments' own parameters the exact values are below.")
 
 
 def chapter(all_runs, futures: dict, out: Path, attempt, *, paper_comps=(),
-            sweep_note: str = SWEEP_NOTE) -> ChapterResult:
+            opts=None) -> ChapterResult:
     """The chapter from the report's runs (``all_runs``: ExperimentRuns) and the futures of
     :func:`theory_tasks` (``{experiment: Future}``).  ``attempt(section, stage, fn, experiment)`` runs a
     piece and records its failure (the pipeline's ``_Failures.attempt``).  ``paper_comps``:
-    the experiments' own comparisons (the drift and D_x rows the text quotes)."""
+    the experiments' own comparisons (the drift and D_x rows the text quotes).  ``opts``
+    (RunOptions): where the sweep curves' runs go, when ``opts.sweeps``."""
     res = ChapterResult()
     if not futures:
         return res
@@ -239,11 +307,33 @@ def chapter(all_runs, futures: dict, out: Path, attempt, *, paper_comps=(),
         _fp_text(a, [c for c in comps if c.experiment == a.experiment]) for a in res.analyses)))
     paragraphs.append(Markup("<b>Drift and diffusion under a bias.</b> ") + escape(" ".join(
         _transport_text(a, list(paper_comps)) for a in res.analyses)))
-    res.sections.insert(0, Section(CHAPTER_TITLE, _intro(comps, sweep_note)
-                                   + paragraphs, figures=figs + fp_figs, tables=[_table(comps)],
+    sweep_figs: list = []
+    runs0 = next((r for r in all_runs if r.exp.name == SWEEP_EXPERIMENT and r.exp.name in futures),
+                 None)
+    if opts is not None and getattr(opts, "sweeps", False) and runs0 is not None:
+        sweep_comps, sweep_figs, errs = run_sweeps(runs0.exp, opts, out, attempt)
+        res.comparisons.extend(sweep_comps)
+        comps = res.comparisons
+        err = "; ".join(x for x in [err, *errs] if x) or None
+        paragraphs.append(Markup("<b>Curves over a parameter.</b> ") + escape(
+            _sweep_text(sweep_comps)))
+    res.sections.insert(0, Section(CHAPTER_TITLE, _intro(comps, "" if sweep_figs else SWEEP_NOTE)
+                                   + paragraphs, figures=figs + fp_figs + sweep_figs,
+                                   tables=[_table(comps)],
                                    error=err))
     return res
 
+
+def _sweep_text(comps: list[Comparison]) -> str:
+    if not comps:
+        return "The sweeps failed (see the error below)."
+    ok = sum(c.within_budget for c in comps)
+    zmax = max(abs(c.z) for c in comps)
+    return (f"The mobility curve (drift against the force a, across the stick-slip threshold) "
+            f"and D_x against the noise strength 1/gamma (log-log, with its local exponent) of "
+            f"the stick experiment, each point its own circuit run at quick size "
+            f"(analogue.study.sweep): {ok} of {len(comps)} points within budget, largest "
+            f"|z| {zmax:.2f}.")
 
 
 def summary_rows(res: ChapterResult) -> list:

@@ -312,7 +312,8 @@ class _Drawer(StudyHooks):
                 self.measured = measure_chapter.chapter(
                     list(result.runs.values()), self.measure_f, self.out,
                     result.failures.attempt,
-                    paper_comps=[c for a in result.analyses.values() for c in a.comparisons])
+                    paper_comps=[c for a in result.analyses.values() for c in a.comparisons],
+                    opts=self.opts)
             result.measured = {a.experiment: a for a in self.measured.analyses}
 
 

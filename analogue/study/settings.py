@@ -72,6 +72,9 @@ class RunOptions:
     quick: bool = False
     progress: bool = True
     timeout: float | None = None  # seconds per deck; None: simulate's default
+    # the report's chapter "What experiments measure" also runs its two sweep curves (8
+    # circuit points of the stick experiment at quick size: analogue.report.measure_chapter)
+    sweeps: bool = False
 
     def simulate_kwargs(self) -> dict:
         kw: dict = {"workers": self.workers, "progress": self.progress}

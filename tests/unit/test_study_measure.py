@@ -146,3 +146,33 @@ def test_chapter_section_from_the_numbers(stick, tmp_path):
     assert "0.92 and 0.96 of the noise-free stick time" in text
     assert "sticking rate 1.31" in text
     assert {p.path.name for p in sec.figures} == {"spectra_stick.png", "first_passage_stick.png"}
+
+
+def test_sweep_points_become_comparisons_with_the_datasets_budget():
+    """A one-dimensional sweep dataset's points (the layout of analogue.study.sweep) become
+    rows with its circuit value, stderr, exact value and budget terms, judged by the report's
+    criterion; a point without a value (NaN) is left out."""
+    import xarray as xr
+    from analogue.study.sweep import BUDGET_TERMS
+    a = np.array([0.0, 0.3, 0.6])
+    terms = np.zeros((3, len(BUDGET_TERMS)))
+    terms[:, BUDGET_TERMS.index("bandwidth")] = [0.001, 0.002, 0.0]
+    ds = xr.Dataset({"mean_v": ("a", [0.004, 0.09, np.nan]),
+                     "mean_v_stderr": ("a", [0.002, 0.003, 0.004]),
+                     "mean_v_theory": ("a", [0.0, 0.1, 0.2]),
+                     "mean_v_budget_terms": (("a", "budget_term"), terms)},
+                    coords={"a": a, "budget_term": list(BUDGET_TERMS)})
+    comps = measure_chapter.sweep_comparisons(ds, "mean_v", "stick")
+    assert [c.observable for c in comps] == ["sweep: drift <v> at a=0", "sweep: drift <v> at a=0.3"]
+    assert comps[0].z == pytest.approx(2.0) and comps[0].budget.bandwidth == 0.001
+    assert comps[0].within_budget                       # 0.004 <= 3 * 0.002 + 0.001
+    assert comps[1].within_budget                       # 0.01 <= 3 * 0.003 + 0.002
+    assert comps[1].budget.total() == pytest.approx(0.002)
+
+
+def test_cli_offers_the_sweep_curves():
+    from click.testing import CliRunner
+    from analogue.cli import main
+    for cmd in ("report", "paper"):
+        r = CliRunner().invoke(main, [cmd, "--help"])
+        assert r.exit_code == 0 and "--sweeps" in r.output
