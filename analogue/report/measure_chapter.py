@@ -308,10 +308,11 @@ def chapter(all_runs, futures: dict, out: Path, attempt, *, paper_comps=(),
     paragraphs.append(Markup("<b>Drift and diffusion under a bias.</b> ") + escape(" ".join(
         _transport_text(a, list(paper_comps)) for a in res.analyses)))
     sweep_figs: list = []
-    runs0 = next((r for r in all_runs if r.exp.name == SWEEP_EXPERIMENT and r.exp.name in futures),
-                 None)
-    if opts is not None and getattr(opts, "sweeps", False) and runs0 is not None:
+    a0 = next((a for a in res.analyses if a.experiment == SWEEP_EXPERIMENT), None)
+    runs0 = next((r for r in all_runs if a0 is not None and r.exp.name == a0.experiment), None)
+    if opts is not None and getattr(opts, "sweeps", False) and a0 is not None and runs0:
         sweep_comps, sweep_figs, errs = run_sweeps(runs0.exp, opts, out, attempt)
+        a0.extra = sweep_comps   # the experiment's chapter rows (and so metrics.json's)
         res.comparisons.extend(sweep_comps)
         comps = res.comparisons
         err = "; ".join(x for x in [err, *errs] if x) or None

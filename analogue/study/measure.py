@@ -356,12 +356,18 @@ class MeasureAnalysis:
     first_passage: dict                 # v0 -> FirstPassageEstimate
     rows: list = field(default_factory=list)
     wall_time_s: float = 0.0
+    # comparisons made elsewhere for this experiment's chapter (the sweep points the report
+    # adds when asked: analogue.report.measure_chapter.run_sweeps)
+    extra: list = field(default_factory=list)
 
     @property
     def comparisons(self) -> list[Comparison]:
         """The rows as comparisons: smoothing and sampling as computed (signed), the measured
         bandwidth and integration differences as ``|d| + SE_MULTIPLIER SE`` (as every other
-        row of the report)."""
+        row of the report); then :attr:`extra`."""
+        return [*self._row_comparisons(), *self.extra]
+
+    def _row_comparisons(self) -> list[Comparison]:
         return [compare(self.experiment, r.label, r.circuit, r.stderr, r.theory, "exact",
                         Budget(smoothing=r.smoothing, sampling=r.sampling,
                                bandwidth=_term(r.bandwidth), integration=_term(r.integration)),
