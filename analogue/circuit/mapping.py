@@ -1033,33 +1033,24 @@ def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
         tau_leak = inductance / (inductor_rs * theta) if inductor_rs > 0 else math.inf
         bias.update(_spring_leak(model, tau_leak))
 
-    # --- shot noise: charge C kappa per unit jump, flat-topped pulses of width w
-    shot_charge = shot_width = 0.0
-    if model.shot is not None:
-        sh = model.shot
-        shot_charge = ck
+    # --- shot noise: charge C kappa per unit jump, flat-topped pulses of width w, the kicks'
+    # own (analogue.variants.noise.Shot.pulses; no pulses without kicks).  The pulses' edges
+    # are ramps, integrated by ngspice with first-order steps after each breakpoint: at most
+    # about half their share of the charge (measured on a bare capacitor: delivered jumps
+    # within 3e-6 of the recorded ones)
+    from .shot import EDGE
+    swing = math.sqrt(2 * SWING_LEVEL * model.tau_m / model.gamma) if gaussian else 0.0
+
+    def drift_max(jump: float) -> float:
+        # the largest drift over the velocity range, plus what a spring adds over its reach
         vgrid = np.linspace(v_lo, v_hi, 2001)
-        drift_max = float(np.max(np.abs(_sgn_law(model).drift(vgrid)))) + delta_max
-        if model.spring > 0:
-            drift_max += model.spring * (abs(model.x0) + delta_max / model.spring + 8.0 * sh.mean
-                                         + (math.sqrt(2 * SWING_LEVEL * model.tau_m / model.gamma)
-                                            if gaussian else 0.0))
-        step = spec.max_step if spec.max_step is not None else noise_dt
-        w_min = SHOT_MIN_WIDTH * step
-        if spec.shot_width is not None and spec.shot_width < w_min * (1 - 1e-12):
-            raise ValueError(f"shot_width={spec.shot_width:.3g} is below {w_min:.3g} "
-                             f"({SHOT_MIN_WIDTH:g} of the largest solver step {step:.3g}): "
-                             "ngspice then integrates the velocity between kicks wrongly; "
-                             "raise shot_width or lower max_step")
-        shot_width = (spec.shot_width if spec.shot_width is not None
-                      else max(SHOT_PULSE_TARGET * sh.mean / drift_max, w_min))
-        bias["shot_pulse"] = drift_max * shot_width / sh.mean
-        bias["shot_overlap"] = sh.rate * shot_width
-        # the pulses' edges are ramps, integrated by ngspice with first-order steps after
-        # each breakpoint: at most about half their share of the charge (measured on a bare
-        # capacitor: delivered jumps within 3e-6 of the recorded ones)
-        from .shot import EDGE
-        bias["shot_edge"] = EDGE / 2.0
+        return (float(np.max(np.abs(_sgn_law(model).drift(vgrid)))) + delta_max
+                + model.restoring.kick_drift(model, delta_max, jump, swing))
+
+    shot_charge, shot_width, shot_bias = model.noise_kind.pulses(
+        ck, drift_max, spec.max_step if spec.max_step is not None else noise_dt, spec.shot_width,
+        min_width=SHOT_MIN_WIDTH, target=SHOT_PULSE_TARGET, edge=EDGE)
+    bias.update(shot_bias)
 
     mapping = CircuitMapping(
         model=model, spec=spec, theta=theta, capacitance=cap, kappa=kappa,

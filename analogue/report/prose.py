@@ -236,7 +236,7 @@ def theory_kinds_text(experiments, members) -> str:
             refs.append("the Kolmogorov-Feller numerics for shot noise")
         if any(m.spring > 0 for m in models):
             refs.append("the Monte Carlo for a spring")
-        if any(m.spring == 0 and _tau_c(m) is not None for m in models):
+        if any(m.dimension == 1 and _tau_c(m) is not None for m in models):
             refs.append("the Monte Carlo for coloured noise (no exact theory yet)")
         out.append("For the family's members the reference is " + ", ".join(refs) + ".")
     return " ".join(out)

@@ -47,58 +47,116 @@ def _check_model(model: object) -> None:
     checks.instance("model", model, Model, description="an analogue.Model")
 
 
+class _Paper:
+    """The paper's model (:attr:`analogue.Model.is_paper`): closed forms, half-line
+    quadrature and the Scharfetter-Gummel Fokker-Planck of :mod:`.stationary`,
+    :mod:`.work_statistics` and this module."""
+
+    @staticmethod
+    def stationary_moments(model: Model, h: float | None) -> StationaryMoments:
+        return _stationary_moments(model, h=h)
+
+    @staticmethod
+    def scgf(model: Model, k: ArrayLike, h: float | None) -> np.ndarray:
+        out: np.ndarray = _paper_scgf(model, k, h=h)
+        return out
+
+    @staticmethod
+    def rate_function(model: Model, w: ArrayLike, h: float | None) -> np.ndarray:
+        out: np.ndarray = _paper_rate_function(model, w, h=h)
+        return out
+
+    @staticmethod
+    def work_pdf(model: Model, w: ArrayLike, tau: float, **kwargs: Any) -> np.ndarray:
+        out: np.ndarray = _paper_work_pdf(model, w, tau, **kwargs)
+        return out
+
+    @staticmethod
+    def propagator_atom(model: Model, t: ArrayLike, v0: float, t0: float,
+                        h: float | None) -> float | np.ndarray:
+        t_arr = np.asarray(t, dtype=float)   # Gaussian noise: no atom
+        return 0.0 if t_arr.ndim == 0 else np.zeros(t_arr.shape)
+
+    @staticmethod
+    def propagator(model: Model, v: ArrayLike, t: ArrayLike, v0: float, t0: float,
+                   grid: Grid | None, h: float | None, method: str) -> np.ndarray:
+        return _paper_propagator(model, v, t, v0, t0, grid=grid, h=h, method=method)
+
+
+class _Family:
+    """Every other one-dimensional member: :mod:`.family`, whose solver the noise variant
+    names (``model.noise.exact_solver``: Fokker-Planck, Kolmogorov-Feller; a noise without
+    one, coloured noise, is refused there naming the Monte Carlo)."""
+
+    @staticmethod
+    def stationary_moments(model: Model, h: float | None) -> StationaryMoments:
+        moments: StationaryMoments = _family.stationary_moments(model, h=h)
+        return moments
+
+    @staticmethod
+    def scgf(model: Model, k: ArrayLike, h: float | None) -> np.ndarray:
+        out: np.ndarray = _family.scgf(model, k, h=h)
+        return out
+
+    @staticmethod
+    def rate_function(model: Model, w: ArrayLike, h: float | None) -> np.ndarray:
+        out: np.ndarray = _family.rate_function(model, w, h=h)
+        return out
+
+    @staticmethod
+    def work_pdf(model: Model, w: ArrayLike, tau: float, **kwargs: Any) -> np.ndarray:
+        raise ValueError("work_pdf is implemented for the paper's model only; for the family use "
+                         "exact.scgf / exact.rate_function")
+
+    @staticmethod
+    def propagator_atom(model: Model, t: ArrayLike, v0: float, t0: float,
+                        h: float | None) -> float | np.ndarray:
+        atom: float | np.ndarray = _family.propagator_atom(model, t, v0, t0, h=h)
+        return atom
+
+    @staticmethod
+    def propagator(model: Model, v: ArrayLike, t: ArrayLike, v0: float, t0: float,
+                   grid: Grid | None, h: float | None, method: str) -> np.ndarray:
+        if grid is not None or method != "auto":
+            raise ValueError("grid and method apply to the paper's model only")
+        density: np.ndarray = _family.propagator(model, v, t, v0, t0, h=h)
+        return density
+
+
+def _route(model: Model) -> type[_Paper] | type[_Family]:
+    """The exact route of ``model``, chosen here once: the paper's numerics or the family's."""
+    _check_model(model)
+    return _Paper if model.is_paper else _Family
+
+
 def stationary_moments(model: Model, h: float | None = None) -> StationaryMoments:
     """Exact stationary moments; the paper's model by :mod:`.stationary`, every other 1-D
     member of the family by :mod:`.family` (with ``p_zero``, the atom at v = 0)."""
-    _check_model(model)
-    if not model.is_paper:
-        moments: StationaryMoments = _family.stationary_moments(model, h=h)
-        return moments
-    return _stationary_moments(model, h=h)
+    return _route(model).stationary_moments(model, h)
 
 
 def scgf(model: Model, k: ArrayLike, *, h: float | None = None) -> np.ndarray:
     """Work SCGF (:func:`.work_statistics.scgf`; family members: :func:`.family.scgf`)."""
-    _check_model(model)
-    if not model.is_paper:
-        out: np.ndarray = _family.scgf(model, k, h=h)
-    else:
-        out = _paper_scgf(model, k, h=h)
-    return out
+    return _route(model).scgf(model, k, h)
 
 
 def rate_function(model: Model, w: ArrayLike, *, h: float | None = None) -> np.ndarray:
     """Work rate function (:func:`.work_statistics.rate_function`; family members:
     :func:`.family.rate_function`, whose scaling with gamma = inf is documented there)."""
-    _check_model(model)
-    if not model.is_paper:
-        out: np.ndarray = _family.rate_function(model, w, h=h)
-    else:
-        out = _paper_rate_function(model, w, h=h)
-    return out
+    return _route(model).rate_function(model, w, h)
 
 
 def work_pdf(model: Model, w: ArrayLike, tau: float, **kwargs: Any) -> np.ndarray:
     """Finite-time work density (:func:`.work_statistics.work_pdf`); the paper's model only
     (for family members the SCGF and rate function are available)."""
-    _check_model(model)
-    if not model.is_paper:
-        raise ValueError("work_pdf is implemented for the paper's model only; for the family use "
-                         "exact.scgf / exact.rate_function")
-    out: np.ndarray = _paper_work_pdf(model, w, tau, **kwargs)
-    return out
+    return _route(model).work_pdf(model, w, tau, **kwargs)
 
 
 def propagator_atom(model: Model, t: ArrayLike, v0: float, t0: float = 0.0, *,
                     h: float | None = None) -> float | np.ndarray:
     """``P(v(t) = 0 | v0)``: the atom of the transition law (pure shot noise, stick regime);
     0 for the paper's model."""
-    _check_model(model)
-    if model.is_paper:
-        t_arr = np.asarray(t, dtype=float)
-        return 0.0 if t_arr.ndim == 0 else np.zeros(t_arr.shape)
-    atom: float | np.ndarray = _family.propagator_atom(model, t, v0, t0, h=h)
-    return atom
+    return _route(model).propagator_atom(model, t, v0, t0, h)
 
 
 def propagator(model: Model, v: ArrayLike, t: ArrayLike, v0: float, t0: float = 0.0, *,
@@ -154,12 +212,12 @@ def propagator(model: Model, v: ArrayLike, t: ArrayLike, v0: float, t0: float = 
     ~1e-12).  Cost: O(n) per time; the grid has 900 - 14000 nodes in the cases above (see
     ``benchmarks/bench_propagator_grid.py`` for the cost against the previous grid).
     """
-    _check_model(model)
-    if not model.is_paper:
-        if grid is not None or method != "auto":
-            raise ValueError("grid and method apply to the paper's model only")
-        density: np.ndarray = _family.propagator(model, v, t, v0, t0, h=h)
-        return density
+    return _route(model).propagator(model, v, t, v0, t0, grid, h, method)
+
+
+def _paper_propagator(model: Model, v: ArrayLike, t: ArrayLike, v0: float, t0: float, *,
+                      grid: Grid | None, h: float | None, method: str) -> np.ndarray:
+    """:func:`propagator` of the paper's model (Scharfetter-Gummel grid, :mod:`.propagation`)."""
     v = np.asarray(v, dtype=float)
     if not np.all(np.isfinite(v)):
         raise ValueError("v must be finite")

@@ -132,6 +132,13 @@ class Noise:
     def dt_limit(self, dt: float) -> float:
         return dt
 
+    def pulses(self, charge: float, drift_max: Callable[[float], float], step: float,
+               width: float | None, *, min_width: float, target: float, edge: float
+               ) -> tuple[float, float, dict[str, float]]:
+        """``(charge per unit jump, pulse width, budget terms)`` of the circuit's kick pulses
+        (analogue.circuit.mapping): none without kicks."""
+        return 0.0, 0.0, {}
+
     def kicker(self) -> Callable[[float, int, np.random.Generator], np.ndarray] | None:
         """``kicks(dt, rows, rng)``: the velocity kicks of one Monte Carlo step, or None when
         this noise has none."""
@@ -240,6 +247,28 @@ class Shot(Noise):
 
     def kicker(self) -> Callable[[float, int, np.random.Generator], np.ndarray]:
         return self.step_kicks
+
+    def pulses(self, charge: float, drift_max: Callable[[float], float], step: float,
+               width: float | None, *, min_width: float, target: float, edge: float
+               ) -> tuple[float, float, dict[str, float]]:
+        """Each kick a flat-topped current pulse of ``charge`` per unit jump and width ``w``:
+        ``width`` when given (refused below ``min_width`` of the largest solver ``step``:
+        ngspice then integrates the velocity between kicks wrongly), else ``target mean /
+        drift_max`` and at least that floor, with ``drift_max(mean)`` the largest drift over
+        the velocity range.  Budget terms: ``shot_pulse = drift_max w/mean`` (the drift
+        during a pulse against the jump), ``shot_overlap = rate w``, ``shot_edge = edge/2``
+        (the ramps' share of the charge, integrated to first order)."""
+        sh = self.shot
+        dmax = drift_max(sh.mean)
+        w_min = min_width * step
+        if width is not None and width < w_min * (1 - 1e-12):
+            raise ValueError(f"shot_width={width:.3g} is below {w_min:.3g} ({min_width:g} of "
+                             f"the largest solver step {step:.3g}): ngspice then integrates "
+                             "the velocity between kicks wrongly; raise shot_width or lower "
+                             "max_step")
+        w = width if width is not None else max(target * sh.mean / dmax, w_min)
+        return charge, w, {"shot_pulse": dmax * w / sh.mean, "shot_overlap": sh.rate * w,
+                           "shot_edge": edge / 2.0}
 
     def step_kicks(self, dt: float, rows: int, rng: np.random.Generator) -> np.ndarray:
         """The exact compound-Poisson sum of one step: count ~ Poisson(rate dt), the sum of

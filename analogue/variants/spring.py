@@ -32,6 +32,12 @@ class Restoring:
     def dt_limit(self, dt: float) -> float:
         return dt
 
+    def kick_drift(self, model: Any, delta_max: float, jump: float, swing: float) -> float:
+        """What the restoring force adds to the largest drift a kick's pulse must outrun
+        (analogue.circuit.mapping: shot pulse width), for kicks of mean ``jump``, friction
+        at most ``delta_max`` and a Gaussian velocity swing ``swing``: nothing without one."""
+        return 0.0
+
     def attractor(self, model: Any) -> float:
         """Deterministic attractor from rest: 0 if |a| <= Delta(0), else the friction law's."""
         if abs(model.a) <= model.static_friction:
@@ -80,6 +86,11 @@ class Spring(Restoring):
     def attractor(self, model: Any) -> float:
         """With a spring every motion ends at rest."""
         return 0.0
+
+    def kick_drift(self, model: Any, delta_max: float, jump: float, swing: float) -> float:
+        """``spring (|x0| + Delta_max/spring + 8 jump + swing)``: the spring force over the
+        position's reach (the release, the stick band, 8 mean jumps, the Gaussian swing)."""
+        return self.spring * (abs(self.x0) + delta_max / self.spring + 8.0 * jump + swing)
 
     def entries(self) -> dict[str, Any]:
         return {"spring": self.spring, **super().entries()}
