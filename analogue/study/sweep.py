@@ -7,7 +7,7 @@ parameter.  At each point:
 - **circuit**: a stationary run (the experiment's ``[report]`` stationary settings: replicas,
   length, burn-in, the finer stationary noise hold ``stationary_hold_divisor``; ``quick``
   scales them as ``analogue report --quick`` does) and a first-passage run from the fixed
-  start ``v0 = experiment.v0[0]`` (the experiment's replicas and ``t_end``, on the same
+  start ``v0``, the first nonzero ``experiment.v0`` (the experiment's replicas and ``t_end``, on the same
   finer hold: one tolerance calibration serves both runs, and the first passage's
   held-noise bias is the smaller one), both through
   :func:`analogue.simulate`, so every deck goes through the run store (a repeated or
@@ -35,9 +35,10 @@ metrics.compare`):
 ``D_x``              position diffusion coefficient, Var x(t) ~ 2 D_x t (Green-Kubo)
 ``mean_work_rate``   F <v> with F = m a (the work rate of eq. (3) in reduced units: the
                      experiment's mass times the point's a, times <v>)
-``first_passage_mean`` mean time from v0 = experiment.v0[0] to the first v = 0 (NaN in the
-                     circuit where a replica has not reached 0 by t_end: censored; the
-                     count is ``first_passage_censored``)
+``first_passage_mean`` mean time from v0 = the first nonzero experiment.v0 to the first
+                     v = 0 (NaN in the circuit where a replica has not reached 0 by t_end:
+                     censored, counted in ``first_passage_censored``; NaN everywhere when
+                     every experiment.v0 is 0, as in the work experiment)
 ==================== ===================================================================
 
 Theory curves: ``<obs>_theory_fine_<name>`` on the coordinate ``<name>_fine`` (61 values
@@ -338,7 +339,7 @@ class SweepPlan:
     quick: bool
     settings: ReportSettings            # the stationary settings at this size
     fp_replicas: int                    # first-passage replicas
-    fp_v0: float
+    fp_v0: float | None                 # None: every experiment.v0 is 0 (no first passage)
     points: tuple[dict, ...]
     models: tuple[Model, ...]
     mappings: tuple[CircuitMapping, ...]
@@ -384,7 +385,8 @@ def plan_sweep(experiment: Experiment | str | Path, vary: Mapping[str, Any], *,
         models.append(model)
         mappings.append(mapping)
     return SweepPlan(exp=exp, axes=axes, quick=quick, settings=settings,
-                     fp_replicas=fp_replicas, fp_v0=float(exp.v0[0]), points=tuple(points),
+                     fp_replicas=fp_replicas,
+                     fp_v0=next((float(v) for v in exp.v0 if v != 0), None), points=tuple(points),
                      models=tuple(models), mappings=tuple(mappings))
 
 
@@ -407,17 +409,19 @@ def _window_probability(model: Model, threshold: float) -> float:
     return float(min(1.0, val))
 
 
-def point_theory(model: Model, *, threshold: float, v0: float) -> dict[str, float]:
+def point_theory(model: Model, *, threshold: float, v0: float | None) -> dict[str, float]:
     """Exact values of every sweep observable (:data:`OBSERVABLES`) for ``model`` (1-D,
     Gaussian noise): the stationary moments and D_x (:func:`analogue.theory.exact.
     stationary_moments`), P(|v| < threshold), F <v> (F = m a) and the mean first-passage
-    time from ``v0`` (quadrature, :func:`analogue.theory.first_passage.first_passage_mean`)."""
+    time from ``v0`` (quadrature, :func:`analogue.theory.first_passage.first_passage_mean`;
+    NaN for ``v0 = None``)."""
     mom = stationary_moments(model)
     return {"mean_v": float(mom.mean), "var_v": float(mom.variance),
             "p_positive": float(mom.p_positive),
             "stick_fraction": _window_probability(model, threshold),
             "D_x": float(mom.diffusion), "mean_work_rate": float(model.force * mom.mean),
-            "first_passage_mean": float(first_passage_mean(model, v0))}
+            "first_passage_mean": (math.nan if v0 is None
+                                   else float(first_passage_mean(model, v0)))}
 
 
 # points of the theory curves along each axis (the figures' lines): every observable but the
@@ -551,11 +555,13 @@ def _point(plan: SweepPlan, i: int, runner: Runner) -> dict[str, Any]:
                     replicas=settings.stationary_replicas, seed=seeds["sweep_stationary"],
                     sample_dt=exp.sample_dt, circuit=stat_spec,
                     runner=runner.replace(label=f"sweep {exp.name} {where} stationary"[:100]))
-    log.info("%s: %s: first-passage run from v0=%g", exp.name, where, plan.fp_v0)
-    fp = simulate(model, v0=plan.fp_v0, t_end=exp.t_end, replicas=plan.fp_replicas,
-                  seed=seeds["sweep_first_passage"], sample_dt=exp.sample_dt,
-                  circuit=stat_spec,
-                  runner=runner.replace(label=f"sweep {exp.name} {where} first passage"[:100]))
+    fp = None
+    if plan.fp_v0 is not None:
+        log.info("%s: %s: first-passage run from v0=%g", exp.name, where, plan.fp_v0)
+        fp = simulate(model, v0=plan.fp_v0, t_end=exp.t_end, replicas=plan.fp_replicas,
+                      seed=seeds["sweep_first_passage"], sample_dt=exp.sample_dt,
+                      circuit=stat_spec, runner=runner.replace(
+                          label=f"sweep {exp.name} {where} first passage"[:100]))
     lap("circuit_s")
 
     log.info("%s: %s: theory and held-noise Monte Carlo pair", exp.name, where)
@@ -587,16 +593,17 @@ def _point(plan: SweepPlan, i: int, runner: Runner) -> dict[str, Any]:
     # D_x is a variance (of increments): its jackknife scales with the estimate, so a low
     # estimate reports a small error; under the null the error is that at the theory's value
     # (the rule stationary_null_se applies to var v).  Measured on the quick stick point
-    # a = 0.2 over 6 circuit seeds: z +1.5, -0.7, -1.6, 0.0, -3.2, -3.7 on the jackknife
-    # alone, the low estimates with the smallest errors (0.0005 against 0.0011)
+    # a = 0.2 over 6 circuit seeds: z +1.5, -0.7, -1.6, 0.0, -3.2, -1.3 on the jackknife
+    # alone (the sweep's own seed: -3.7), the low estimates with the smallest errors (0.0005
+    # against 0.0011)
     val = circ[_KINDS["D_x"]][0]
     if val > 0 and th_eff["D_x"] > val:
         stderr["D_x"] = max(stderr["D_x"], stderr["D_x"] * th_eff["D_x"] / val)
-    est = first_passage(fp)
+    est = first_passage(fp) if fp is not None else None
     lap("estimates_s")
 
-    # the held noise: white against held on common increments (stationary: the stationary
-    # runs' finer hold; first passage: the circuit's hold), seeds from the point's band stream
+    # the held noise: white against held on common increments, on the stationary runs' hold
+    # (both circuit runs use it), seeds from the point's band stream
     n_mc = MC_QUICK_REPLICAS if plan.quick else MC_REPLICAS
     band_seed = seeds["sweep_band"]
     fp_seed = int(np.random.SeedSequence(band_seed, spawn_key=(1,)).generate_state(
@@ -607,12 +614,12 @@ def _point(plan: SweepPlan, i: int, runner: Runner) -> dict[str, Any]:
         t_end=_whole_holds(settings.stationary_t_end, stat_hold, exp.sample_dt), replicas=n_mc,
         seed=band_seed, noise_dt=stat_hold, sample_dt=exp.sample_dt)
     band = jackknife_difference(fn_band, held, white)
-    held, white = held_noise_pair(model_eff, v0=plan.fp_v0,
-                                  t_end=_whole_holds(exp.t_end, stat_hold, exp.sample_dt),
-                                  replicas=n_mc,
-                                  seed=fp_seed, noise_dt=stat_hold,
-                                  sample_dt=exp.sample_dt)
-    band.update(jackknife_difference(_fp_values, held, white))
+    if plan.fp_v0 is not None:
+        held, white = held_noise_pair(model_eff, v0=plan.fp_v0,
+                                      t_end=_whole_holds(exp.t_end, stat_hold, exp.sample_dt),
+                                      replicas=n_mc, seed=fp_seed, noise_dt=stat_hold,
+                                      sample_dt=exp.sample_dt)
+        band.update(jackknife_difference(_fp_values, held, white))
     lap("monte_carlo_s")
 
     out: dict[str, Any] = {}
@@ -626,20 +633,26 @@ def _point(plan: SweepPlan, i: int, runner: Runner) -> dict[str, Any]:
     val, se, _, terms = out["mean_v"]
     out["mean_work_rate"] = (f * val, abs(f) * se, th["mean_work_rate"],
                              {k: abs(f) * v for k, v in terms.items()})
-    d, d_se = band["first_passage_mean"]
-    out["first_passage_mean"] = (est.mean, est.mean_se, th["first_passage_mean"], {
-        "smoothing": th_eff["first_passage_mean"] - th["first_passage_mean"],
-        "bandwidth": abs(d) + SE_MULTIPLIER * d_se,
-        "integration": _integration(fp.meta, est.mean_se),
-        "sampling": sampling_bias_bound(model, plan.fp_v0, exp.sample_dt)})
-    out["_info"] = {"timing": timing, "seeds": seeds, "threshold": thr, "censored": est.n_censored,
-                    "stationary_replicas": stat.replicas, "first_passage_replicas": fp.replicas,
+    if fp is not None and est is not None and plan.fp_v0 is not None:
+        d, d_se = band["first_passage_mean"]
+        out["first_passage_mean"] = (est.mean, est.mean_se, th["first_passage_mean"], {
+            "smoothing": th_eff["first_passage_mean"] - th["first_passage_mean"],
+            "bandwidth": abs(d) + SE_MULTIPLIER * d_se,
+            "integration": _integration(fp.meta, est.mean_se),
+            "sampling": sampling_bias_bound(model, plan.fp_v0, exp.sample_dt)})
+    else:
+        out["first_passage_mean"] = (math.nan, math.nan, math.nan,
+                                     {t: math.nan for t in BUDGET_TERMS})
+    out["_info"] = {"timing": timing, "seeds": seeds, "threshold": thr,
+                    "censored": est.n_censored if est is not None else 0,
+                    "stationary_replicas": stat.replicas,
+                    "first_passage_replicas": fp.replicas if fp is not None else 0,
                     "ngspice_version": stat.meta.get("ngspice_version"),
                     "stationary_noise_dt": stat.meta.get("noise_dt"),
-                    "first_passage_noise_dt": fp.meta.get("noise_dt"),
+                    "first_passage_noise_dt": fp.meta.get("noise_dt") if fp is not None else None,
                     "epsilon": mapping.epsilon,
                     "wall_time_s": float(stat.meta.get("wall_time", 0.0))
-                    + float(fp.meta.get("wall_time", 0.0))}
+                    + (float(fp.meta.get("wall_time", 0.0)) if fp is not None else 0.0)}
     return out
 
 
@@ -734,7 +747,7 @@ def _dataset(plan: SweepPlan, results: list[dict], wall: float):
         "stationary_burn_in": float(st.stationary_burn_in),
         "stationary_hold_divisor": int(st.stationary_hold_divisor),
         "stick_threshold_factor": float(st.stick_threshold),
-        "first_passage_v0": plan.fp_v0,
+        "first_passage_v0": math.nan if plan.fp_v0 is None else plan.fp_v0,
         "first_passage_replicas": int(plan.fp_replicas),
         "first_passage_t_end": float(exp.t_end),
         "sample_dt": float(exp.sample_dt),

@@ -29,20 +29,20 @@ def store(tmp_path_factory):
     return tmp_path_factory.mktemp("sweep-store")
 
 
+def _sweep(name, grid, store, tmp_path_factory):
+    out = tmp_path_factory.mktemp(f"sweep-{name}")
+    return analogue.sweep("stick", {name: grid}, quick=True, out=out, store=store,
+                          progress=False), out
+
+
 @pytest.fixture(scope="module")
 def over_a(store, tmp_path_factory):
-    out = tmp_path_factory.mktemp("sweep-a")
-    ds = analogue.sweep("stick", {"a": A_GRID}, quick=True, out=out, store=store,
-                        progress=False)
-    return ds, out
+    return _sweep("a", A_GRID, store, tmp_path_factory)
 
 
 @pytest.fixture(scope="module")
 def over_gamma(store, tmp_path_factory):
-    out = tmp_path_factory.mktemp("sweep-gamma")
-    ds = analogue.sweep("stick", {"gamma": GAMMA_GRID}, quick=True, out=out, store=store,
-                        progress=False)
-    return ds, out
+    return _sweep("gamma", GAMMA_GRID, store, tmp_path_factory)
 
 
 def _check_file(out, dim, values):
@@ -146,3 +146,45 @@ def test_cli_refuses_bad_grids_before_running(cli, tmp_path):
         assert not (tmp_path / "x").exists()
     r = cli.invoke(main, ["sweep", "stick", "--quick", "--out", str(tmp_path / "x")])
     assert r.exit_code == 2 and "--vary" in r.output
+
+
+def test_an_experiment_started_at_rest_has_no_first_passage(tmp_path):
+    """Every experiment.v0 = 0: the first passage is NaN throughout (theory, circuit, budget,
+    flagged undefined), and nothing else is missing.  A small user experiment (8 replicas
+    of 4 tau_m at quick size) to keep it cheap."""
+    toml = tmp_path / "rest.toml"
+    toml.write_text(TINY)
+    ds = analogue.sweep(toml, {"a": [0.1]}, quick=True, out=tmp_path / "out",
+                        store=tmp_path / "store", progress=False)
+    assert np.isnan(ds["first_passage_mean"].values).all()
+    assert np.isnan(ds["first_passage_mean_theory"].values).all()
+    assert (ds["first_passage_mean_within_budget"].values == -1).all()
+    assert ds["first_passage_censored"].values.tolist() == [0]
+    assert math.isnan(ds.attrs["first_passage_v0"])
+    for obs in OBSERVABLES[:-1]:
+        assert np.isfinite(ds[obs].values).all() and np.isfinite(ds[obs + "_theory"]).all()
+    with xr.open_dataset(tmp_path / "out" / "sweep.nc") as on_disk:
+        assert set(on_disk.data_vars) == set(ds.data_vars)
+
+
+TINY = """
+name = "rest"
+[model]
+tau_m = 1.0
+delta = 0.7
+a = 0.2
+gamma = 10.0
+[circuit]
+time_scale = 1e-3
+capacitance = 100e-9
+[experiment]
+v0 = [0.0]
+replicas = 8
+t_end = 2.0
+sample_dt = 0.01
+[report]
+stationary_replicas = 8
+stationary_t_end = 8.0
+stationary_burn_in = 1.0
+check_replicas = 4
+"""

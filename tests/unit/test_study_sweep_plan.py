@@ -152,3 +152,13 @@ def test_monte_carlo_pair_runs_on_holds_that_do_not_divide_the_run():
     held, white = held_noise_pair(plan.mappings[0].model_effective, v0=2.0, t_end=t,
                                   replicas=2, seed=1, noise_dt=hold, sample_dt=plan.exp.sample_dt)
     assert held.v.shape == white.v.shape
+
+
+def test_first_passage_starts_from_the_first_nonzero_v0():
+    # the work experiment starts at v0 = [0, 3]: a path started at rest is there at once
+    assert load_experiment("work").v0[0] == 0.0
+    assert S.plan_sweep("work", {"a": [0.5]}, quick=True).fp_v0 == 3.0
+    assert S.plan_sweep("stick", {"a": [0.5]}, quick=True).fp_v0 == 2.0
+    m = STICK.model
+    assert math.isnan(S.point_theory(m, threshold=0.03, v0=None)["first_passage_mean"])
+    assert S.point_theory(m, threshold=0.03, v0=2.0)["first_passage_mean"] > 0
