@@ -254,8 +254,9 @@ def _transition_law(exp: Experiment, model: Model, v0: float, times):
     out before: var v at t = 0.5 read 0.308 instead of 0.163 for tau_m 2, Delta 0.3, a -0.5,
     two-sided kicks rate 1.5, mean 0.4, v0 = 0)."""
     lo = min(v0, model.potential_minimum() if model.is_gradient else 0.0) - 12 * model.velocity_scale
-    hi = max(v0, model.attractor) + 12 * model.velocity_scale + (
-        12 * model.shot.mean if model.shot is not None else 0.0)
+    # and 12 mean jumps of the kicks (analogue.variants: none without kicks)
+    hi = max(v0, model.attractor) + 12 * model.velocity_scale + 12 * sum(
+        model.noise_kind.jump_scales())
     dv = (hi - lo) / 4000
     v = dv * np.arange(math.floor(lo / dv), math.ceil(hi / dv) + 1)   # v = 0 on a node
     ts = np.asarray(times, float)
@@ -360,18 +361,32 @@ def member_runs(exp: Experiment, opts=None, *, quick: bool | None = None,
     sizes = member_sizes(exp, quick)
     tick = progress or (lambda *_: None)
     plan = SeedPlan(exp.seed)             # every seed below (analogue.study.seeds)
+    runs = _RUNS.get(C.model_class(exp.model), _one_d_runs)
+    return runs(exp, opts, sizes=sizes, quick=quick, plan=plan, tick=tick)
+
+
+def _release_runs(exp: Experiment, opts, *, sizes: MemberSizes, quick: bool, plan: SeedPlan,
+                  tick: Callable) -> MemberRuns:
+    """The spring's runs: the release from x0 at rest and its first deck 100x tighter."""
     seed, name, m = plan.member_circuit, exp.name, exp.model
-    if m.spring > 0:
-        tick(f"{name}: circuit run from x0 = {m.x0:g} ({sizes.transition_replicas} replicas)")
-        circ = _circuit(exp, v0=0.0, t_end=sizes.stationary_t_end,
-                        replicas=sizes.transition_replicas, seed=seed, sizes=sizes, opts=opts,
-                        per_deck=CHECK_REPLICAS)
-        tick(f"{name}: integration check (first {CHECK_REPLICAS} replicas, 100x tighter)")
-        chk = _circuit(exp, v0=0.0, t_end=sizes.stationary_t_end, replicas=CHECK_REPLICAS,
-                       seed=seed, sizes=sizes, opts=opts, spec=exp.check_spec(),
-                       per_deck=CHECK_REPLICAS)
-        return MemberRuns(exp, sizes, quick, transition=circ, check=chk,
-                          seeds={"transition": seed, "check_transition": seed})
+    tick(f"{name}: circuit run from x0 = {m.x0:g} ({sizes.transition_replicas} replicas)")
+    circ = _circuit(exp, v0=0.0, t_end=sizes.stationary_t_end,
+                    replicas=sizes.transition_replicas, seed=seed, sizes=sizes, opts=opts,
+                    per_deck=CHECK_REPLICAS)
+    tick(f"{name}: integration check (first {CHECK_REPLICAS} replicas, 100x tighter)")
+    chk = _circuit(exp, v0=0.0, t_end=sizes.stationary_t_end, replicas=CHECK_REPLICAS,
+                   seed=seed, sizes=sizes, opts=opts, spec=exp.check_spec(),
+                   per_deck=CHECK_REPLICAS)
+    return MemberRuns(exp, sizes, quick, transition=circ, check=chk,
+                      seeds={"transition": seed, "check_transition": seed})
+
+
+def _one_d_runs(exp: Experiment, opts, *, sizes: MemberSizes, quick: bool, plan: SeedPlan,
+                tick: Callable) -> MemberRuns:
+    """A 1-D member's runs: stationary (from the start model's law), transition (from
+    ``exp.v0[0]``, with ``histogram_times``) and the stationary run's first deck 100x
+    tighter."""
+    seed, name = plan.member_circuit, exp.name
     v0_stat = _stationary_start(exp, sizes, plan)
     tick(f"{name}: stationary circuit run ({sizes.stationary_replicas} x "
          f"{sizes.stationary_t_end:g})")
@@ -395,6 +410,10 @@ def member_runs(exp: Experiment, opts=None, *, quick: bool | None = None,
         seeds["transition"] = plan.member_transition
     return MemberRuns(exp, sizes, quick, transition=trans, check=chk, stationary=stat,
                       seeds=seeds)
+
+
+# the runs of each member class (catalogue.model_class); the others: _one_d_runs
+_RUNS: dict[str, Callable[..., MemberRuns]] = {C.SPRING_MEMBER: _release_runs}
 
 
 def _stationary_start(exp: Experiment, sizes: MemberSizes, plan: SeedPlan) -> np.ndarray:
