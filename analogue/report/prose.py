@@ -118,7 +118,7 @@ def model_sentence(exp) -> str:
 
 # a parameter named in a description, written "name = value": not after an operator or a
 # closing bracket ("(a - Delta) tau_m = 0.5" is a product, "2 Delta/spring = 1" a quotient)
-_ASSIGNED = re.compile(r"(?<![\w)*/+^.-])(?<![)*/+^-] )\b(tau_m|Delta|delta|gamma|mass|cubic|spring|"
+_ASSIGNED = re.compile(r"(?<![\w)*/+^.-])(?<![)*/+^-] )\b(tau_m|tau_c|Delta|delta|gamma|mass|cubic|spring|"
                        r"x0|delta_s|v_s|a)\s*=\s*(-?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?)(?![\w(])")
 # shot-noise wording of the standard files: "at rate 1 per unit time", "with mean 0.5"
 _SHOT_WORDS = re.compile(r"\b(rate|mean)\s+(\d+(?:\.\d*)?(?:[eE][-+]?\d+)?)\b(?!\s*[*/^])")
@@ -131,6 +131,9 @@ def _model_values(m) -> dict:
         out["delta_s"], out["v_s"] = m.stribeck
     if m.shot is not None:
         out["rate"], out["mean"] = m.shot.rate, m.shot.mean
+    tau_c = _tau_c(m)
+    if tau_c is not None:   # coloured noise's correlation time
+        out["tau_c"] = tau_c
     return out
 
 

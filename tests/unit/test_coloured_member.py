@@ -4,10 +4,13 @@ tau_c and gamma, and at Delta = 0 the report's Monte Carlo reference meets the c
 ``Var v = tau_m^2/(gamma (tau_m + tau_c))`` (an independent route) within its standard error."""
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import pytest
 
 from analogue import Model
 from analogue.report.beyond import physics_text
+from analogue.report.prose import description_mismatches
 from analogue.study import catalogue as C
 from analogue.study.members import _jk, monte_carlo_reference
 from analogue.theory import family
@@ -32,6 +35,12 @@ def test_class_rows_and_reference():
     white = m.replace(noise=None, cubic=1.0)
     assert C.model_class(white) == C.GAUSSIAN_MEMBER
     assert {C.reference_of(o, white) for o in C.member_observables(white)} == {"exact"}
+
+
+def test_a_copied_description_with_another_tau_c_is_flagged():
+    exp = SimpleNamespace(model=_ou(0.5, tau_c=0.5),
+                          description="Coloured noise with tau_c = 0.2 and gamma = 12.")
+    assert description_mismatches(exp) == ["tau_c = 0.2 (the model has 0.5)"]
 
 
 def test_prose_quotes_the_members_own_numbers():
