@@ -595,7 +595,10 @@ def _point(plan: SweepPlan, i: int, runner: Runner) -> dict[str, Any]:
     # (the rule stationary_null_se applies to var v).  Measured on the quick stick point
     # a = 0.2 over 6 circuit seeds: z +1.5, -0.7, -1.6, 0.0, -3.2, -1.3 on the jackknife
     # alone (the sweep's own seed: -3.7), the low estimates with the smallest errors (0.0005
-    # against 0.0011)
+    # against 0.0011).  Not the circuit's noise: the SDE driven by 12 of ngspice's recorded
+    # trrandom sequences gave z mean -0.24, sd 0.90, numpy's white noise over 20 seeds -0.25,
+    # 0.92 (min -2.3), numpy's held at the same hold -0.61, 1.47 (min -3.2): at 32 x 48 tau_m
+    # the estimate's law has a long low tail
     val = circ[_KINDS["D_x"]][0]
     if val > 0 and th_eff["D_x"] > val:
         stderr["D_x"] = max(stderr["D_x"], stderr["D_x"] * th_eff["D_x"] / val)
