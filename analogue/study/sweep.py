@@ -118,7 +118,7 @@ from .settings import ReportSettings, RunOptions, stationary_noise_dt
 __all__ = ["OBSERVABLES", "BUDGET_TERMS", "Axis", "SweepPlan", "plan_sweep", "parse_vary",
            "parse_vary_text", "point_seed", "point_theory", "sweep", "sweep_parameters",
            "MAX_POINTS", "MAX_POINTS_PER_AXIS", "MC_REPLICAS", "Z_LIMIT", "theory_curves",
-           "FINE_POINTS", "FINE_OBSERVABLES"]
+           "FINE_POINTS", "FINE_OBSERVABLES", "write_sweep"]
 
 log = logging.getLogger("analogue.sweep")
 

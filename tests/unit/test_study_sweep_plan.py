@@ -162,3 +162,20 @@ def test_first_passage_starts_from_the_first_nonzero_v0():
     m = STICK.model
     assert math.isnan(S.point_theory(m, threshold=0.03, v0=None)["first_passage_mean"])
     assert S.point_theory(m, threshold=0.03, v0=2.0)["first_passage_mean"] > 0
+
+
+def test_a_failed_write_leaves_nothing_behind(tmp_path):
+    """sweep.nc is written atomically: a writer that fails (here: a variable netCDF cannot
+    hold) raises OSError naming the file and leaves neither it nor a temporary file."""
+    import xarray as xr
+    ds = xr.Dataset({"mean_v": ("a", np.array([0.1, 0.2])),
+                     "bad": ("a", np.array([{"x": 1}, {"y": 2}], dtype=object))},
+                    coords={"a": [0.0, 0.2]})
+    with pytest.raises(OSError, match="sweep.nc"):
+        S.write_sweep(ds, tmp_path / "sweep.nc")
+    assert list(tmp_path.iterdir()) == []
+    good = ds.drop_vars("bad")
+    S.write_sweep(good, tmp_path / "sweep.nc")
+    with xr.open_dataset(tmp_path / "sweep.nc") as back:
+        np.testing.assert_array_equal(back["mean_v"].values, [0.1, 0.2])
+    assert [p.name for p in tmp_path.iterdir()] == ["sweep.nc"]
