@@ -371,6 +371,7 @@ def write_report(result: StudyResult, drawer: _Drawer, out: Path, title: str,
     provenance = result.provenance(wall)
     sections.extend(_provenance_sections(provenance, wall))
     metrics = result.metrics(provenance)
+    result.record = metrics
     # (ensure_ascii=False: a path under a non-UTF-8 locale is written as its own UTF-8 bytes,
     # not as escaped lone surrogates; files.write_text)
     write_text(out / "metrics.json", json.dumps(metrics, indent=2, default=str,

@@ -109,12 +109,26 @@ class StudyResult:
     # filled by the page: experiment (or figure group) -> PNG paths; the page itself
     figures: dict[str, list[Path]] = field(default_factory=dict)
     page: Path | None = None
+    # what the page recorded (metrics.json's content: comparisons, provenance with the wall
+    # time and the critical path, summary, failures); None until a page is written
+    record: dict | None = None
 
     def __repr__(self) -> str:
         s = self.summary()
         return (f"StudyResult({len(self.experiments) + len(self.members)} experiments, "
                 f"{s['comparisons']} comparisons, {s['within_budget']} within budget, "
                 f"{len(self.failures.items)} failures, page={self.page})")
+
+    @property
+    def wall_time_s(self) -> float | None:
+        """Seconds from the start of the study to its page (None before the page)."""
+        return None if self.record is None else self.record["provenance"]["wall_time_s"]
+
+    @property
+    def critical_path_s(self) -> float | None:
+        """The study's wall time with unlimited cores (:mod:`analogue.study.critical_path`;
+        None before the page)."""
+        return None if self.record is None else self.record["provenance"]["critical_path_s"]
 
     @property
     def all_analyses(self) -> list:

@@ -71,6 +71,8 @@ def test_report_returns_the_study(tmp_path, monkeypatch):
     metrics = json.loads((tmp_path / "r" / "metrics.json").read_text())
     # the result is what the page and metrics.json say
     assert [c.as_dict() for c in res.comparisons] == metrics["comparisons"]
+    assert json.loads(json.dumps(res.record, default=str)) == metrics
+    assert 0 < res.critical_path_s <= res.wall_time_s == metrics["provenance"]["wall_time_s"]
     assert res.comparisons and all(math.isfinite(c.budget.total()) for c in res.comparisons)
     assert res.figures["mine"] and all(p.exists() for p in res.figures["mine"])
     assert set(res.by_role("mine")) >= {"stationary", "noise_free", "check_transition",
