@@ -592,9 +592,8 @@ def store_prune(store_dir, experiments, unindexed, older_than, max_size, quarant
 
 # ------------------------------------------------------------------------------- theory
 def _theory_help() -> str:
-    from .theory.query import QUANTITIES
-    names = {"t": "--t", "v": "--v", "v0": "--v0", "w": "--w", "k": "--k", "tau": "--tau",
-             "points": "--points"}
+    # the catalogue alone: --help loads no theory (nor scipy)
+    from .theory.quantities import OPTION_NAMES as names, QUANTITIES
     lines = []
     for q in QUANTITIES.values():
         opts = " ".join(names[o] for o in q.options)

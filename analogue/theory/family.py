@@ -51,8 +51,10 @@ from scipy.sparse.linalg import splu
 
 from .. import checks
 from ..model import Model, ShotNoise
-from .kolmogorov_feller import (Kicks, ShotGrid, _grid_range, default_spacing, shot_generator,
-                               stable_zeros)
+from .flow_table import flow_table
+from .fokker_planck import Grid, symmetric_generator
+from .kolmogorov_feller import (Kicks, ShotGrid, _gaussian_range, _grid_range, default_spacing,
+                                has_atom, shot_generator, stable_zeros)
 from .moments import StationaryMoments
 
 
@@ -231,7 +233,6 @@ def _law(model: Model, h: float) -> _Law:
 
 
 def _law_fokker_planck(model: Model, h: float) -> _Law:
-    from .fokker_planck import Grid
     v = Grid.span(*_grid_range(model), h).v  # the nodes of the Scharfetter-Gummel grid
     return _Law(v, _gradient_density(model, v), 0.0, h, False)
 
@@ -310,7 +311,6 @@ def _green_kubo(model: Model, g: ShotGrid, p: np.ndarray) -> float:
 def _gradient_smooth_law(model: Model) -> tuple[np.ndarray, np.ndarray]:
     """``(v, exp(-gamma U)/Z)`` for a smooth law (epsilon > 0) on the Simpson grid of
     :func:`_gradient_smooth_moments` (v = 0 a node when the range straddles it)."""
-    from .kolmogorov_feller import _gaussian_range
     lo, hi = _gaussian_range(model)
     h = min(model.epsilon / 20.0, model.velocity_scale / 400.0,
             model.friction.velocity_length / 100.0)
@@ -531,7 +531,6 @@ def _once_kicked(model: Model, v: np.ndarray, times: np.ndarray, v0: float,
     cubic; against the OU-shot closed form 8e-10).  This part carries the jump of the density at the front
     v_det(t) (one-sided kicks: from 0 below to its value above) exactly.  A point at v = 0
     is read on the side v > 0 (as :func:`_on_grid` reads it)."""
-    from .flow_table import flow_table
     shot = model.shot
     assert shot is not None
     lo, hi = span
@@ -765,8 +764,6 @@ def _principal(g: ShotGrid, pot: np.ndarray, guess: float, scale: float) -> floa
 
 
 def _principal_gradient(model: Model, h: float, k: float, F: float) -> float:
-    from .fokker_planck import Grid, symmetric_generator
-    from .kolmogorov_feller import _gaussian_range
     # the tilted ground state sits near tau_m (2 k F tau_m/gamma + a): widen by that shift
     lo, hi = _gaussian_range(model)
     shift = 4.0 * abs(k * F) * model.tau_m ** 2 / model.gamma
@@ -998,7 +995,6 @@ def work_edge(model: Model) -> float | None:
     noise = model.noise_kind
     if not (noise.one_sided and noise.pure_kicks):
         return None
-    from .kolmogorov_feller import has_atom
     cands = [float(z) for z in stable_zeros(model)] + ([0.0] if has_atom(model) else [])
     v_edge = max(cands) if cands else float(model.attractor)
     return _force(model) * v_edge

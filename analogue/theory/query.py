@@ -1,6 +1,6 @@
 """Theory values as tables, for the ``analogue theory`` command (and notebooks).
 
-:data:`QUANTITIES` is the catalogue: for each quantity the options it uses, the theories
+:data:`QUANTITIES` (from :mod:`analogue.theory.quantities`) is the catalogue: for each quantity the options it uses, the theories
 (``kind``) it offers and what it returns.  :func:`theory_table` refuses options a quantity does
 not use and kinds it does not offer, so an answer is never silently something else than what
 was asked.  Values that do not exist (a boundary in the slip regime, a crossing time of a path
@@ -19,6 +19,10 @@ from numpy.typing import ArrayLike
 
 from .. import checks
 from ..model import Model
+from . import exact, weak_noise
+from .exact import rate_function as _exact_rate_function
+from .quantities import KINDS, OPTION_NAMES, QUANTITIES, Quantity
+from .work_statistics import weak_noise_limit_rate_function as _limit_rate_function
 
 __all__ = [
     "KINDS",
@@ -29,44 +33,6 @@ __all__ = [
     "theory_table",
     "weak_noise_density",
 ]
-
-KINDS = ("exact", "weak-noise", "limit")
-
-
-@dataclass(frozen=True)
-class Quantity:
-    name: str
-    options: tuple[str, ...]   # the options it needs, e.g. ("t", "v", "v0")
-    kinds: tuple[str, ...]     # the theories it offers (first = default); () = no choice
-    summary: str
-    optional: tuple[str, ...] = ()    # options it may use
-
-    def default_kind(self) -> str | None:
-        return self.kinds[0] if self.kinds else None
-
-
-QUANTITIES: dict[str, Quantity] = {q.name: q for q in (
-    Quantity("stationary", (), ("exact",), "moments of the stationary law p_s, eq. (6)"),
-    Quantity("deterministic", ("t", "v0"), (), "noise-free velocity v(t) from v0, eq. (13)"),
-    Quantity("action", ("t", "v", "v0"), ("weak-noise",),
-             "least action to (v, t), kind of path, switching times"),
-    Quantity("path", ("t", "v", "v0"), ("weak-noise",),
-             "points (s, v*(s)) of the optimal path to (v, t)", optional=("points",)),
-    Quantity("boundaries", ("t", "v0"), ("weak-noise",),
-             "w, u, w_cr between path kinds, eqs. (41), (45), (49)"),
-    Quantity("propagator", ("t", "v", "v0"), ("exact", "weak-noise"),
-             "transition density f(v, t | v0), eqs. (46)-(51)"),
-    Quantity("rate-function", ("w",), ("exact", "weak-noise", "limit"),
-             "work rate function I(w), eq. (64)"),
-    Quantity("fluctuation-relation", ("w",), ("exact", "weak-noise", "limit"),
-             "I(-w) - I(w), eq. (67)"),
-    Quantity("scgf", ("k",), ("exact",), "scaled cumulant generating function lambda(k)"),
-    Quantity("work-pdf", ("w", "tau"), ("exact",), "density of w = W_tau/tau at finite tau"),
-)}
-
-_OPTION_NAMES = {"t": "--t", "v": "--v", "v0": "--v0", "w": "--w", "k": "--k", "tau": "--tau",
-                 "points": "--points"}
-
 
 @dataclass(frozen=True)
 class TheoryTable:
@@ -156,19 +122,19 @@ def _check(q: Quantity, kind: str | None, given: dict[str, object]) -> str | Non
         raise ValueError(f"--kind must be one of {', '.join(q.kinds)} for {q.name}, got {kind!r}")
     unused = [k for k, v in given.items() if v is not None and k not in q.options + q.optional]
     if unused:
-        uses = ", ".join(_OPTION_NAMES[o] for o in q.options + q.optional) or "no options"
-        raise ValueError(f"{', '.join(_OPTION_NAMES[u] for u in unused)}: not used by "
+        uses = ", ".join(OPTION_NAMES[o] for o in q.options + q.optional) or "no options"
+        raise ValueError(f"{', '.join(OPTION_NAMES[u] for u in unused)}: not used by "
                          f"{q.name} (it uses {uses})")
     missing = [o for o in q.options if given.get(o) is None]
     if missing:
-        raise ValueError(f"{q.name} needs {', '.join(_OPTION_NAMES[m] for m in missing)}")
+        raise ValueError(f"{q.name} needs {', '.join(OPTION_NAMES[m] for m in missing)}")
     return kind
 
 
 def _floats(name: str, values: object) -> np.ndarray:
     arr = np.atleast_1d(np.asarray(values, dtype=float))
     if arr.ndim != 1 or arr.size == 0 or not np.all(np.isfinite(arr)):
-        raise ValueError(f"{_OPTION_NAMES[name]} must be one or more finite numbers")
+        raise ValueError(f"{OPTION_NAMES[name]} must be one or more finite numbers")
     return arr
 
 
@@ -178,7 +144,6 @@ def weak_noise_density(model: Model, v: ArrayLike, t: float, v0: float) -> np.nd
     velocities ``v`` (one is enough), normalised on an internal grid wide enough that the
     density at its edges is below 1e-12 of its peak (:func:`weak_noise.propagator` normalises
     on the grid it is given, which must then cover the distribution)."""
-    from . import weak_noise
     v = _floats("v", v)
     centre = float(model.deterministic(v0, t))
     half = 10.0 * model.velocity_scale
@@ -239,7 +204,6 @@ def theory_table(model: Model, quantity: str, *, v: ArrayLike | None = None,
         return TheoryTable(quantity, kind, header, rows, reasons or {})
 
     if quantity == "stationary":
-        from . import exact
         d = exact.stationary_moments(model).as_dict()
         return table(["quantity", "value"], [[key, float(val)] for key, val in d.items()])
     if quantity == "deterministic":
@@ -247,7 +211,6 @@ def theory_table(model: Model, quantity: str, *, v: ArrayLike | None = None,
         vals = np.atleast_1d(model.deterministic(start, times))
         return table(["t", "v"], [[float(a), float(b)] for a, b in zip(times, vals)])
     if quantity in ("action", "path"):
-        from . import weak_noise
         n = 50 if points is None else points
         # bounded: --points 100000000 ran past a minute (killed) instead of answering
         if quantity == "path":
@@ -267,7 +230,6 @@ def theory_table(model: Model, quantity: str, *, v: ArrayLike | None = None,
         return table(["t", "v", "kind", "action", "t_cross", "t_a", "t_b", "t_1", "t_2"], rows,
                      _path_reasons())
     if quantity == "boundaries":
-        from . import weak_noise
         rows = []
         for tt in _floats("t", t):
             b = weak_noise.boundaries(model, tt, start)
@@ -280,19 +242,17 @@ def theory_table(model: Model, quantity: str, *, v: ArrayLike | None = None,
             if kind == "weak-noise":
                 f = weak_noise_density(model, grid, tt, start)
             else:
-                from . import exact
-                f = exact.propagator(model, grid, tt, start)
+                        f = exact.propagator(model, grid, tt, start)
             rows += [[float(tt), float(a), float(b)] for a, b in zip(grid, np.ravel(f))]
         return table(["t", "v", f"f_{kind}"], rows)
     if quantity in ("rate-function", "fluctuation-relation"):
         ws = _floats("w", w)
         if kind == "weak-noise":
-            from . import weak_noise
             rate = weak_noise.rate_function
         elif kind == "limit":
-            from .work_statistics import weak_noise_limit_rate_function as rate
+            rate = _limit_rate_function
         else:
-            from .exact import rate_function as rate
+            rate = _exact_rate_function
         if quantity == "rate-function":
             vals = np.ravel(rate(model, ws))
             return table(["w", f"I_{kind}"], [[float(a), float(b)] for a, b in zip(ws, vals)],
@@ -301,19 +261,16 @@ def theory_table(model: Model, quantity: str, *, v: ArrayLike | None = None,
                           "beyond the edge of the work's support (the Legendre maximiser runs "
                           "to |k| -> inf)"})
         if kind == "weak-noise":
-            from . import weak_noise
             vals = np.ravel(weak_noise.fluctuation_relation(model, ws))
         else:
             vals = np.ravel(np.asarray(rate(model, -ws)) - np.asarray(rate(model, ws)))
         return table(["w", f"I(-w)-I(w) [{kind}]"],
                      [[float(a), float(b)] for a, b in zip(ws, vals)])
     if quantity == "scgf":
-        from . import exact
         ks = _floats("k", k)
         vals = np.ravel(exact.scgf(model, ks))
         return table(["k", "lambda(k)"], [[float(a), float(b)] for a, b in zip(ks, vals)])
     # work-pdf
-    from . import exact
     ws = _floats("w", w)
     tau = checks.positive("--tau", tau)
     vals = np.ravel(exact.work_pdf(model, ws, tau))

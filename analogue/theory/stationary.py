@@ -43,6 +43,7 @@ from ..model import Model
 from . import family
 from .exact_grid import resolved_grid
 from .fokker_planck import Grid, generator, symmetric_generator
+from .propagation import CONTOUR_MIN_NODES, _talbot
 # StationaryMoments lives below this module and the family's (both return it); re-exported here,
 # where it has always been imported from.
 from .moments import StationaryMoments
@@ -352,7 +353,6 @@ def _integrated_on_grid(model: Model, grid: Grid, taus: np.ndarray,
     """``2 int_0^tau (tau - s) C(s) ds`` on one grid, for every tau (see
     :func:`integrated_autocorrelation`)."""
     from scipy.linalg import lapack
-    from .propagation import CONTOUR_MIN_NODES, _talbot
     diag, off, y, u = _poisson_solution(model, grid, observable)
     # Dot products by numpy's pairwise sum, not BLAS: a threaded OpenBLAS ddot rounds
     # differently with the thread count, and the report computes these both in its

@@ -64,6 +64,7 @@ from .. import checks
 from ..checks import finite_array as _finite_array
 from ..model import Model
 from .fokker_planck import Grid
+from .stationary import autocorrelation, integrated_autocorrelation
 
 try:
     from threadpoolctl import threadpool_limits as _threadpool_limits
@@ -702,7 +703,6 @@ def work_variance(model: Model, taus: ArrayLike, *, n: int | None = None,
     ``n`` (odd >= 3; family members always, with 801): Simpson's rule on ``n`` lags per
     window of :func:`analogue.theory.stationary.autocorrelation` (one call for all windows).
     Vectorised over taus."""
-    from .stationary import autocorrelation, integrated_autocorrelation
     model = _check_model(model)
     ta = _finite_array("taus", taus)
     if np.any(ta <= 0):
