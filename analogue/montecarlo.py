@@ -35,6 +35,8 @@ import numpy as np
 from . import checks
 from .ensemble import Ensemble
 from .model import Model
+from .theory.flow_table import flow_table
+from .theory.kolmogorov_feller import _grid_range
 from .theory.stationary import sample_stationary
 
 __all__ = ["simulate_sde", "simulate_sde_held_pair", "standard_noise", "default_dt", "SCHEMES"]
@@ -599,8 +601,6 @@ def _flow_rk4(model, v, x, s, dt):
 def _table_for(model, v):
     """The tabulated flow (:mod:`analogue.theory.flow_table`) over twice the range the
     Kolmogorov-Feller grid covers (the stationary reach plus 45 kick means) and the starts."""
-    from .theory.flow_table import flow_table
-    from .theory.kolmogorov_feller import _grid_range
     lo, hi = _grid_range(model)
     span = hi - lo
     return flow_table(model, min(lo - 0.5 * span, float(v.min())),

@@ -24,6 +24,7 @@ import numpy as np
 
 from ..ensemble import Ensemble
 from ..model import Model
+from ..montecarlo import default_dt, simulate_sde
 from ..study.metrics import Z_LIMIT
 from ..study.observables import (
     exact_stationary,
@@ -49,7 +50,6 @@ def observables_fn(model: Model, *, burn_in: float, threshold: float, taus=(1.0,
 def bandwidth_pair(design: BoardDesign, *, v0, t_end: float, replicas: int, seed: int,
                    sample_dt: float) -> tuple[Ensemble, Ensemble]:
     """(coloured, white) SDE ensembles of the realised model with common increments."""
-    from ..montecarlo import default_dt, simulate_sde
     model = design.realised
     h = design.noise_dt
     per_hold = max(1, math.ceil(h / default_dt(model) - 1e-9))

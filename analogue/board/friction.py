@@ -30,7 +30,7 @@ noise term exactly where the stick statistics are measured.  It is described, no
 from __future__ import annotations
 
 from .. import checks
-from ..circuit.parts import DiodePart
+from ..circuit.parts import DiodePart, get_part, thermal_voltage
 
 _n = checks.spice_number  # a deck number: _n(name, value)
 
@@ -126,7 +126,6 @@ def ota_lines(prefix: str, sj: str, out: str, *, i_abc: float, k: float, vos: fl
     """An LM13700-class OTA as the friction element: current ``I_abc (1 + asym sgn) tanh((k
     V(out) + vos)/(2 V_T))`` into ``sj`` (behavioural; ``asymmetry`` is the relative mismatch
     of the output mirrors).  Bipolar input pair: width 2 V_T at the OTA input."""
-    from ..circuit.parts import thermal_voltage
     p = checks.identifier("prefix", prefix)
     vt2 = 2.0 * thermal_voltage(temperature_k)
     arg = f"({_n('k', k)}*v({out})+{_n('vos', vos)})/{_n('vt2', vt2)}"
@@ -142,7 +141,6 @@ def floating_bridge_deck(*, i_delta: float, i_force: float, r: float, c: float, 
     ``i_delta`` only while the voltage across it exceeds ``headroom`` and can never deliver
     power (a current-regulator diode / LM334-class part), modelled as
     ``I = i_delta * clip(V_across/headroom, 0, 1)`` from ``p`` to ``n``."""
-    from ..circuit.parts import get_part
     part = get_part("1N4148")
     model = " ".join(f"{k}={_n(k, v)}" for k, v in part.model)
     # orientation of analogue.circuit.netlist: D1 v->p, D2 0->p, D3 n->v, D4 n->0 and the

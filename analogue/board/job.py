@@ -34,7 +34,9 @@ import numpy as np
 from ..circuit import ngspice as ng
 from ..circuit.experiments import load_experiment
 from ..ensemble import Ensemble
+from ..montecarlo import simulate_sde
 from ..study.metrics import validate_metrics
+from ..study.observables import subset
 from ..study.seeds import SeedPlan
 from ..theory.exact import rate_function, sample_stationary, stationary_moments
 from . import budget, calibration, tolerance
@@ -44,8 +46,11 @@ from .kicad import write_kicad_netlist
 from .kicad_sch import write_kicad_schematic
 from .design import BoardSpec, design_board
 from .netlist import build_board_deck, nominal_instance
+from .opamp import vendor_model_path
+from .report import write_report
 from .runner import noise_directory, run_board
 from .schematic import draw_schematic
+from .trajectory import compare_paths, reference_paths
 
 __all__ = ["FULL", "QUICK", "JobSettings", "run_board_job", "stderr_at", "theory_observables"]
 
@@ -144,18 +149,15 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
     t0 = _time.perf_counter()
     v0 = sample_stationary(design.realised, st.replicas, plan.board_stationary_v0)
     if vendor is not None:
-        from .opamp import vendor_model_path
         vendor = (str(vendor_model_path(vendor[0], vendor[1])), vendor[1])
     ens = run_board(design, nominal, v0=v0, t_end=st.t_end, sample_dt=SAMPLE_DT, seed=seed,
                     store=store, workers=workers, vendor=vendor)
     tight = run_board(design, nominal, v0=v0[:st.integ_replicas], t_end=st.t_end,
                       sample_dt=SAMPLE_DT, seed=seed, store=store, workers=workers, reltol=1e-4,
                       vendor=vendor)
-    from ..study.observables import subset
     integ = budget.integration_pair(fn, subset(ens, np.arange(st.integ_replicas)), tight)
     timings["nominal_s"] = _time.perf_counter() - t0
     log("board: trajectory check against the equations driven by the same DAC sequences")
-    from .trajectory import compare_paths, reference_paths
     k = min(4, st.replicas)
     ref_paths = reference_paths(design, seed=seed, replicas=range(k), v0=v0[:k], t_end=st.t_end,
                                 times=ens.t)
@@ -271,7 +273,6 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
     metrics = _clean(metrics)
     validate_metrics(metrics)
     (out / "metrics.json").write_text(json.dumps(metrics, indent=1))
-    from .report import write_report
     return write_report(out, exp, design, metrics)
 
 
@@ -405,7 +406,6 @@ def stderr_at(design, fn, *, seed: int, replicas: int, t_end: float, pool: int =
     ``replicas/2`` groups: one degree of freedom at 4 replicas (the quick job), where it gave
     0.001 on a stick fraction whose error is about 0.02, and a 32-replica one varies by tens of
     per cent with the seed."""
-    from ..montecarlo import simulate_sde
     n = max(int(pool), int(replicas))
     v0 = sample_stationary(design.realised, n, seed)
     ens = simulate_sde(design.realised, v0=v0, t_end=t_end, replicas=n, seed=seed,

@@ -10,6 +10,7 @@ from markupsafe import Markup
 from ..report.html import Figure, Section, Table, write_page
 from .calibration import ADC_SPEC
 from .netlist import R_IC, RESET_TIME
+from .schematic import draw_schematic
 
 __all__ = ["write_report"]
 
@@ -31,7 +32,6 @@ def _offset_paragraph(lim) -> str:
 
 def _schematic_png(design, out: Path) -> Path | None:
     """The same drawing rasterised (the page embeds PNG); the SVG is the deliverable."""
-    from .schematic import draw_schematic
     try:
         return draw_schematic(design, out / "schematic.png", fmt="png")
     except Exception:  # noqa: BLE001 - a missing matplotlib backend must not lose the report

@@ -30,6 +30,7 @@ import numpy as np
 from .. import checks
 from ..circuit.parts import get_part, thermal_voltage
 from ..model import Model
+from ..theory.stationary import stationary_std
 from . import opamp
 from .design import BoardDesign
 from .netlist import ROLES, BoardInstance, nominal_instance, role_part
@@ -187,7 +188,6 @@ def gradients(design: BoardDesign, observe, rel: float = 0.01) -> tuple[dict, di
     real = design.realised
     base = observe(real, 0.0)
     x0 = _vector(design, real, 0.0)
-    from ..circuit.mapping import stationary_std
     steps = rel * np.where(x0 != 0, np.abs(x0), stationary_std(real))
     grads = {k: np.zeros(len(PARAMS)) for k in base}
     for j in range(len(PARAMS)):

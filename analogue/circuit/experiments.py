@@ -67,6 +67,7 @@ from ..model import Model
 from .. import checks
 from ..study.figure_layout import fig5_layout
 from ..study.settings import ReportSettings, report_settings_from_dict
+from ..theory import weak_noise
 from .mapping import (FIXED_TRTOL, CircuitMapping, CircuitSpec, check_mapping_values,
                       check_spec_ranges, map_model)
 from .netlist import Deck, build_deck
@@ -248,9 +249,8 @@ def _floats(what: str, value, *, allow_empty: bool = True) -> tuple:
 def _nested_class(cls, key: str):
     """The dataclass a field of ``cls`` is annotated with (``shot: ShotNoise | None``)."""
     annotation = str(_init_fields(cls)[key].type)
-    import analogue
     for token in re.findall(r"[A-Za-z_][A-Za-z0-9_]*", annotation):
-        for home in (sys.modules.get(cls.__module__), _model_module, analogue):
+        for home in (sys.modules.get(cls.__module__), _model_module):
             found = getattr(home, token, None) if home is not None else None
             if isinstance(found, type) and (dataclasses.is_dataclass(found)
                                             or hasattr(found, "from_mapping")):
@@ -337,7 +337,6 @@ def _check_figures(exp: Experiment, where: str) -> None:
     m = exp.model
     if not m.is_paper:
         return
-    from ..theory import weak_noise
     if m.regime == "stick":
         v0s = exp.v0[:2] if len(exp.v0) > 1 else (exp.v0[0], -exp.v0[0])
         for v0 in v0s:

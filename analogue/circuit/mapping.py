@@ -100,6 +100,7 @@ from ..theory.stationary import CENTRAL_BIN, central_bin_bias, stationary_std  #
 from .. import checks
 from .parts import IDEAL_IS, DiodePart, bridge_dc_current, get_part, ideal_diode, thermal_voltage, PARTS
 from . import nonlinear as nl
+from .shot import EDGE
 
 __all__ = ["CircuitSpec", "CircuitMapping", "map_model", "COULOMB_KINDS", "DIODES",
            "CUBIC_KINDS", "velocity_range", "velocity_std", "default_smoothing", "default_noise_dt",
@@ -1038,7 +1039,6 @@ def map_model(model: Model, spec: CircuitSpec | None = None) -> CircuitMapping:
     # are ramps, integrated by ngspice with first-order steps after each breakpoint: at most
     # about half their share of the charge (measured on a bare capacitor: delivered jumps
     # within 3e-6 of the recorded ones)
-    from .shot import EDGE
     swing = math.sqrt(2 * SWING_LEVEL * model.tau_m / model.gamma) if gaussian else 0.0
 
     def drift_max(jump: float) -> float:

@@ -39,6 +39,7 @@ import numpy as np
 from .. import checks
 from ..cores import one_thread_env
 from ..files import utf8 as _utf8
+from .limits import format_bytes, memory_limit
 from .rawfile import RawPlot, read_raw
 
 __all__ = [
@@ -781,7 +782,6 @@ def run_deck(text: str, *, timeout: float = 3600.0, t_stop: float | None = None,
         if not raw.exists():
             raise NgspiceError(_with_said("ngspice wrote no raw file", said))
         # The reader holds the file and a copy of its data: refuse what cannot fit, unread.
-        from .limits import format_bytes, memory_limit
         size = raw.stat().st_size
         mem, why = memory_limit()
         if 2 * size > mem:

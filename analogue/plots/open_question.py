@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from ..model import Model
+from ..theory import weak_noise
 from ..theory import work_statistics as ws
 from ..theory.cache import cached_call
 from .style import new_figure, save
@@ -65,7 +66,6 @@ def draw_open_question(outdir, points=None, gammas=GAMMAS, cache=None,
     The paper's I(w) is drawn with the report's one convention at w = 0, the Filippov value
     (:func:`analogue.theory.weak_noise.rate_function`), as in Fig. 8.
     """
-    from ..theory import weak_noise
     outdir = Path(outdir)
     gammas = tuple(float(g) for g in gammas)
     if not gammas or any(not (g > 0 and np.isfinite(g)) for g in gammas):

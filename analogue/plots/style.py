@@ -13,6 +13,8 @@ from matplotlib.layout_engine import ConstrainedLayoutEngine
 from matplotlib.mathtext import MathTextParser
 from matplotlib.ticker import FixedLocator, Locator, NullLocator
 
+from ..files import atomic_path
+
 __all__ = ["KIND_COLOURS", "DPI", "new_figure", "save", "VELOCITY", "TIME"]
 
 DPI = 120
@@ -142,7 +144,6 @@ def save(fig: Figure, path: Path) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     freeze_layout(fig)
-    from ..files import atomic_path
     with atomic_path(path) as tmp:   # never a half-written PNG (a full disk names the file)
         fig.savefig(tmp, dpi=DPI, format="png")
     return path
