@@ -250,6 +250,20 @@ def netlist(experiment, check):
             click.echo(f"wrote {p}")
 
 
+@main.command()
+@click.argument("experiment")
+@click.argument("out", type=click.Path(dir_okay=False, path_type=Path))
+def schematic(experiment, out):
+    """Draw one replica of EXPERIMENT's circuit (a name or a TOML path) with its component
+    values in SI units, as OUT (.svg or .png); `analogue schematic stick docs/schematic.svg`
+    redraws the committed drawing."""
+    from .circuit.experiments import load_experiment
+    from .circuit.schematic import draw
+    exp = load_experiment(experiment)
+    draw(exp.mapping(), out, title=f"{exp.name}: {exp.model.regime} regime")
+    click.echo(f"wrote {out}")
+
+
 # ------------------------------------------------------------------ run / report / paper
 _HOST = re.compile(r"(?:[A-Za-z0-9](?:[A-Za-z0-9-]{0,61}[A-Za-z0-9])?)(?:\.[A-Za-z0-9](?:[A-Za-z0-9-]{0,61}[A-Za-z0-9])?)*"
                    r"|\[[0-9A-Fa-f:.]+\]")

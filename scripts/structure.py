@@ -7,7 +7,8 @@ scripts/structure.py`` prints
   (:data:`OWN`), which are where such a difference is meant to live;
 * the import circles and the imports that run back up a layer (the graph and the layers of
   ``tests/unit/test_import_layers.py``, read with :mod:`ast`, nothing imported), module level
-  and, separately, the own imports made inside functions;
+  and, separately, the own imports made inside functions (and the lazy exports of a package's
+  ``__init__``, which the layering test exempts);
 * the longest functions (lines from ``def`` to the last line of the body).
 
 ``--json`` prints the same as one JSON object (for a closing note or a comparison).
@@ -112,7 +113,8 @@ def import_structure() -> dict:
     return {"circles": cycles, "circles_with_function_imports": layers._cycles(full),
             "back_arrows": back, "back_arrows_in_functions": back_fn,
             "function_level_own_imports": len(in_functions),
-            "function_level_own_imports_outside_cli": len(outside_cli)}
+            "function_level_own_imports_outside_cli": len(outside_cli),
+            "lazy_exports": [f"{m}.{fn} -> {t}" for m, t, fn, _ in layers.lazy_exports()]}
 
 
 def measure() -> dict:
@@ -151,6 +153,10 @@ def main(argv: list[str] | None = None) -> int:
         print("  " + b)
     print(f"Own imports inside functions: {m['function_level_own_imports']} "
           f"({m['function_level_own_imports_outside_cli']} outside cli.py)")
+    print(f"Lazy exports (a package's __init__ loading its children on first use, exempt): "
+          f"{len(m['lazy_exports'])}")
+    for e in m["lazy_exports"]:
+        print("  " + e)
     print("\nLongest functions (lines):")
     for name, n in m["longest_functions"]:
         print(f"  {n:4d}  {name}")

@@ -10,8 +10,9 @@ component values of the mapping in SI units:
   ``I_Delta tanh(V/(2 N V_T))``), or a behavioural source;
 - node ``x``: the position integrator, a VCCS ``g_x V(v)`` into ``Cx``.
 
-``python -m analogue.circuit.schematic circuits/stick.toml docs/schematic.svg`` redraws the
-committed ``docs/schematic.svg``.
+``analogue schematic stick docs/schematic.svg`` redraws the committed ``docs/schematic.svg``
+(the command line reads the experiment, a layer above this one; this module only draws a
+mapping).
 """
 from __future__ import annotations
 
@@ -124,17 +125,8 @@ def draw(mapping: CircuitMapping, path=None, *, title: str | None = None):
     return d
 
 
-def main(argv=None) -> int:
-    argv = sys.argv[1:] if argv is None else argv
-    if len(argv) != 2:
-        print("usage: python -m analogue.circuit.schematic EXPERIMENT OUT.svg", file=sys.stderr)
-        return 2
-    from .experiments import load_experiment
-    exp = load_experiment(argv[0])
-    draw(exp.mapping(), argv[1], title=f"{exp.name}: {exp.model.regime} regime")
-    print(f"wrote {argv[1]}")
-    return 0
-
-
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    # the entry that was here read an experiment (the study layer's) from the circuit layer
+    print("python -m analogue.circuit.schematic is now `analogue schematic EXPERIMENT OUT.svg`",
+          file=sys.stderr)
+    sys.exit(2)

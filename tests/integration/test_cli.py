@@ -11,7 +11,7 @@ from analogue.cli import main
 from analogue.theory import exact, weak_noise
 
 ROOT = Path(__file__).resolve().parents[2]
-COMMANDS = ["netlist", "run", "report", "paper", "sweep", "theory", "figures"]
+COMMANDS = ["netlist", "schematic", "run", "report", "paper", "sweep", "theory", "figures"]
 
 
 @pytest.mark.parametrize("cmd", COMMANDS)

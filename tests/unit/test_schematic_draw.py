@@ -72,3 +72,29 @@ def test_time_axis_label_is_not_seconds():
     assert TIME == "time t (units of tau_m)"
     for p in (ROOT / "analogue").rglob("*.py"):
         assert "time s (model units)" not in p.read_text(), p
+
+
+def test_cli_schematic_draws_the_experiments_mapping(tmp_path):
+    # `analogue schematic` replaced `python -m analogue.circuit.schematic` (whose main() read an
+    # experiment from the circuit layer, an import up into the study layer): the same drawing
+    from click.testing import CliRunner
+
+    from analogue.cli import main
+    out = tmp_path / "cli.svg"
+    r = CliRunner().invoke(main, ["schematic", "stick", str(out)])
+    assert r.exit_code == 0, r.output
+    assert f"wrote {out}" in r.output
+    direct = tmp_path / "direct.svg"
+    exp = load_experiment("stick")
+    draw(exp.mapping(), direct, title=f"{exp.name}: {exp.model.regime} regime")
+    assert out.read_text() == direct.read_text()
+
+
+def test_cli_schematic_names_an_unknown_experiment(tmp_path):
+    from click.testing import CliRunner
+
+    from analogue.cli import main
+    r = CliRunner().invoke(main, ["schematic", "no-such-experiment", str(tmp_path / "x.svg")])
+    assert r.exit_code != 0
+    assert "no-such-experiment" in r.output
+    assert not (tmp_path / "x.svg").exists()
