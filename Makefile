@@ -19,9 +19,12 @@ setup-test: setup
 	scripts/install-system.sh --test
 
 # The stick board (issue 13) first, so that the paper report links it (board/index.html).
+# --sweeps: the "What experiments measure" chapter's two sweep curves (issue 23); each
+# point is its own circuit run (quick size), stored like every other run.
+SWEEP_FLAGS ?= --sweeps
 paper: setup
 	$(VENV)/bin/analogue board stick $(PAPER_FLAGS) --out $(OUT)/board
-	$(VENV)/bin/analogue paper $(PAPER_FLAGS) --out $(OUT)
+	$(VENV)/bin/analogue paper $(PAPER_FLAGS) $(SWEEP_FLAGS) --out $(OUT)
 
 test: setup-test
 	$(PY) -m pytest -n 2 --dist loadgroup -q
