@@ -51,7 +51,6 @@ _TIME_LABELS = {"t_cross": "$t^\\times$", "t_a": "$t_a$", "t_b": "$t_b$", "t_1":
 
 def _path_panel(ax, model, v0, v, t, title, *, show_attractor=False):
     """One optimal path (weak_noise.optimal_path) with its switching times marked."""
-
     p = weak_noise.optimal_path(model, v, t, v0, n=800)
     colour = KIND_COLOURS.get(p.kind, "k")
     ax.plot(p.s, p.v, color=colour, lw=2, label=f"{p.kind} path, A = {p.action:.3f}")
@@ -141,7 +140,6 @@ def fig5_boundaries(axes=None, tau_m=1.0, delta=0.7, a=0.2, v0s=(2.0, -2.0), t_m
     final velocities above, between and below the boundaries at t = t_end are overlaid.
     ``t_max``, ``t_end``, ``margin``: None derives each panel's from its model and v0
     (:func:`fig5_layout`); a value given is used for every panel."""
-
     axes = _axes(axes, 1, len(v0s))
     m = _model(tau_m, delta, a)
     for ax, v0, tag in zip(axes, v0s, "ab"):
@@ -181,7 +179,6 @@ def fig6_propagator(axes=None, tau_m=1.0, delta=0.7, a=0.2, gamma=10.0, v0=2.0,
     """Fig. 6: saddle-point transition probability f(v, t | v0, 0) (eqs. (46), (47)), normalised
     on the grid, at four times; vertical dashed lines at u^+ and w^+ where they exist; the last
     time is compared with the stationary law p_s (eq. (6))."""
-
     axes = _axes(axes, 2, 2)
     m = _model(tau_m, delta, a, gamma=gamma)
     grid = np.linspace(*v_range, 1401)
@@ -215,7 +212,6 @@ def fig7_work_paths(axes=None, tau_m=1.0, mass=1.0, delta=1.0, a=0.5,
                     endpoints=FIG7_ENDPOINTS):
     """Fig. 7: paths minimising K = A - beta W at fixed work rate w (eqs. (57), (58),
     (60)); for long tau they sit near tilde v_w = w/(m a) (eq. (63), dashed)."""
-
     axes = _axes(axes, 2, 2)
     m = _model(tau_m, delta, a, mass=mass)
     colours = ("tab:blue", "tab:red", "tab:green", "tab:purple", "tab:orange")
@@ -252,7 +248,6 @@ def fig8_rate_function(axes=None, tau_m=1.0, mass=1.0, delta=1.0, a=0.5,
                        a_values=(0.25, 0.5, 1.0, 1.5), w_max=(1.5, 4.0)):
     """Fig. 8: rate function I(w) of eq. (64): (a) a = 0.5, (b) several a.  The jump at w = 0 is
     a Delta; the filled dot is the value at w = 0 (cheapest way of holding v = 0)."""
-
     axes = _axes(axes, 1, 2)
     w = np.linspace(-w_max[0], w_max[0], 2001)
     m = _model(tau_m, delta, a, mass=mass)
@@ -278,7 +273,6 @@ def fig8_rate_function(axes=None, tau_m=1.0, mass=1.0, delta=1.0, a=0.5,
 def fig9_fluctuation_relation(axes=None, tau_m=1.0, mass=1.0, delta=1.0, a=0.5, w_max=4.0):
     """Fig. 9: I(-w) - I(w) (eq. (67)) = w/(m tau_m) + a Delta sgn(w): a jump 2 a Delta at 0;
     the conventional SSFT line w/(m tau_m) (Delta = 0) for comparison."""
-
     ax = _axes(axes, 1, 1)[0]
     w = np.linspace(-w_max, w_max, 2001)
     m = _model(tau_m, delta, a, mass=mass)

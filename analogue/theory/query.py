@@ -1,11 +1,12 @@
 """Theory values as tables, for the ``analogue theory`` command (and notebooks).
 
-:data:`QUANTITIES` (from :mod:`analogue.theory.quantities`) is the catalogue: for each quantity the options it uses, the theories
-(``kind``) it offers and what it returns.  :func:`theory_table` refuses options a quantity does
-not use and kinds it does not offer, so an answer is never silently something else than what
-was asked.  Values that do not exist (a boundary in the slip regime, a crossing time of a path
-that does not cross) are NaN in :attr:`TheoryTable.rows` with a reason in
-:meth:`TheoryTable.reason`; :meth:`TheoryTable.as_json` turns them into ``null`` (strict JSON).
+:data:`QUANTITIES` (from :mod:`analogue.theory.quantities`) is the catalogue: for each quantity
+the options it uses, the theories (``kind``) it offers and what it returns.
+:func:`theory_table` refuses options a quantity does not use and kinds it does not offer, so an
+answer is never silently something else than what was asked.  Values that do not exist (a
+boundary in the slip regime, a crossing time of a path that does not cross) are NaN in
+:attr:`TheoryTable.rows` with a reason in :meth:`TheoryTable.reason`;
+:meth:`TheoryTable.as_json` turns them into ``null`` (strict JSON).
 """
 from __future__ import annotations
 
@@ -242,7 +243,7 @@ def theory_table(model: Model, quantity: str, *, v: ArrayLike | None = None,
             if kind == "weak-noise":
                 f = weak_noise_density(model, grid, tt, start)
             else:
-                        f = exact.propagator(model, grid, tt, start)
+                f = exact.propagator(model, grid, tt, start)
             rows += [[float(tt), float(a), float(b)] for a, b in zip(grid, np.ravel(f))]
         return table(["t", "v", f"f_{kind}"], rows)
     if quantity in ("rate-function", "fluctuation-relation"):
