@@ -487,7 +487,7 @@ def sweep(experiment, vary, out, workers, scheduler, store, timeout, quick, prog
     logger.addHandler(_ProgressLines())
     logger.setLevel(_logging.INFO)
     opts = _options(workers, scheduler, store, timeout, quick, progress)
-    ds = run_sweep(experiment, grid, quick=quick, out=out, **opts.simulate_kwargs())
+    ds = run_sweep(experiment, grid, quick=quick, out=out, runner=opts.runner())
     click.echo(f"wrote {Path(out) / 'sweep.nc'}")
     for p in draw_sweep(ds, out):
         click.echo(f"wrote {p}")

@@ -178,7 +178,8 @@ def choose_deck_size(model: Model, spec, *, replicas: int, t_end: float, workers
     ``store``, ``scheduler``, ``executor``, ``timeout`` of earlier versions) and ``run``: how
     the calibration's decks run, as for
     :func:`analogue.circuit.tolerances.choose_tolerances` (through
-    :func:`analogue.circuit.decks.run_ensemble`, never :func:`analogue.simulate`)."""
+    :func:`analogue.circuit.decks.run_ensemble`, never :func:`analogue.simulate`; ``run`` is
+    deprecated: DeprecationWarning)."""
     run = require_run(run, "choose_deck_size")
     lo, hi = _check_bounds(bounds)
     replicas = checks.integer("replicas", replicas, minimum=1)

@@ -53,6 +53,7 @@ overridden: only the unset ones are chosen, among candidates that agree with the
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -97,15 +98,22 @@ __all__ = [
 # A simulate-like callable, ``run(model, circuit=spec, v0=..., t_end=..., replicas=...,
 # seed=..., replicas_per_deck=..., **run_options) -> Ensemble``: the way calibrations ran
 # before the Runner (kept for callers that pass one; without it they run through
-# decks.run_ensemble).
+# decks.run_ensemble; deprecated, :func:`require_run`).
 RunDecks = Callable[..., Ensemble]
 
 
 def require_run(run: RunDecks | None, who: str) -> RunDecks | None:
-    """``run`` if None or callable (the legacy way to run a calibration), else TypeError."""
-    if run is not None and not callable(run):
+    """``run`` if None or callable (the legacy way to run a calibration), else TypeError.
+    Deprecated (DeprecationWarning when given): no caller in the package passes one since
+    the report's calibrations take a Runner (issue 20); pass ``runner=`` instead."""
+    if run is None:
+        return None
+    if not callable(run):
         raise TypeError(f"{who}: run must be callable like analogue.simulate, "
                         f"got {type(run).__name__}")
+    warnings.warn(f"{who}(run=...) is deprecated: the calibration runs its decks itself; "
+                  f"pass runner=analogue.Runner(...) for how they run", DeprecationWarning,
+                  stacklevel=3)
     return run
 
 
@@ -451,7 +459,8 @@ def choose_tolerances(model: Model, spec: CircuitSpec | None = None, *, replicas
     options ``store``, ``workers``, ``scheduler``, ``executor`` and ``timeout`` of earlier
     versions make one (not together with ``runner``).  The decks run through
     :func:`analogue.circuit.decks.run_ensemble`, never :func:`analogue.simulate`;
-    ``run``: a simulate-like callable to run them instead (earlier versions needed one)."""
+    ``run``: a simulate-like callable to run them instead (earlier versions needed one;
+    deprecated: DeprecationWarning)."""
     if observables is not None:
         observables = tuple(observables)
         unknown = [o for o in observables if o not in ALL_OBSERVABLES]

@@ -52,6 +52,7 @@ from ..estimators import work_rate_samples
 from .observables import jackknife_difference, subset
 from ..theory.kolmogorov_feller import default_spacing
 from ..theory import family
+from ..circuit.runner import Runner
 from ..circuit.simulate import simulate
 from ..montecarlo import simulate_sde
 from ..theory.exact import stationary_moments as _sm
@@ -294,15 +295,16 @@ def _null_se(o: C.Observable, law: C.LawMoments, n: int) -> float:
 
 # ------------------------------------------------------------------------------ runs
 def _circuit(exp: Experiment, *, v0, t_end: float, replicas: int, seed: int, sizes: MemberSizes,
-             opts, spec=None, per_deck: int | None = None) -> Ensemble:
+             runner: Runner, spec=None, per_deck: int | None = None) -> Ensemble:
     """One circuit run through :func:`analogue.simulate` (seeded, stored).  ``per_deck``
     fixes the deck size, so that a re-run of the first deck with ``spec`` (the integration
-    check) sees the same noise: a deck's noise depends on (seed, deck index, deck size)."""
-    kw = opts.simulate_kwargs() if opts is not None else {"progress": False}
+    check) sees the same noise: a deck's noise depends on (seed, deck index, deck size).
+    ``runner``: how the decks run (:meth:`RunOptions.runner`)."""
     if per_deck is not None:
-        kw["replicas_per_deck"] = per_deck
+        runner = runner.replace(replicas_per_deck=per_deck)
     return simulate(exp.model, v0=v0, t_end=t_end, replicas=replicas, seed=seed,
-                    sample_dt=sizes.sample_dt, circuit=exp.spec if spec is None else spec, **kw)
+                    sample_dt=sizes.sample_dt, circuit=exp.spec if spec is None else spec,
+                    runner=runner)
 
 
 def _analysed(exp: Experiment, ens: Ensemble) -> Ensemble:
@@ -362,26 +364,28 @@ def member_runs(exp: Experiment, opts=None, *, quick: bool | None = None,
     tick = progress or (lambda *_: None)
     plan = SeedPlan(exp.seed)             # every seed below (analogue.study.seeds)
     runs = _RUNS.get(C.model_class(exp.model), _one_d_runs)
-    return runs(exp, opts, sizes=sizes, quick=quick, plan=plan, tick=tick)
+    # how the decks run: the options' runner (none given: silent, the default store)
+    runner = opts.runner() if opts is not None else Runner(progress=False)
+    return runs(exp, runner, sizes=sizes, quick=quick, plan=plan, tick=tick)
 
 
-def _release_runs(exp: Experiment, opts, *, sizes: MemberSizes, quick: bool, plan: SeedPlan,
+def _release_runs(exp: Experiment, runner: Runner, *, sizes: MemberSizes, quick: bool, plan: SeedPlan,
                   tick: Callable) -> MemberRuns:
     """The spring's runs: the release from x0 at rest and its first deck 100x tighter."""
     seed, name, m = plan.member_circuit, exp.name, exp.model
     tick(f"{name}: circuit run from x0 = {m.x0:g} ({sizes.transition_replicas} replicas)")
     circ = _circuit(exp, v0=0.0, t_end=sizes.stationary_t_end,
-                    replicas=sizes.transition_replicas, seed=seed, sizes=sizes, opts=opts,
+                    replicas=sizes.transition_replicas, seed=seed, sizes=sizes, runner=runner,
                     per_deck=CHECK_REPLICAS)
     tick(f"{name}: integration check (first {CHECK_REPLICAS} replicas, 100x tighter)")
     chk = _circuit(exp, v0=0.0, t_end=sizes.stationary_t_end, replicas=CHECK_REPLICAS,
-                   seed=seed, sizes=sizes, opts=opts, spec=exp.check_spec(),
+                   seed=seed, sizes=sizes, runner=runner, spec=exp.check_spec(),
                    per_deck=CHECK_REPLICAS)
     return MemberRuns(exp, sizes, quick, transition=circ, check=chk,
                       seeds={"transition": seed, "check_transition": seed})
 
 
-def _one_d_runs(exp: Experiment, opts, *, sizes: MemberSizes, quick: bool, plan: SeedPlan,
+def _one_d_runs(exp: Experiment, runner: Runner, *, sizes: MemberSizes, quick: bool, plan: SeedPlan,
                 tick: Callable) -> MemberRuns:
     """A 1-D member's runs: stationary (from the start model's law), transition (from
     ``exp.v0[0]``, with ``histogram_times``) and the stationary run's first deck 100x
@@ -391,7 +395,7 @@ def _one_d_runs(exp: Experiment, opts, *, sizes: MemberSizes, quick: bool, plan:
     tick(f"{name}: stationary circuit run ({sizes.stationary_replicas} x "
          f"{sizes.stationary_t_end:g})")
     stat = _circuit(exp, v0=v0_stat, t_end=sizes.stationary_t_end,
-                    replicas=sizes.stationary_replicas, seed=seed, sizes=sizes, opts=opts,
+                    replicas=sizes.stationary_replicas, seed=seed, sizes=sizes, runner=runner,
                     per_deck=CHECK_REPLICAS)
     v00 = float(exp.v0[0])
     times = [float(t) for t in exp.histogram_times]
@@ -400,10 +404,10 @@ def _one_d_runs(exp: Experiment, opts, *, sizes: MemberSizes, quick: bool, plan:
         tick(f"{name}: transition circuit run from v0 = {v00:g} "
              f"({sizes.transition_replicas} replicas)")
         trans = _circuit(exp, v0=v00, t_end=max(times), replicas=sizes.transition_replicas,
-                         seed=plan.member_transition, sizes=sizes, opts=opts)
+                         seed=plan.member_transition, sizes=sizes, runner=runner)
     tick(f"{name}: integration check (first {CHECK_REPLICAS} stationary replicas, 100x tighter)")
     chk = _circuit(exp, v0=v0_stat[:CHECK_REPLICAS], t_end=sizes.stationary_t_end,
-                   replicas=CHECK_REPLICAS, seed=seed, sizes=sizes, opts=opts,
+                   replicas=CHECK_REPLICAS, seed=seed, sizes=sizes, runner=runner,
                    spec=exp.check_spec(), per_deck=CHECK_REPLICAS)
     seeds = {"stationary": seed, "check_stationary": seed}
     if trans is not None:

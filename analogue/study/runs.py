@@ -52,6 +52,7 @@ from ..circuit.simulate import run_decks, time_grid, value_limits
 from ..circuit.deck_size import choose_deck_size
 from ..circuit.simulate import simulate
 from ..circuit.tolerances import resolve_spec
+from ..circuit.runner import Runner
 from ..circuit import ngspice as _ng
 from ..theory.exact import sample_stationary
 from .theory_curves import stationary_taus
@@ -61,11 +62,12 @@ __all__ = ["ExperimentRuns", "run_experiment_runs", "first_deck_size", "check_pl
 
 
 
-def default_workers(kw: dict | None = None) -> int:
-    """Local ngspice processes at once: ``kw["workers"]`` when given, else the CPUs this
+def default_workers(runner: Runner | None = None) -> int:
+    """Local ngspice processes at once: ``runner.workers`` when set, else the CPUs this
     process may use (:func:`analogue.cores.usable_cpus`: affinity mask and cgroup quota, not
     the machine's count; issue 22)."""
-    return (kw or {}).get("workers") or usable_cpus()
+    return (runner.workers if runner is not None else None) or usable_cpus()
+
 
 def first_deck_size(replicas: int, per_deck: int = DEFAULT_REPLICAS_PER_DECK) -> int:
     """Replicas in deck 0 when :func:`analogue.simulate` splits ``replicas`` evenly."""
@@ -203,16 +205,15 @@ class ExperimentRuns:
         }
 
 
-def _noise_free_run(exp: Experiment, seed: int, kw: dict) -> Ensemble:
-    """One replica per v0 on the user's circuit with the noise off (paper Fig. 1)."""
+def _noise_free_run(exp: Experiment, seed: int, runner: Runner) -> Ensemble:
+    """One replica per v0 on the user's circuit with the noise off (paper Fig. 1), its deck
+    run with ``runner`` (its deck size unused: the deck is made here)."""
     deck = exp.noise_free_deck(seed=seed)
     times = time_grid(deck.t_end, exp.sample_dt)
     v0 = np.asarray(exp.v0, dtype=float)
-    run_kw: dict[str, Any] = {k: kw[k] for k in ("store", "workers", "scheduler", "executor",
-                                                "progress", "timeout") if k in kw}
     mapping = exp.noise_free_mapping()
     v, x, _, info = run_decks([deck], times, v0, limits=value_limits(mapping, v0, deck.t_end),
-                              **run_kw)
+                              runner=runner)
     meta: dict[str, Any] = {"source": "circuit", "noise": "off", "model": exp.model.as_dict(),
             "model_effective": mapping.model_effective.as_dict(), "seed": seed,
             "deck_sha256": [deck.sha256], "t_end": deck.t_end, "sample_dt": exp.sample_dt,
@@ -234,19 +235,23 @@ def _noise_free_run(exp: Experiment, seed: int, kw: dict) -> Ensemble:
 REPORT_FRACTION = 0.06
 
 
-def _choose(model, spec, replicas: int, t_end: float, kw: dict, check: int, observables):
+def _choose(model, spec, replicas: int, t_end: float, runner: Runner, check: int,
+            observables):
     """(spec with its tolerances set, replicas per deck, why) for one run of the report whose
     integration error is measured on about ``check`` of its paths, compared on
-    ``observables`` (circuit.tolerances.STATIONARY_OBSERVABLES, or None: all)."""
-    # (the run's --timeout holds for the calibrations too: issue 19, a hung ngspice kept a
-    # --timeout 3 run going for the calibrations' default hour per deck)
-    common = {k: kw[k] for k in ("store", "scheduler", "timeout") if k in kw}
-    workers = default_workers(kw)
-    spec, tol = resolve_spec(model, spec, replicas=replicas, t_end=t_end, workers=workers,
+    ``observables`` (circuit.tolerances.STATIONARY_OBSERVABLES, or None: all).  The
+    calibrations run with ``runner`` (its store, Dask scheduler and timeout: the run's
+    --timeout holds for the calibrations too, issue 19, where a hung ngspice kept a --timeout
+    3 run going for the calibrations' default hour per deck), on its workers or the usable
+    CPUs, through :func:`analogue.circuit.decks.run_ensemble` (the same decks and store keys
+    as through :func:`analogue.simulate`, which they called back before)."""
+    workers = default_workers(runner)
+    cal = runner.replace(workers=workers)
+    spec, tol = resolve_spec(model, spec, replicas=replicas, t_end=t_end,
                              check_replicas=min(check, replicas), observables=observables,
-                             fraction=REPORT_FRACTION, run=simulate, **common)
+                             fraction=REPORT_FRACTION, runner=cal)
     deck = choose_deck_size(model, spec, replicas=replicas, t_end=t_end, workers=workers,
-                            run=simulate, **common)
+                            runner=cal)
     return spec, deck.replicas_per_deck, {"tolerances": tol.as_dict(),
                                           "deck_size": deck.as_dict()}
 
@@ -286,28 +291,29 @@ class SharedPool(cf.Executor):
         pass  # the pool is the caller's
 
 
-def _run_jobs(jobs: list[tuple[str, Callable[..., Any]]], kw: dict) -> dict:
-    """Run ``jobs`` (name, fn(executor-kwargs) -> result) with every deck on one pool of
-    ``kw["workers"]`` ngspice processes, queued in the order given (longest first), and return
-    ``{name: result}``.  Each job runs in its own thread, which only waits for its decks, with
+def _run_jobs(jobs: list[tuple[str, Callable[[Runner], Any]]], runner: Runner) -> dict:
+    """Run ``jobs`` (name, fn(runner) -> result) with every deck on one pool of
+    ``runner.workers`` ngspice processes (each job gets ``runner`` with the pool as its
+    executor), queued in the order given (longest first), and return ``{name: result}``.  Each job runs in its own thread, which only waits for its decks, with
     a copy of the caller's context, so the run store's key collectors
     (:func:`analogue.circuit.store_index.collecting_keys`) see every deck.  The calling thread
     holds :func:`analogue.circuit.ngspice.interrupt_guard` meanwhile (a signal kills every
     ngspice process and raises there).  With a Dask scheduler address the jobs run one after
-    another on it (each simulate call connects on its own)."""
-    if kw.get("scheduler"):
-        return {name: fn({}) for name, fn in jobs}
-    workers = default_workers(kw)
+    another on it (each simulate call connects on its own) with ``runner`` as it is."""
+    if runner.scheduler is not None:
+        return {name: fn(runner) for name, fn in jobs}
+    workers = default_workers(runner)
     out = {}
     with _ng.interrupt_guard(), \
             cf.ThreadPoolExecutor(max_workers=workers, thread_name_prefix="analogue-deck") as pool, \
             cf.ThreadPoolExecutor(max_workers=len(jobs),
-                                  thread_name_prefix="analogue-run") as runner:
+                                  thread_name_prefix="analogue-run") as threads:
         futures = {}
         try:
             for name, fn in jobs:
                 view = SharedPool(pool)
-                fut = runner.submit(contextvars.copy_context().run, fn, {"executor": view})
+                fut = threads.submit(contextvars.copy_context().run, fn,
+                                     runner.replace(executor=view))
                 futures[name] = fut
                 # the next job's decks queue behind this one's (all from the store: none)
                 while not (view.started.wait(0.05) or fut.done()):
@@ -339,7 +345,7 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
 
     t_start = time.perf_counter()
     settings = (settings or exp.report).for_options(opts)
-    kw = opts.simulate_kwargs()
+    runner = opts.runner()
     model, spec = exp.model, exp.spec
     model_eff = exp.mapping().model_effective
     replicas = opts.scaled(exp.replicas)
@@ -366,14 +372,14 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
     # state, and transitions from far-off v0 err more (measured: judged on v(T), v(T)^2,
     # 1[v(T)<0] alone, the quick stick and work transitions took trap 1e-4 and 1e-3 with
     # trtol 20, and their P(v<0) rows' integration terms reached 0.14 and 0.12 SE)
-    trans_spec, trans_deck, trans_why = _choose(model, spec, replicas, exp.t_end, kw, check,
+    trans_spec, trans_deck, trans_why = _choose(model, spec, replicas, exp.t_end, runner, check,
                                                 None)
     # the stationary runs (and their check) hold the noise for a fraction of the circuit's
     # hold (plan.stationary_noise_dt): their indicator observables carry the largest
     # bandwidth bias; tolerances and deck size are chosen for that finer deck
     stat_base = spec.replace(noise_dt=stationary_noise_dt(exp.mapping().noise_dt, settings))
     stat_spec, stat_deck, stat_why = _choose(model, stat_base, n_stat, settings.stationary_t_end,
-                                             kw, check, STATIONARY_OBSERVABLES)
+                                             runner, check, STATIONARY_OBSERVABLES)
     v0_stat = np.asarray(sample_stationary(model_eff, n_stat, seeds["stationary"]), dtype=float)
     for i, v0 in enumerate(exp.v0):
         seeds[f"transition v0={v0:g}"] = plan.transition(i)
@@ -387,12 +393,14 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
         sample_dt=exp.sample_dt, workers=NOTIONAL_WORKERS)
     n1 = s_decks * s_size
 
-    def run(**args):
-        return lambda ex: simulate(model, sample_dt=exp.sample_dt, **args, **kw, **ex)
+    def run(*, replicas_per_deck: int, **args):
+        # a job's runner: the report's, with the deck pool as its executor (_run_jobs)
+        return lambda job: simulate(model, sample_dt=exp.sample_dt, **args,
+                                    runner=job.replace(replicas_per_deck=replicas_per_deck))
 
     # Longest first: the checks (5x the nominal cost per unit time), the stationary run, the
     # transition runs; the noise-free run (one short deck) last.
-    jobs: list[tuple[str, Callable[..., Any]]] = [
+    jobs: list[tuple[str, Callable[[Runner], Any]]] = [
         ("check_stationary", run(v0=v0_stat[:n1], t_end=s_window, replicas=n1,
                                  seed=seeds["stationary"], circuit=exp.check_spec(stat_spec),
                                  replicas_per_deck=s_size)),
@@ -407,9 +415,9 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
                                      seed=plan.transition(i), circuit=trans_spec,
                                      replicas_per_deck=trans_deck))
              for i, v0 in enumerate(exp.v0)]
-    jobs.append(("noise_free", lambda ex: _noise_free_run(exp, seeds["noise_free"], {**kw, **ex})))
+    jobs.append(("noise_free", lambda job: _noise_free_run(exp, seeds["noise_free"], job)))
     t_jobs = time.perf_counter()
-    done = _run_jobs(jobs, kw)
+    done = _run_jobs(jobs, runner)
     ran = [float(w) for e in done.values() for w in e.meta.get("ran_deck_wall_times") or ()
            if w is not None]
 

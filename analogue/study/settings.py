@@ -39,11 +39,13 @@ from __future__ import annotations
 
 import math
 import re
+import warnings
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 from .. import checks
-from ..circuit.runner import Runner
+from ..circuit.runner import DEFAULT_TIMEOUT, Runner
 
 __all__ = ["RunOptions", "ReportSettings", "report_settings_from_dict",
            "QUICK_DIVISOR", "MIN_STATIONARY_REPLICAS", "MIN_CHECK_REPLICAS",
@@ -76,7 +78,20 @@ class RunOptions:
     # circuit points of the stick experiment at quick size: analogue.report.measure_chapter)
     sweeps: bool = False
 
+    def runner(self, **changes: Any) -> Runner:
+        """These options as the :class:`analogue.Runner` every deck of the study runs with
+        (store, workers, Dask scheduler, per-deck timeout, progress), with ``changes`` (a
+        deck size, a label, an executor: :meth:`Runner.replace`'s keywords), validated by the
+        Runner.  The one way run options travel from the study to what runs decks (issue 20:
+        no dict of run options between layers)."""
+        return Runner(store=self.store, workers=self.workers, scheduler=self.scheduler or None,
+                      timeout=DEFAULT_TIMEOUT if self.timeout is None else self.timeout,
+                      progress=self.progress).replace(**changes)
+
     def simulate_kwargs(self) -> dict:
+        """Deprecated (DeprecationWarning): use :meth:`runner` and pass ``runner=``."""
+        warnings.warn("RunOptions.simulate_kwargs() is deprecated: pass "
+                      "runner=RunOptions.runner() instead", DeprecationWarning, stacklevel=2)
         kw: dict = {"workers": self.workers, "progress": self.progress}
         if self.scheduler:
             kw["scheduler"] = self.scheduler

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 
+from analogue import Runner
 from analogue.cli import main
 from analogue.circuit import experiments as E
 from conftest import toml_text
@@ -176,9 +177,10 @@ def test_timeout_reaches_simulate(cli, monkeypatch, tmp_path, cmd):
     r = cli.invoke(main, args)
     assert r.exit_code == 0, r.output
     assert seen["opts"].timeout == 7.5
-    assert seen["opts"].simulate_kwargs()["timeout"] == 7.5
+    assert seen["opts"].runner().timeout == 7.5
     r = cli.invoke(main, [cmd] + (["stick"] if cmd != "paper" else []))
-    assert "timeout" not in seen["opts"].simulate_kwargs()
+    assert seen["opts"].timeout is None
+    assert seen["opts"].runner().timeout == Runner().timeout  # the default hour
 
 
 # ------------------------------------------------------------------------------ paths

@@ -146,6 +146,7 @@ def test_the_reports_noise_free_run_refuses_huge_values(tmp_path, monkeypatch):
     """Paper Fig. 1's noise-free run (study.runs._noise_free_run) goes through run_decks
     directly: it gets the same physical limits."""
     from analogue.circuit.experiments import load_experiment
+    from analogue import Runner
     from analogue.study.runs import _noise_free_run
     exp = load_experiment("stick")
     bindir = tmp_path / "bin"
@@ -153,7 +154,7 @@ def test_the_reports_noise_free_run_refuses_huge_values(tmp_path, monkeypatch):
     monkeypatch.setenv("PATH", f"{bindir}{os.pathsep}{os.environ['PATH']}")
     root = tmp_path / "store"
     with pytest.raises(ng.NgspiceError, match="physically reach"):
-        _noise_free_run(exp, 1, {"store": root, "workers": 1, "progress": False})
+        _noise_free_run(exp, 1, Runner(store=root, workers=1, progress=False))
     assert RunStore(root).keys() == []
 
 

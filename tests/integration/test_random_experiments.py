@@ -113,7 +113,7 @@ def fake_runs(exp, opts, settings=None) -> ExperimentRuns:
 _NOMINAL: dict = {}
 
 
-def fake_member_circuit(exp, *, v0, t_end, replicas, seed, sizes, opts, spec=None,
+def fake_member_circuit(exp, *, v0, t_end, replicas, seed, sizes, runner, spec=None,
                         per_deck=None) -> Ensemble:
     """A member's circuit run, from the SDE of its effective model (the spring's position read
     back as the inductor's would be).  The integration check (``spec`` given) re-runs the

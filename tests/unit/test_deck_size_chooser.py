@@ -78,7 +78,8 @@ def test_the_calibration_runs_through_a_given_run():
         return Ensemble(t, np.zeros((replicas, 3)), np.zeros((replicas, 3)),
                         {"deck_raw_points": [pts]})
     try:
-        c = ds.choose_deck_size(STICK, SPEC, replicas=512, t_end=10.0, workers=2, run=run)
+        with pytest.deprecated_call(match=r"choose_deck_size\(run=\.\.\.\) is deprecated"):
+            c = ds.choose_deck_size(STICK, SPEC, replicas=512, t_end=10.0, workers=2, run=run)
     finally:
         ds._MEMO.clear()
     assert [(r, d) for _, r, d in calls] == [(r, r) for r in ds.CAL_SIZES]

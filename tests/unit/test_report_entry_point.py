@@ -137,7 +137,10 @@ def test_a_runner_says_how_the_report_runs(tmp_path, monkeypatch):
     (opts,) = seen
     assert (opts.store, opts.workers, opts.timeout, opts.progress, opts.quick) == \
         (tmp_path / "store", 3, 99.0, False, True)
-    assert opts.simulate_kwargs()["store"] == tmp_path / "store"
+    # the options give the decks back the very runner the report was handed (issue 20)
+    assert opts.runner() == runner
+    with pytest.deprecated_call():
+        assert opts.simulate_kwargs()["store"] == tmp_path / "store"
     for bad in (dict(replicas_per_deck=8), dict(label="x")):
         with pytest.raises(ValueError, match=f"runner.{next(iter(bad))}"):
             analogue.report("stick", out=tmp_path / "n", runner=analogue.Runner(**bad))
