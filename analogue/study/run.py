@@ -310,88 +310,137 @@ def _schedule(result: StudyResult, opts: RunOptions, hooks: StudyHooks, pool: Wo
       that both are ready when its runs are; the hooks' background tasks last; the
       bandwidth terms' Monte Carlo chunks run on the threads of ``mc`` (every core);
     - the family members' circuit work starts once the paper's circuit runs are done (the
-      cores ngspice used are free), beside the paper's last comparisons and figures."""
-    experiments, phases, fails = result.experiments, result.phases, result.failures
-    order = sorted(range(len(experiments)), key=lambda i: -circuit_cost(experiments[i], opts))
-    theory_f: dict = {}
-    band_f: dict = {}
-    for i in order:
-        exp = experiments[i]
-        settings = exp.report.for_options(opts)
-        theory_f[i] = pool.submit("exact theory", exp.name,
-                                  lambda exp=exp, s=settings: experiment_theory(exp, s,
-                                                                                progress=say))
-        band_f[i] = pool.submit("bandwidth term (held/white Monte Carlo)", exp.name,
-                                lambda exp=exp, s=settings: bandwidth_terms(exp, s,
-                                                                            progress=say,
-                                                                            executor=mc))
-    background = {phase: pool.submit(phase, None, fn) for phase, fn in hooks.background().items()}
-    runs_f = {i: circuit.submit("circuit runs", experiments[i].name,
-                                lambda exp=experiments[i]: runs_task(exp, opts))
-              for i in order}
-    # the members start once the paper's circuit runs are done, when ngspice leaves the cores
-    # (issue 22: more cores, less waiting).  Before, they waited for the paper's chapters
-    # (figures and Fig. 1 drawn): on 2 cores that kept the paper's chapters 8.5 s shorter
-    # (two members' ngspice made the last experiment's figures take 6.3 s of wall for
-    # ~2.4 CPU-s) but left the cores to the main thread alone for those seconds, and on a
-    # larger machine all but one idle
-    paper_done: Future = Future()
-    members_f: list = [None] * len(result.members)
-    for j in sorted(range(len(result.members)),
-                    key=lambda j: -member_cost(result.members[j])):   # longest first
-        members_f[j] = family.submit_after([*runs_f.values()],
-                                           "family member (circuit and theory)",
-                                           result.members[j].name,
-                                           lambda exp=result.members[j]: member_task(exp, opts))
-    runs_by_index: dict = {}
-    analyses_by_index: dict = {}
-    # The hooks draw in this thread as soon as an experiment's theory curves are in, while
-    # the circuit threads run the next experiments
-    undrawn: list = []          # (runs, analysis, future of its theory curves), in order
+      cores ngspice used are free), beside the paper's last comparisons and figures.
 
-    def draw_ready(block: bool) -> None:
+    Its phases, in the order they start, are the methods of :class:`_Schedule`."""
+    plan = _Schedule(result, opts, hooks, pool, circuit, family)
+    plan.submit_theory(mc)
+    plan.submit_runs()
+    plan.submit_members()
+    plan.compare_as_runs_complete()
+    plan.complete_paper()
+    plan.collect_members()
+
+
+class _Schedule:
+    """One study's schedule (:func:`_schedule`): what was submitted to which pool, and the
+    phases that submit and collect it."""
+
+    def __init__(self, result: StudyResult, opts: RunOptions, hooks: StudyHooks,
+                 pool: Workers, circuit: Workers, family: Workers):
+        self.result, self.opts, self.hooks = result, opts, hooks
+        self.pool, self.circuit, self.family = pool, circuit, family
+        self.experiments = result.experiments
+        self.order = sorted(range(len(self.experiments)),
+                            key=lambda i: -circuit_cost(self.experiments[i], opts))
+        self.theory_f: dict = {}
+        self.band_f: dict = {}
+        self.background: dict = {}
+        self.runs_f: dict = {}
+        self.members_f: list = [None] * len(result.members)
+        # (runs, analysis, future of its theory curves), in the order the runs completed:
+        # drawn by the hooks in this thread as soon as their theory curves are in, while the
+        # circuit threads run the next experiments
+        self.undrawn: list = []
+
+    def submit_theory(self, mc) -> None:
+        """The theory thread, longest experiment first: each one's exact theory, then its
+        bandwidth term (Monte Carlo chunks on ``mc``); the hooks' background tasks last."""
+        for i in self.order:
+            exp = self.experiments[i]
+            settings = exp.report.for_options(self.opts)
+            self.theory_f[i] = self.pool.submit(
+                "exact theory", exp.name,
+                lambda exp=exp, s=settings: experiment_theory(exp, s, progress=say))
+            self.band_f[i] = self.pool.submit(
+                "bandwidth term (held/white Monte Carlo)", exp.name,
+                lambda exp=exp, s=settings: bandwidth_terms(exp, s, progress=say, executor=mc))
+        self.background = {phase: self.pool.submit(phase, None, fn)
+                           for phase, fn in self.hooks.background().items()}
+
+    def submit_runs(self) -> None:
+        """The paper-model experiments' circuit runs, longest first."""
+        opts = self.opts
+        self.runs_f = {i: self.circuit.submit("circuit runs", self.experiments[i].name,
+                                              lambda exp=self.experiments[i]:
+                                              runs_task(exp, opts))
+                       for i in self.order}
+
+    def submit_members(self) -> None:
+        """The members, longest first, once the paper's circuit runs are done, when ngspice
+        leaves the cores (issue 22: more cores, less waiting).  Before, they waited for the
+        paper's chapters (figures and Fig. 1 drawn): on 2 cores that kept the paper's chapters
+        8.5 s shorter (two members' ngspice made the last experiment's figures take 6.3 s of
+        wall for ~2.4 CPU-s) but left the cores to the main thread alone for those seconds,
+        and on a larger machine all but one idle."""
+        members, opts = self.result.members, self.opts
+        for j in sorted(range(len(members)), key=lambda j: -member_cost(members[j])):
+            self.members_f[j] = self.family.submit_after(
+                [*self.runs_f.values()], "family member (circuit and theory)",
+                members[j].name, lambda exp=members[j]: member_task(exp, opts))
+
+    def draw_ready(self, block: bool) -> None:
+        """Hand the hooks every experiment whose theory curves are in (all: ``block``), in
+        order, and every finished background task."""
+        phases, undrawn, background = self.result.phases, self.undrawn, self.background
         while undrawn and (block or undrawn[0][2].done()):
             runs, a, f = undrawn.pop(0)
             with phases("waiting for theory curves", runs.exp.name):
                 a.curves = _curves_of(f)
-            hooks.experiment_ready(result, runs, a)
+            self.hooks.experiment_ready(self.result, runs, a)
         for phase, f in list(background.items()):
             if block or f.done():
                 del background[phase]
-                hooks.background_ready(result, phase, f)
+                self.hooks.background_ready(self.result, phase, f)
 
-    def next_done() -> int:
+    def next_done(self) -> int:
         """The next experiment whose runs are done (the runs' order among those done at
         once), drawing what is ready while none is."""
+        runs_f = self.runs_f
         while True:
-            done = [i for i in order if i in runs_f and runs_f[i].done()]
+            done = [i for i in self.order if i in runs_f and runs_f[i].done()]
             if done:
                 return done[0]
-            draw_ready(block=False)
+            self.draw_ready(block=False)
             waits = list(runs_f.values())
-            if undrawn:
-                waits.append(undrawn[0][2])
-            waits.extend(background.values())
-            with phases("waiting for circuit runs"):
+            if self.undrawn:
+                waits.append(self.undrawn[0][2])
+            waits.extend(self.background.values())
+            with self.result.phases("waiting for circuit runs"):
                 while not wait(waits, timeout=POLL_S, return_when=FIRST_COMPLETED).done:
                     pass  # (polled: see result_of)
 
-    # the experiments are compared in the order their runs complete (the result keeps the
-    # given order)
-    while runs_f:
-        i = next_done()
-        exp, run_f, th_f, bw_f = experiments[i], runs_f.pop(i), theory_f[i], band_f[i]
+    def compare_as_runs_complete(self) -> None:
+        """Each experiment compared with theory in the order its runs complete (the result
+        keeps the given order); a failed run or comparison is recorded, never raised."""
+        runs_by_index: dict = {}
+        analyses_by_index: dict = {}
+        while self.runs_f:
+            i = self.next_done()
+            got = self.compare(i)
+            if got is not None:
+                runs_by_index[i], analyses_by_index[i] = got
+        for i in sorted(runs_by_index):
+            self.result.runs[self.experiments[i].name] = runs_by_index[i]
+            self.result.analyses[self.experiments[i].name] = analyses_by_index[i]
+
+    def compare(self, i: int) -> tuple[ExperimentRuns, ExperimentAnalysis] | None:
+        """Experiment ``i``'s runs (done) against its theory; its data-dependent theory
+        curves (work densities on the circuit's bins...) start in the background meanwhile,
+        beside the next experiment's circuit runs.  None when its runs or its comparison
+        failed (recorded)."""
+        result, phases, fails = self.result, self.result.phases, self.result.failures
+        exp, run_f = self.experiments[i], self.runs_f.pop(i)
+        th_f, bw_f = self.theory_f[i], self.band_f[i]
         section = experiment_section_title(exp)
         runs, err = fails.attempt(section, "circuit runs", lambda f=run_f: result_of(f), exp.name)
         if runs is None:
             th_f.cancel()
             bw_f.cancel()
             result.failed[exp.name] = err
-            continue
-        # the data-dependent theory curves (work densities on the circuit's bins...) run in the
-        # background while this experiment's comparisons and the next one's circuit run
-        cf = pool.submit("theory curves", exp.name,
-                         lambda runs=runs: figure_curves(runs, progress=say), priority=NOW)
+            return None
+        cf = self.pool.submit("theory curves", exp.name,
+                              lambda runs=runs: figure_curves(runs, progress=say), priority=NOW)
         say(f"{exp.name}: comparing with theory")
 
         def compare_(runs=runs, th_f=th_f, bw_f=bw_f):
@@ -405,32 +454,31 @@ def _schedule(result: StudyResult, opts: RunOptions, hooks: StudyHooks, pool: Wo
         if analysis is None:
             cf.cancel()
             result.failed[exp.name] = err
-            continue
-        runs_by_index[i] = runs
-        analyses_by_index[i] = analysis
-        undrawn.append((runs, analysis, cf))
-    for i in sorted(runs_by_index):
-        result.runs[experiments[i].name] = runs_by_index[i]
-        result.analyses[experiments[i].name] = analyses_by_index[i]
+            return None
+        self.undrawn.append((runs, analysis, cf))
+        return runs, analysis
 
-    # the paper's chapters are complete once their figures are drawn
-    draw_ready(block=True)
-    hooks.main_complete(result)
-    result.paper_wall = time.perf_counter() - result.t0
-    paper_done.set_result(None)
+    def complete_paper(self) -> None:
+        """The paper's chapters are complete once their figures are drawn."""
+        self.draw_ready(block=True)
+        self.hooks.main_complete(self.result)
+        self.result.paper_wall = time.perf_counter() - self.result.t0
 
-    for exp, ma_f in zip(result.members, members_f):
-        with phases("waiting for family members", exp.name):
-            ma, err = fails.attempt(experiment_section_title(exp), "member analysis",
-                                    ma_f.result, exp.name)
-        if ma is None:
-            result.failed[exp.name] = err
-        else:
-            result.member_analyses[exp.name] = ma
-    # the members' own time: their analyses (in a circuit thread, beside the paper's
-    # comparisons); the page adds its figures
-    result.member_wall = sum(p["seconds"] for p in phases.items
-                             if p["phase"] == "family member (circuit and theory)")
+    def collect_members(self) -> None:
+        """The members' analyses, in the given order (a failure recorded), and their own
+        time: their analyses (in a circuit thread, beside the paper's comparisons); the page
+        adds its figures."""
+        result, phases, fails = self.result, self.result.phases, self.result.failures
+        for exp, ma_f in zip(result.members, self.members_f):
+            with phases("waiting for family members", exp.name):
+                ma, err = fails.attempt(experiment_section_title(exp), "member analysis",
+                                        ma_f.result, exp.name)
+            if ma is None:
+                result.failed[exp.name] = err
+            else:
+                result.member_analyses[exp.name] = ma
+        result.member_wall = sum(p["seconds"] for p in phases.items
+                                 if p["phase"] == "family member (circuit and theory)")
 
 
 # ------------------------------------------------------------------------ runs alone
