@@ -62,3 +62,19 @@ def test_chunks_in_worker_processes(monkeypatch):
         got = held_noise_pair(STICK, v0=0.2, replicas=7, executor=ex, **KW)
     for g, w in zip(got, want):
         _same(g, w)
+
+
+def test_without_noise_the_paths_are_the_same(monkeypatch):
+    """keep_noise=False (the report's bandwidth terms, which read only the paths): the same
+    paths bit for bit, and no noise stacked (one chunk or several)."""
+    for chunk in (4, 64):
+        monkeypatch.setattr(budget, "PAIR_CHUNK", chunk)
+        want = _one_loop(0.5, 11)
+        with ThreadPoolExecutor(2) as ex:
+            got = held_noise_pair_chunks(STICK, v0=0.5, replicas=11, executor=ex,
+                                         keep_noise=False, **KW)()
+        for g, w in zip(got, want):
+            assert g.noise is None
+            for name in ("t", "v", "x"):
+                assert np.array_equal(getattr(g, name), getattr(w, name)), name
+            assert g.meta == w.meta
