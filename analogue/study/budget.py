@@ -288,7 +288,10 @@ def real_diode_transition_element(mapping: CircuitMapping, v0: float, times) -> 
     (:func:`analogue.theory.friction_law.transition_moments_with_friction`; the shared grid
     error cancels).  ``{label: difference}``; empty where :func:`real_diode_element` is.
     Measured on the stick experiment's default mapping (v0 = +-2, t = 0.5..8): at most 4.8e-7
-    (1N4148) and 7.8e-6 (BAT54); 0.5 s per v0."""
+    (1N4148) and 7.8e-6 (BAT54); 0.5 s per v0.  A start deep in the tail (v0 = -3 at tau_m =
+    2, Delta = 0.5, a = 0.3, gamma = 15) takes the contour route: 0.04 s of CPU for both laws
+    to t = 8 (expm_multiply, before: 12 s, 60-125 s wall on a loaded machine;
+    benchmarks/bench_friction_law.py)."""
     if not _real_bridge(mapping):
         return {}
     model, eps = mapping.model_effective, mapping.epsilon

@@ -12,7 +12,8 @@ and the position diffusion coefficient (Green-Kubo) is the quadrature
 continuum form of :mod:`analogue.theory.stationary`'s grid sum).  Transition moments
 (:func:`transition_moments_with_friction`) propagate the Scharfetter-Gummel master equation of
 :mod:`analogue.theory.fokker_planck` built on that U (detailed balance with exp(-gamma U) is
-exact at the nodes for any law) with ``expm_multiply``.  Everything here is a
+exact at the nodes for any law) by its spectral sum, or by the contour route of
+:mod:`analogue.theory.propagation` for a start deep in the tail.  Everything here is a
 quadrature on one uniform grid that resolves the law's width: ``U`` by cumulative Simpson of
 ``U'``, the moments by Simpson, ``G`` by cumulative Simpson.  With ``c = tanh(v/epsilon)`` the
 values agree with :func:`analogue.theory.exact.stationary_moments` at that epsilon to 3e-12
@@ -32,12 +33,15 @@ from scipy.sparse.linalg import expm_multiply
 from .. import checks
 from ..model import Model
 from .fokker_planck import bernoulli
+from .propagation import amplification, contour_nodes, contour_tridiagonal
 from .stationary import StationaryMoments
 
 # spectral route: modes kept while exp(lambda t_min) > e^-_MODES; starts where gamma (U - U_min)/2
-# exceeds _DEEP use expm_multiply (the spectral sum's rounding error is about
-# exp(gamma (U(v0) - U_min)/2) 1e-16 of the mass: 1e-6 at _DEEP; expm_multiply costs 10-20 s
-# at the stick experiment's grid where the spectral route takes 0.4 s)
+# exceeds _DEEP use the contour route (the spectral sum's rounding error is about
+# exp(gamma (U(v0) - U_min)/2) 1e-16 of the mass: 1e-6 at _DEEP).  They went by expm_multiply,
+# O(n / h^2) per unit time: 28-66 s per law to t = 8 from v0 = -3 on the 1N4148 grid at tau_m =
+# 2 (n = 3282), against 0.3-0.6 s by the contour route, which agrees to 1.8e-10
+# (benchmarks/bench_friction_law.py)
 _MODES = 40.0
 _DEEP = 23.0
 
@@ -120,6 +124,35 @@ def stationary_law_with_friction(model: Model, friction: Callable[[np.ndarray], 
     return FrictionLaw(v, w, moments)
 
 
+def _deep_start(sub: np.ndarray, dia: np.ndarray, sup: np.ndarray, p0: np.ndarray,
+                times: np.ndarray, half: np.ndarray, step: float) -> list[np.ndarray]:
+    """``exp(L t) p0`` at the sorted ``times`` for a start deep in the tail: the contour route
+    (:func:`analogue.theory.propagation.contour_tridiagonal`, O(n) per time whatever t) with the
+    nodes :func:`~analogue.theory.propagation.contour_nodes` asks for this start's
+    amplification ``ln sum p_j e^{half_j}``; a start too deep even for it (more than
+    CONTOUR_MAX_NODES) goes by ``expm_multiply`` in steps of at most ``step`` until the
+    mass allows it (as :func:`~analogue.theory.propagation.propagate_hybrid`)."""
+    log_pi = -2.0 * half
+    gen = None
+    probs: list[np.ndarray] = []
+    now, p = 0.0, p0
+    for pos, t in enumerate(times):
+        while True:
+            q = np.clip(p, 0.0, None)
+            nodes = contour_nodes(amplification(log_pi, q))
+            if nodes is not None:
+                return probs + list(contour_tridiagonal(sub, dia, sup, q, times[pos:] - now, nodes))
+            if now >= t:
+                break
+            if gen is None:
+                gen = sparse.diags([sup, dia, sub], [1, 0, -1], format="csr")
+            dt = min(step, float(t) - now)
+            p = expm_multiply(gen * dt, p)
+            now += dt
+        probs.append(p)
+    return probs
+
+
 def _potential_on(v: np.ndarray, i0: int, du: np.ndarray) -> np.ndarray:
     """U on the grid ``v`` (node i0 is v = 0) from U' = du, by cumulative Simpson from 0."""
     up = integrate.cumulative_simpson(du[i0:], x=v[i0:], initial=0.0)
@@ -129,7 +162,7 @@ def _potential_on(v: np.ndarray, i0: int, du: np.ndarray) -> np.ndarray:
 
 def transition_moments_with_friction(model: Model, friction: Callable[[np.ndarray], np.ndarray],
                                      width: float, v0: float, times: Iterable[float],
-                                     h: float | None = None
+                                     h: float | None = None, method: str = "auto"
                                      ) -> dict[float, tuple[float, float, float]]:
     """Mean, variance and P(v < 0) of ``f(v, t | v0)`` for the paper's model with its sgn
     replaced by ``c = friction`` (as :func:`stationary_law_with_friction`), at each of
@@ -138,8 +171,11 @@ def transition_moments_with_friction(model: Model, friction: Callable[[np.ndarra
     Scharfetter-Gummel rates ``B(+-gamma dU)/(gamma h^2)`` on a uniform grid of spacing ``h``
     (default ``width/2``, at most sqrt(tau_m/gamma)/40) with v = 0 a node, the start split
     linearly between the two nodes around v0; in time the spectral sum of the symmetrised
-    generator over the modes that survive the earliest time (``expm_multiply`` for a start
-    deep in the tail); P(v < 0) counts half of
+    generator over the modes that survive the earliest time (for a start deep in the tail,
+    where that sum would cancel, the contour route
+    :func:`analogue.theory.propagation.contour_tridiagonal`: O(n) per time whatever t, 1e-11
+    of the peak; ``method="expm"`` forces ``expm_multiply`` through the sorted times, the
+    former deep route, 100-200x slower to t = 8 and equal to 2e-10); P(v < 0) counts half of
     the node v = 0.  O(h^2) in space: two laws on the same grid share the leading error, so
     their difference (the element term) is far more accurate than either (with the tanh law,
     against :func:`analogue.theory.exact.propagator`'s moments: 1e-4 of the spread at the
@@ -150,6 +186,8 @@ def transition_moments_with_friction(model: Model, friction: Callable[[np.ndarra
     width = checks.positive("width", width)
     v0 = checks.finite("v0", v0)
     times = [checks.positive("t", float(t)) for t in times]
+    if method not in ("auto", "expm"):
+        raise ValueError(f"method must be 'auto' or 'expm', got {method!r}")
     if h is None:
         h = min(width / 2.0, model.velocity_scale / 40.0)
     h = checks.positive("h", h)
@@ -176,21 +214,26 @@ def transition_moments_with_friction(model: Model, friction: Callable[[np.ndarra
     p0[j + 1] += w
     grid_t = np.sort(np.array(times))
     half = 0.5 * (u - u.min())  # -ln sqrt(pi), up to a constant
-    if half[j] + half[j + 1] < 2.0 * _DEEP:
+    if method == "auto" and half[j] + half[j + 1] < 2.0 * _DEEP:
         # spectral route: S = Pi^-1/2 L Pi^1/2 symmetric tridiagonal; only the modes that
         # survive the earliest time (exp(lambda t_min) > e^-_MODES) are needed
         lam, q = linalg.eigh_tridiagonal(diag, np.sqrt(up * down), select="v",
                                          select_range=(-_MODES / grid_t[0], 1.0))
         b = q.T @ (p0 * np.exp(half))
         probs = [np.exp(-half) * (q @ (np.exp(lam * t) * b)) for t in grid_t]
-    else:
-        # a start deep in the tail: the spectral sum would cancel; propagate directly
+    elif method == "expm":
+        # expm_multiply through the sorted times (the deep route before the contour; kept to
+        # check it: O(n / h^2) per unit time, 28 s per law to t = 8 from v0 = -3 on the
+        # 1N4148 tau_m = 2 grid, benchmarks/bench_friction_law.py)
         gen = sparse.diags([down, diag, up], [1, 0, -1], format="csr")
         probs, prev, p = [], 0.0, p0
         for t in grid_t:
             p = expm_multiply(gen * (t - prev), p)
             prev = t
             probs.append(p)
+    else:
+        # a start deep in the tail: the spectral sum would cancel; the contour route
+        probs = _deep_start(up, diag, down, p0, grid_t, half, model.tau_m / 4.0)
     out = {}
     for t, p in zip(grid_t, probs):
         q = np.clip(p, 0.0, None)
