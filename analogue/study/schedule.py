@@ -99,13 +99,17 @@ class Phases:
 
     @contextmanager
     def __call__(self, phase: str, experiment: str | None = None, thread: str = "main"):
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.thread_time()
         try:
             yield
         finally:
             dt = time.perf_counter() - t0
+            # cpu_s: this thread's CPU seconds in the phase (not its ngspice processes', nor
+            # the Monte Carlo chunks' threads': provenance's bandwidth_timing), the job's CPU
+            # by item (issue 22, item 4: the quick job on 2 cores is bound by its CPU)
             self.items.append({"phase": phase, "experiment": experiment, "thread": thread,
-                               "start_s": round(t0 - self.origin, 3), "seconds": round(dt, 3)})
+                               "start_s": round(t0 - self.origin, 3), "seconds": round(dt, 3),
+                               "cpu_s": round(time.thread_time() - c0, 3)})
             say(f"phase done: {phase}{f' ({experiment})' if experiment else ''} "
                 f"[{thread}]: {dt:.1f} s")
 

@@ -236,3 +236,16 @@ def test_theory_thread_takes_data_dependent_work_first():
     finally:
         pool.close()
     assert order == ["x", "y", "b", "c"]
+
+
+def test_a_phase_records_its_threads_cpu_seconds(monkeypatch):
+    """Each phase records its thread's CPU seconds (cpu_s, issue 22 item 4: the job's CPU by
+    item) beside its wall time: the thread_time difference over the phase."""
+    clock = iter([10.0, 12.5])
+    monkeypatch.setattr(SCH.time, "thread_time", lambda: next(clock))
+    phases = SCH.Phases(origin=0.0)
+    with phases("exact theory", "stick", thread="theory"):
+        pass
+    (item,) = phases.items
+    assert item["cpu_s"] == 2.5
+    assert item["phase"] == "exact theory" and item["thread"] == "theory"
