@@ -227,12 +227,13 @@ def sweep_comparisons(ds, obs: str, experiment: str) -> list[Comparison]:
 def run_sweeps(exp, opts, out: Path, attempt) -> tuple[list, list, list[str]]:
     """The two sweep curves of the chapter for ``exp`` (the paper's stick experiment):
     ``(comparisons, figures, errors)``; each sweep's circuit runs go through the run store
-    like every other (``opts``: store, workers, scheduler, timeout)."""
+    like every other, with the report's runner (``opts.runner()``: store, workers, scheduler,
+    timeout), silent."""
     comps, figs, errors = [], [], []
+    runner = opts.runner(progress=False)
     for name, (vary, obs, figure) in SWEEPS.items():
         ds, err = attempt(CHAPTER_TITLE, f"sweep: {name}", lambda vary=vary: sweep(
-            exp, vary, quick=True, store=opts.store, workers=opts.workers,
-            scheduler=opts.scheduler, timeout=opts.timeout, progress=False), exp.name)
+            exp, vary, quick=True, runner=runner), exp.name)
         if ds is None:
             errors.append(f"sweep {name}: {err}")
             continue

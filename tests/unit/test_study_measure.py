@@ -170,6 +170,33 @@ def test_sweep_points_become_comparisons_with_the_datasets_budget():
     assert comps[1].budget.total() == pytest.approx(0.002)
 
 
+def test_the_sweep_curves_run_with_the_reports_runner(tmp_path, monkeypatch):
+    """The chapter's two sweeps get the report's Runner (silent), not its options one by one
+    (issue 20: no run options as keywords between the layers); a failed sweep is an error
+    line, not an exception."""
+    seen = []
+
+    def sweep(exp, vary, **kw):
+        seen.append((vary, kw))
+        raise RuntimeError("stop")
+    monkeypatch.setattr(measure_chapter, "sweep", sweep)
+    opts = RunOptions(store=tmp_path / "store", workers=3, timeout=42.0, quick=True)
+
+    def attempt(section, what, fn, name):
+        try:
+            return fn(), None
+        except RuntimeError as exc:
+            return None, str(exc)
+    comps, figs, errors = measure_chapter.run_sweeps(load_experiment("stick"), opts, tmp_path,
+                                                     attempt)
+    assert (comps, figs) == ([], []) and len(errors) == len(measure_chapter.SWEEPS) == len(seen)
+    for _vary, kw in seen:
+        assert set(kw) == {"quick", "runner"} and kw["quick"] is True
+        assert kw["runner"] == opts.runner(progress=False)
+        assert (kw["runner"].store, kw["runner"].workers, kw["runner"].timeout) == \
+            (tmp_path / "store", 3, 42.0)
+
+
 def test_cli_offers_the_sweep_curves():
     from click.testing import CliRunner
     from analogue.cli import main
