@@ -165,11 +165,10 @@ def ceiling(argv=None):
 
     # 2. the calibration (once per model; kept in the store)
     t0 = time.perf_counter()
-    tol = choose_tolerances(model, CircuitSpec(), replicas=R, t_end=T, store=args.store,
-                            workers=2, run=analogue.simulate)
+    cal = analogue.Runner(store=args.store, workers=2)
+    tol = choose_tolerances(model, CircuitSpec(), replicas=R, t_end=T, runner=cal)
     chosen = CircuitSpec(**tol.tolerances.as_dict())
-    deck = choose_deck_size(model, chosen, replicas=R, t_end=T, workers=2, store=args.store,
-                            run=analogue.simulate)
+    deck = choose_deck_size(model, chosen, replicas=R, t_end=T, workers=2, runner=cal)
     t_cal = time.perf_counter() - t0
     print(f"chosen: {tol.tolerances.label()} (criterion met: {tol.criterion_met}, worst "
           f"{tol.worst_observable} at {tol.worst_ratio:.3f} statistical errors), "
