@@ -107,3 +107,22 @@ def test_transition_refuses_unknown_method():
     m = MODELS[0]
     with pytest.raises(ValueError, match="method"):
         transition_moments_with_friction(m, np.tanh, m.epsilon, 1.0, [0.5], method="eigen")
+
+
+def test_start_too_deep_for_the_contour_steps_first(monkeypatch):
+    """v0 = -6 (gamma (U(v0) - U_min)/2 = 103: the contour would need 89 > CONTOUR_MAX_NODES
+    nodes) goes by expm_multiply until the mass allows the contour (one step here), then the
+    contour; against the expm_multiply route: 3e-10 measured, 1e-9 asserted."""
+    from analogue.theory import friction_law
+    m = MODELS[0]
+    c = lambda v: np.clip(v / m.epsilon, -1.0, 1.0)  # noqa: E731
+    calls = []
+    expm = friction_law.expm_multiply
+    monkeypatch.setattr(friction_law, "expm_multiply",
+                        lambda *a, **k: calls.append(1) or expm(*a, **k))
+    new = friction_law.transition_moments_with_friction(m, c, m.epsilon, -6.0, [0.3, 0.6])
+    assert len(calls) == 1  # then the contour: the expm route would step twice
+    old = friction_law.transition_moments_with_friction(m, c, m.epsilon, -6.0, [0.3, 0.6],
+                                                        method="expm")
+    for t in (0.3, 0.6):
+        assert new[t] == pytest.approx(old[t], rel=0, abs=1e-9), t
