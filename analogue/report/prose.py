@@ -18,7 +18,7 @@ import math
 import re
 from pathlib import Path
 from ..circuit.experiments import PAPER_EXPERIMENTS, standard_circuit
-from ..circuit.experiments import PAPER_EXPERIMENTS
+from ..variants.words import CIRCUIT, EQUATION, REFERENCE, Phrase, merge, num
 
 __all__ = ["is_paper_experiment", "is_paper_report", "main_part", "model_sentence", "description_mismatches",
            "experiment_paragraphs", "circuit_paragraph", "equation_text", "board_link",
@@ -27,8 +27,7 @@ __all__ = ["is_paper_experiment", "is_paper_report", "main_part", "model_sentenc
 _log = logging.getLogger("analogue.report.prose")
 
 
-def _num(x: float) -> str:
-    return f"{x:.4g}"
+_num = num
 
 
 def is_paper_experiment(exp) -> bool:
@@ -55,29 +54,11 @@ def main_part(experiments) -> str:
 
 
 # ------------------------------------------------------------------------- the model
-def _tau_c(m) -> float | None:
-    """The correlation time of a coloured-noise model (analogue.variants.coloured), or None."""
-    return getattr(m.noise_kind, "tau_c", None)
-
-
-def _noise_words(m) -> str:
-    parts = []
-    tau_c = _tau_c(m)
-    if tau_c is not None:
-        parts.append(f"gamma = {_num(m.gamma)}, tau_c = {_num(tau_c)} (coloured noise: white "
-                     f"noise of intensity 1/gamma = {_num(1 / m.gamma)} through a low-pass of "
-                     "correlation time tau_c, an Ornstein-Uhlenbeck force)")
-    elif math.isfinite(m.gamma):
-        parts.append(f"gamma = {_num(m.gamma)} (Gaussian velocity noise of intensity "
-                     f"1/gamma = {_num(1 / m.gamma)})")
-    else:
-        parts.append("gamma = inf (no Gaussian noise)")
-    if m.shot is not None:
-        side = ("two-sided (each kick's sign +/- with probability 1/2)" if m.shot.two_sided
-                else "one-sided (every kick pushes up)")
-        parts.append(f"shot noise: kicks at rate {_num(m.shot.rate)} per unit time, "
-                     f"exponentially distributed jumps of mean {_num(m.shot.mean)}, {side}")
-    return "; ".join(parts)
+def _phrases(models) -> list:
+    """What the models' variants say of themselves (analogue.variants.words), all together."""
+    return [p for m in models
+            for p in (*m.friction.page_phrases(), *m.noise_kind.page_phrases(),
+                      *m.restoring.page_phrases(m.noise_kind))]
 
 
 def model_sentence(exp) -> str:
@@ -86,13 +67,9 @@ def model_sentence(exp) -> str:
     items = [f"tau_m = {_num(m.tau_m)}", f"Delta = {_num(m.delta)}", f"a = {_num(m.a)}"]
     if m.mass != 1:
         items.append(f"mass = {_num(m.mass)}")
-    if m.cubic:
-        items.append(f"cubic = {_num(m.cubic)}")
-    if m.stribeck is not None:
-        items.append(f"Stribeck delta_s = {_num(m.stribeck[0])}, v_s = {_num(m.stribeck[1])}")
-    if m.spring:
-        items.append(f"spring = {_num(m.spring)}, released from x0 = {_num(m.x0)}")
-    text = f"Model (reduced units): {', '.join(items)}; {_noise_words(m)}."
+    items += [*m.friction.describe(), *m.restoring.describe()]
+    text = (f"Model (reduced units): {', '.join(items)}; "
+            f"{'; '.join(m.noise_kind.describe())}.")
     if m.is_paper:
         if m.regime == "stick":
             t_a = ", ".join(f"t_a = {_num(m.stick_time(v0))} from v0 = {_num(v0)}"
@@ -127,14 +104,7 @@ _SHOT_WORDS = re.compile(r"\b(rate|mean)\s+(\d+(?:\.\d*)?(?:[eE][-+]?\d+)?)\b(?!
 def _model_values(m) -> dict:
     out = {"tau_m": m.tau_m, "delta": m.delta, "gamma": m.gamma, "mass": m.mass,
            "cubic": m.cubic, "spring": m.spring, "x0": m.x0, "a": m.a}
-    if m.stribeck is not None:
-        out["delta_s"], out["v_s"] = m.stribeck
-    if m.shot is not None:
-        out["rate"], out["mean"] = m.shot.rate, m.shot.mean
-    tau_c = _tau_c(m)
-    if tau_c is not None:   # coloured noise's correlation time
-        out["tau_c"] = tau_c
-    return out
+    return {**out, **m.friction.stated_values(), **m.noise_kind.stated_values()}
 
 
 def description_mismatches(exp) -> list[str]:
@@ -146,8 +116,8 @@ def description_mismatches(exp) -> list[str]:
     for name, value in _ASSIGNED.findall(text):
         key = "delta" if name == "Delta" else name
         found.append((f"{name} = ", key, value))
-    if exp.model.shot is not None:
-        found += [(f"{name} ", name, value) for name, value in _SHOT_WORDS.findall(text)]
+    # (a model without shot noise has no "rate" or "mean" to disagree with: skipped below)
+    found += [(f"{name} ", name, value) for name, value in _SHOT_WORDS.findall(text)]
     out = []
     for said, key, value in found:
         if key not in values:
@@ -192,20 +162,7 @@ def circuit_paragraph(experiments) -> str:
                      "bridge passes I_Delta tanh(V/(2 N V_T)))")
     if any(m.delta > 0 and s.coulomb != "diode-bridge" for m, s in zip(models, specs)):
         parts.append("a behavioural source for the Coulomb friction (B-source)")
-    if any(m.stribeck is not None for m in models):
-        parts.append("a Stribeck excess current that decays with |V| (velocity weakening)")
-    if any(m.cubic for m in models):
-        parts.append("a cubic conductance g3 V^3 (cubic viscous friction)")
-    if any(m.spring for m in models):
-        parts.append("an inductor from v to ground (the spring; its current is the position)")
-    if any(math.isfinite(m.gamma) for m in models):
-        parts.append("a held Gaussian noise current (ngspice trrandom, reproducible with "
-                     ".options seed; the vibrating plate)"
-                     + (", for coloured noise through an RC low-pass R_ou C_ou = tau_c"
-                        if any(_tau_c(m) is not None for m in models) else ""))
-    if any(m.shot is not None for m in models):
-        parts.append("shot-noise kicks drawn in numpy from the deck seed and delivered as "
-                     "narrow flat-topped current pulses (PWL source)")
+    parts += merge(_phrases(models), CIRCUIT)
     parts.append("and an integrator node x (a VCCS into a capacitor) so that ngspice itself "
                  "integrates the position for the work W = F (x(t+tau) - x(t))")
     return (", ".join(parts) + ". Time is scaled by theta seconds per model time unit. "
@@ -231,16 +188,7 @@ def theory_kinds_text(experiments, members) -> str:
                    "(sgn friction, white noise); 'weak-noise' is the paper's saddle-point result, "
                    "whose budget includes the finite-noise correction exact(gamma) - weak-noise.")
     if members:
-        models = [e.model for e in members]
-        refs = []
-        if any(m.spring == 0 and m.shot is None and _tau_c(m) is None for m in models):
-            refs.append("the Fokker-Planck numerics of the member's own law")
-        if any(m.spring == 0 and m.shot is not None for m in models):
-            refs.append("the Kolmogorov-Feller numerics for shot noise")
-        if any(m.spring > 0 for m in models):
-            refs.append("the Monte Carlo for a spring")
-        if any(m.dimension == 1 and _tau_c(m) is not None for m in models):
-            refs.append("the Monte Carlo for coloured noise (no exact theory yet)")
+        refs = merge(_phrases(e.model for e in members), REFERENCE)
         out.append("For the family's members the reference is " + ", ".join(refs) + ".")
     return " ".join(out)
 
@@ -267,22 +215,9 @@ def budget_text(experiments) -> str:
 
 def equation_text(experiments) -> str:
     """The reduced equation of the intro, with the terms the report's models have."""
-    models = [e.model for e in experiments]
-    friction = ("Delta(v) sgn(v)" if any(m.stribeck is not None for m in models)
-                else "Delta sgn(v)")
-    terms = ["-v/tau_m"]
-    if any(m.cubic for m in models):
-        terms.append("- cubic v^3")
-    terms.append(f"- {friction}")
-    if any(m.spring for m in models):
-        terms.append("- spring x")
-    terms.append("+ a")
-    if any(math.isfinite(m.gamma) and _tau_c(m) is None for m in models):
-        terms.append("+ xi/m")
-    if any(_tau_c(m) is not None for m in models):
-        terms.append("+ eta (coloured: d eta = -eta dt/tau_c + sqrt(2/gamma) dW/tau_c)")
-    if any(m.shot is not None for m in models):
-        terms.append("+ shot kicks")
+    # the variants' terms between -v/tau_m (slot 0) and + a (slot 4): analogue.variants
+    terms = merge([Phrase(0, "-v/tau_m"), Phrase(4, "+ a"),
+                   *_phrases(e.model for e in experiments)], EQUATION)
     return "dv/dt = " + " ".join(terms)
 
 

@@ -9,6 +9,8 @@ chosen once, by type, where :class:`analogue.Model` is built, and found downstre
 - :mod:`.coloured`: :class:`OrnsteinUhlenbeck`, coloured noise (an Ornstein-Uhlenbeck force of
   correlation time ``tau_c``), the first member added as one module plus its line in
   :data:`NOISE_KINDS` (``Model(..., noise=OrnsteinUhlenbeck(tau_c))``).
+- :mod:`.words`: what a variant says of itself on a page (``describe``, ``stated_values``,
+  ``page_phrases``), composed by :mod:`analogue.report.prose`.
 
 A new noise kind is one module with a :class:`Noise` subclass that names its ``kind``, imported
 here (the registration): :data:`NOISE_KINDS` maps the name it has in ``Model.as_dict`` and in an

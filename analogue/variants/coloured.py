@@ -53,7 +53,8 @@ from typing import Any, ClassVar
 import numpy as np
 
 from .. import checks
-from .noise import Noise
+from .noise import HELD_GAUSSIAN, Noise
+from .words import Phrase, num
 
 __all__ = ["OrnsteinUhlenbeck", "stationary_velocity_variance"]
 
@@ -232,3 +233,20 @@ class OrnsteinUhlenbeck(Noise):
         sub.R("ou", "nz", "ou", value("R_ou", res))
         sub.C("ou", "ou", sub.gnd, value("C_ou", cap))
         sub.VCCS("noise", sub.gnd, "v", "ou", sub.gnd, value("noise_gain", mapping.noise_gain))
+
+    def describe(self) -> list[str]:
+        return [f"gamma = {num(self.gamma)}, tau_c = {num(self.tau_c)} (coloured noise: white "
+                f"noise of intensity 1/gamma = {num(1 / self.gamma)} through a low-pass of "
+                "correlation time tau_c, an Ornstein-Uhlenbeck force)"]
+
+    def stated_values(self) -> dict[str, float]:
+        return {"tau_c": self.tau_c}
+
+    def page_phrases(self) -> list[Phrase]:
+        # its held source covers the white one's wording on a page that has both
+        return [Phrase(6, "+ eta (coloured: d eta = -eta dt/tau_c + sqrt(2/gamma) dW/tau_c)"),
+                Phrase(15, HELD_GAUSSIAN + ", for coloured noise through an RC low-pass "
+                           "R_ou C_ou = tau_c", covers=1)]
+
+    def reference_phrases(self) -> list[Phrase]:
+        return [Phrase(23, "the Monte Carlo for coloured noise (no exact theory yet)")]

@@ -29,6 +29,8 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .words import Phrase, num
+
 __all__ = ["FrictionLaw", "Coulomb", "Stribeck", "Cubic", "build_friction"]
 
 
@@ -204,6 +206,20 @@ class FrictionLaw:
         """``ln integral exp(-gamma U)`` by quadrature over the support bound."""
         r = model._support_bound()
         return _quad_log_normaliser(model, -r, r)
+
+    # ------------------------------------------------------------- on a page
+    def describe(self) -> list[str]:
+        """The law's own parameters in a page's model sentence (Coulomb's Delta is the
+        model's, said with it)."""
+        return []
+
+    def stated_values(self) -> dict[str, float]:
+        """The law's own parameters by the names a description may state them with."""
+        return {}
+
+    def page_phrases(self) -> list[Phrase]:
+        """The law's circuit element and equation term (slots: analogue.report.prose)."""
+        return [Phrase(2, "- Delta sgn(v)")]
 
 
 def _quad_log_normaliser(model: Any, lo: float, hi: float,
@@ -383,6 +399,17 @@ class Stribeck(FrictionLaw):
     def entries(self) -> dict[str, Any]:
         return {"stribeck": [self.delta_s, self.v_s]}
 
+    def describe(self) -> list[str]:
+        return [f"Stribeck delta_s = {num(self.delta_s)}, v_s = {num(self.v_s)}"]
+
+    def stated_values(self) -> dict[str, float]:
+        return {"delta_s": self.delta_s, "v_s": self.v_s}
+
+    def page_phrases(self) -> list[Phrase]:
+        # Delta(v) covers the constant Delta of a Coulomb member on the same page
+        return [Phrase(2, "- Delta(v) sgn(v)", covers=1),
+                Phrase(12, "a Stribeck excess current that decays with |V| (velocity weakening)")]
+
 
 @dataclass(frozen=True)
 class Cubic(FrictionLaw):
@@ -476,6 +503,17 @@ class Cubic(FrictionLaw):
 
     def entries(self) -> dict[str, Any]:
         return {"cubic": self.cubic, **self.inner.entries()}
+
+    def describe(self) -> list[str]:
+        return [f"cubic = {num(self.cubic)}", *self.inner.describe()]
+
+    def stated_values(self) -> dict[str, float]:
+        return self.inner.stated_values()
+
+    def page_phrases(self) -> list[Phrase]:
+        return [Phrase(1, "- cubic v^3"),
+                Phrase(13, "a cubic conductance g3 V^3 (cubic viscous friction)"),
+                *self.inner.page_phrases()]
 
 
 def build_friction(delta: float, epsilon: float, cubic: float,

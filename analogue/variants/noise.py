@@ -27,6 +27,12 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from .words import Phrase, gamma_words, num
+
+#: the circuit paragraph's held Gaussian source (coloured noise adds its low-pass)
+HELD_GAUSSIAN = ("a held Gaussian noise current (ngspice trrandom, reproducible with "
+                 ".options seed; the vibrating plate)")
+
 __all__ = ["Noise", "Silent", "Gaussian", "Shot", "build_noise"]
 
 
@@ -172,6 +178,26 @@ class Noise:
         """This kind's entries of a Monte Carlo ensemble's meta (``scheme``: the route)."""
         return {}
 
+    # ------------------------------------------------------------- on a page
+    def describe(self) -> list[str]:
+        """The noise in a page's model sentence, with its numbers."""
+        return [gamma_words(self.gamma)]
+
+    def stated_values(self) -> dict[str, float]:
+        """The kind's own parameters by the names a description may state them with."""
+        return {}
+
+    def page_phrases(self) -> list[Phrase]:
+        """The noise's equation term and circuit element (slots: :mod:`.words`)."""
+        if not math.isfinite(self.gamma):
+            return []
+        return [Phrase(5, "+ xi/m"), Phrase(15, HELD_GAUSSIAN)]
+
+    def reference_phrases(self) -> list[Phrase]:
+        """The reference of a family member's comparisons without a spring: the exact
+        numerics of :attr:`exact_solver`."""
+        return [Phrase(20, "the Fokker-Planck numerics of the member's own law")]
+
 
 @dataclass(frozen=True)
 class Silent(Noise):
@@ -292,6 +318,24 @@ class Shot(Noise):
 
     def mc_meta(self, n_kicks: int, scheme: str) -> dict[str, Any]:
         return {"kicks": int(n_kicks), "shot_scheme": scheme}
+
+    def describe(self) -> list[str]:
+        side = ("two-sided (each kick's sign +/- with probability 1/2)" if self.shot.two_sided
+                else "one-sided (every kick pushes up)")
+        return [*super().describe(),
+                f"shot noise: kicks at rate {num(self.shot.rate)} per unit time, "
+                f"exponentially distributed jumps of mean {num(self.shot.mean)}, {side}"]
+
+    def stated_values(self) -> dict[str, float]:
+        return {"rate": self.shot.rate, "mean": self.shot.mean}
+
+    def page_phrases(self) -> list[Phrase]:
+        return [*super().page_phrases(), Phrase(7, "+ shot kicks"),
+                Phrase(16, "shot-noise kicks drawn in numpy from the deck seed and delivered "
+                           "as narrow flat-topped current pulses (PWL source)")]
+
+    def reference_phrases(self) -> list[Phrase]:
+        return [Phrase(21, "the Kolmogorov-Feller numerics for shot noise")]
 
 
 def build_noise(gamma: float, shot: Any) -> Noise:

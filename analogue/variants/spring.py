@@ -9,6 +9,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from .words import Phrase, num
+
 __all__ = ["Restoring", "Free", "Spring", "build_restoring"]
 
 
@@ -53,6 +55,15 @@ class Restoring:
     def mc_meta(self) -> dict[str, Any]:
         """This force's entries of a Monte Carlo ensemble's meta."""
         return {}
+
+    def describe(self) -> list[str]:
+        """The restoring force in a page's model sentence."""
+        return []
+
+    def page_phrases(self, noise: Any) -> list[Phrase]:
+        """Its circuit element and equation term, and the reference of the family's
+        comparisons (``noise``'s exact theory without a spring)."""
+        return noise.reference_phrases()
 
 
 @dataclass(frozen=True)
@@ -109,6 +120,15 @@ class Spring(Restoring):
             sub.R("leak", "ls", "lg", value("R_L", m.inductor_rs))
         sub.V("sense", "lg", sub.gnd, "0")
         sub.CCVS("xs", "xs", sub.gnd, "vsense", value("H_x", m.x_spring_gain))
+
+    def describe(self) -> list[str]:
+        return [f"spring = {num(self.spring)}, released from x0 = {num(self.x0)}"]
+
+    def page_phrases(self, noise: Any) -> list[Phrase]:
+        return [Phrase(3, "- spring x"),
+                Phrase(14, "an inductor from v to ground (the spring; its current is the "
+                           "position)"),
+                Phrase(22, "the Monte Carlo for a spring")]
 
 
 def build_restoring(spring: float, x0: float) -> Restoring:

@@ -1,0 +1,45 @@
+"""Issue 20: the variants describe themselves (analogue.variants.words); the report's prose
+composes their phrases instead of testing model.shot, model.cubic, ... ."""
+from __future__ import annotations
+
+import math
+
+from analogue import Model, ShotNoise
+from analogue.variants import OrnsteinUhlenbeck
+from analogue.variants.words import CIRCUIT, EQUATION, REFERENCE, Phrase, merge
+
+
+def test_merge_keeps_one_phrase_per_slot_the_covering_one_in_slot_order():
+    got = merge([Phrase(3, "c"), Phrase(1, "a"), Phrase(1, "A", covers=1), Phrase(1, "a"),
+                 Phrase(12, "circuit")], EQUATION)
+    assert got == ["A", "c"]
+    assert merge([Phrase(12, "circuit"), Phrase(2, "eq")], CIRCUIT) == ["circuit"]
+
+
+def test_each_variant_states_its_own_numbers():
+    m = Model(1.5, 0.4, 0.1, 12.0, cubic=0.37, stribeck=(0.21, 0.63), spring=1.7, x0=-0.9)
+    assert m.friction.describe() == ["cubic = 0.37", "Stribeck delta_s = 0.21, v_s = 0.63"]
+    assert m.friction.stated_values() == {"delta_s": 0.21, "v_s": 0.63}
+    assert m.restoring.describe() == ["spring = 1.7, released from x0 = -0.9"]
+    shot = Model(1.0, 0.5, 0.2, math.inf, shot=ShotNoise(rate=2.5, mean=0.35, two_sided=True))
+    words = shot.noise_kind.describe()
+    assert words[0] == "gamma = inf (no Gaussian noise)"
+    assert "rate 2.5 per unit time" in words[1] and "mean 0.35" in words[1]
+    assert "two-sided" in words[1]
+    assert shot.noise_kind.stated_values() == {"rate": 2.5, "mean": 0.35}
+    ou = Model(1.0, 0.5, 0.2, 8.0, noise=OrnsteinUhlenbeck(0.3))
+    assert ou.noise_kind.stated_values() == {"tau_c": 0.3}
+    assert "tau_c = 0.3" in ou.noise_kind.describe()[0]
+
+
+def test_the_reference_is_the_springs_or_else_the_noise_kinds():
+    def refs(m):
+        return merge(m.restoring.page_phrases(m.noise_kind), REFERENCE)
+    shot = ShotNoise(rate=1.0, mean=0.5)
+    assert refs(Model(1, 0.5, 0.2, 10.0)) == ["the Fokker-Planck numerics of the member's own law"]
+    assert refs(Model(1, 0.5, 0.2, math.inf, shot=shot)) == [
+        "the Kolmogorov-Feller numerics for shot noise"]
+    assert refs(Model(1, 0.5, 0.2, math.inf, shot=shot, spring=1.0)) == [
+        "the Monte Carlo for a spring"]
+    assert refs(Model(1, 0.5, 0.2, 10.0, noise=OrnsteinUhlenbeck(0.2))) == [
+        "the Monte Carlo for coloured noise (no exact theory yet)"]
