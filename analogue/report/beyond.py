@@ -25,6 +25,7 @@ from .html import Table
 from . import family_figures as FF
 from .html import Figure, Section
 from .prose import experiment_paragraphs
+from ..variants.words import ELEMENT_TERMS, merge, model_phrases
 
 __all__ = [
     "CHAPTER_TITLE",
@@ -57,10 +58,7 @@ def _num(x: float) -> str:
 def _member_kind(m: Model) -> str:
     """Which extension a member's text describes (the spring first: a spring member has the
     spring's analysis, Monte Carlo reference and no exact P(v = 0), whatever its noise)."""
-    if C.model_class(m) == C.MONTE_CARLO_MEMBER:
-        return "coloured"   # the noise without exact theory (analogue.variants.coloured)
-    return ("spring" if m.spring > 0 else "shot" if m.shot is not None
-            else "stribeck" if m.stribeck is not None else "cubic")
+    return m.restoring.member_kind(m)   # analogue.variants: spring, noise, friction law
 
 
 def physics_text(m: Model) -> str:
@@ -72,8 +70,7 @@ def physics_text(m: Model) -> str:
     stuck_free = abs(m.a) < m.static_friction
     if kind == "shot":
         assert m.shot is not None
-        side = ("two-sided: up or down with probability 1/2" if m.shot.two_sided
-                else "one-sided: every kick pushes up")
+        side = m.noise_kind.side_words()
         text = (f"Shot noise instead of vibrations: the plate kicks the object at random times "
                 f"(Poisson, rate {_num(m.shot.rate)} per unit time; exponentially distributed "
                 f"velocity jumps of mean {_num(m.shot.mean)}, {side}) and does nothing in "
@@ -259,8 +256,6 @@ def _is_paper_chapter(analyses: list) -> bool:
 _KIND_WORDS = {"shot": "shot noise", "spring": "a spring",
                "coloured": "coloured (Ornstein-Uhlenbeck) noise", "stribeck": "velocity weakening "
                "(Stribeck) friction", "cubic": "cubic viscous friction"}
-_ELEMENT_TERMS = {"cubic": "cubic network approximation", "spring": "inductor series resistance",
-                  "shot": "shot pulse width and edges"}
 
 
 def chapter_intro(analyses: list, wall: float, quick: bool) -> list[str]:
@@ -271,9 +266,7 @@ def chapter_intro(analyses: list, wall: float, quick: bool) -> list[str]:
     present = [k for k in ("shot", "spring", "stribeck", "cubic") if k in kinds]
     # an element term is booked wherever the member has that circuit element, whatever the
     # kind its text is filed under (a spring member with cubic friction has both)
-    elements = [_ELEMENT_TERMS[k] for k in ("cubic", "spring", "shot")
-                if any((k == "cubic" and a.exp.model.cubic) or (k == "spring" and a.exp.model.spring)
-                       or (k == "shot" and a.exp.model.shot is not None) for a in analyses)]
+    elements = merge(model_phrases(a.exp.model for a in analyses), ELEMENT_TERMS)
     if _is_paper_chapter(analyses):
         first = ("The paper's concluding section proposes extensions it does not treat: shot "
                  "noise instead of Gaussian vibrations, a spring on the object, a measured "

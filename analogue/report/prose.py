@@ -18,7 +18,7 @@ import math
 import re
 from pathlib import Path
 from ..circuit.experiments import PAPER_EXPERIMENTS, standard_circuit
-from ..variants.words import CIRCUIT, EQUATION, REFERENCE, Phrase, merge, num
+from ..variants.words import CIRCUIT, EQUATION, REFERENCE, Phrase, merge, model_phrases, num
 
 __all__ = ["is_paper_experiment", "is_paper_report", "main_part", "model_sentence", "description_mismatches",
            "experiment_paragraphs", "circuit_paragraph", "equation_text", "board_link",
@@ -54,11 +54,7 @@ def main_part(experiments) -> str:
 
 
 # ------------------------------------------------------------------------- the model
-def _phrases(models) -> list:
-    """What the models' variants say of themselves (analogue.variants.words), all together."""
-    return [p for m in models
-            for p in (*m.friction.page_phrases(), *m.noise_kind.page_phrases(),
-                      *m.restoring.page_phrases(m.noise_kind))]
+_phrases = model_phrases
 
 
 def model_sentence(exp) -> str:

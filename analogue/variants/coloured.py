@@ -250,3 +250,6 @@ class OrnsteinUhlenbeck(Noise):
 
     def reference_phrases(self) -> list[Phrase]:
         return [Phrase(23, "the Monte Carlo for coloured noise (no exact theory yet)")]
+
+    def member_kind(self, friction: Any) -> str:
+        return "coloured"   # the noise without exact theory: the Monte Carlo is the reference

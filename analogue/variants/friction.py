@@ -221,6 +221,12 @@ class FrictionLaw:
         """The law's circuit element and equation term (slots: analogue.report.prose)."""
         return [Phrase(2, "- Delta sgn(v)")]
 
+    def member_kind(self) -> str:
+        """What a family member's text is filed under when neither its spring nor its noise
+        decides (analogue.report.beyond): the cubic term's (so is a Coulomb law alone, a
+        noise-free member)."""
+        return "cubic"
+
 
 def _quad_log_normaliser(model: Any, lo: float, hi: float,
                          v_star: float | None = None) -> float:
@@ -410,6 +416,9 @@ class Stribeck(FrictionLaw):
         return [Phrase(2, "- Delta(v) sgn(v)", covers=1),
                 Phrase(12, "a Stribeck excess current that decays with |V| (velocity weakening)")]
 
+    def member_kind(self) -> str:
+        return "stribeck"
+
 
 @dataclass(frozen=True)
 class Cubic(FrictionLaw):
@@ -513,7 +522,11 @@ class Cubic(FrictionLaw):
     def page_phrases(self) -> list[Phrase]:
         return [Phrase(1, "- cubic v^3"),
                 Phrase(13, "a cubic conductance g3 V^3 (cubic viscous friction)"),
+                Phrase(30, "cubic network approximation"),
                 *self.inner.page_phrases()]
+
+    def member_kind(self) -> str:
+        return self.inner.member_kind()   # Stribeck with a cubic term files as Stribeck
 
 
 def build_friction(delta: float, epsilon: float, cubic: float,

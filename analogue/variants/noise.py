@@ -198,6 +198,15 @@ class Noise:
         numerics of :attr:`exact_solver`."""
         return [Phrase(20, "the Fokker-Planck numerics of the member's own law")]
 
+    def member_kind(self, friction: Any) -> str:
+        """What a member without a spring is filed under: the friction law's, for noise
+        that is no extension of the paper's."""
+        return friction.member_kind()
+
+    def side_words(self) -> str:
+        """Which way the kicks go, in a member's physics text (no kicks: nothing to say)."""
+        return ""
+
 
 @dataclass(frozen=True)
 class Silent(Noise):
@@ -332,7 +341,15 @@ class Shot(Noise):
     def page_phrases(self) -> list[Phrase]:
         return [*super().page_phrases(), Phrase(7, "+ shot kicks"),
                 Phrase(16, "shot-noise kicks drawn in numpy from the deck seed and delivered "
-                           "as narrow flat-topped current pulses (PWL source)")]
+                           "as narrow flat-topped current pulses (PWL source)"),
+                Phrase(32, "shot pulse width and edges")]
+
+    def member_kind(self, friction: Any) -> str:
+        return "shot"
+
+    def side_words(self) -> str:
+        return ("two-sided: up or down with probability 1/2" if self.shot.two_sided
+                else "one-sided: every kick pushes up")
 
     def reference_phrases(self) -> list[Phrase]:
         return [Phrase(21, "the Kolmogorov-Feller numerics for shot noise")]

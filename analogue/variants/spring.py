@@ -65,6 +65,12 @@ class Restoring:
         comparisons (``noise``'s exact theory without a spring)."""
         return noise.reference_phrases()
 
+    def member_kind(self, model: Any) -> str:
+        """What a family member's text is filed under (analogue.report.beyond): the spring
+        first (its analysis, Monte Carlo reference, no exact P(v = 0), whatever the noise),
+        else the noise's or the friction law's."""
+        return model.noise_kind.member_kind(model.friction)
+
 
 @dataclass(frozen=True)
 class Free(Restoring):
@@ -128,7 +134,11 @@ class Spring(Restoring):
         return [Phrase(3, "- spring x"),
                 Phrase(14, "an inductor from v to ground (the spring; its current is the "
                            "position)"),
-                Phrase(22, "the Monte Carlo for a spring")]
+                Phrase(22, "the Monte Carlo for a spring"),
+                Phrase(31, "inductor series resistance")]
+
+    def member_kind(self, model: Any) -> str:
+        return "spring"
 
 
 def build_restoring(spring: float, x0: float) -> Restoring:

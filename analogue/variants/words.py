@@ -11,13 +11,15 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
-__all__ = ["EQUATION", "CIRCUIT", "REFERENCE", "Phrase", "merge", "num", "gamma_words"]
+__all__ = ["EQUATION", "CIRCUIT", "REFERENCE", "ELEMENT_TERMS", "Phrase", "merge",
+           "model_phrases", "num", "gamma_words"]
 
-#: The slots of the three lists: terms of the reduced equation, elements of the circuit
-#: paragraph, references of the family's comparisons.
-EQUATION, CIRCUIT, REFERENCE = range(0, 10), range(10, 20), range(20, 30)
+#: The slots of the lists: terms of the reduced equation, elements of the circuit paragraph,
+#: references of the family's comparisons, the circuit-element terms of the family's budget.
+EQUATION, CIRCUIT, REFERENCE, ELEMENT_TERMS = (range(0, 10), range(10, 20), range(20, 30),
+                                               range(30, 40))
 
 
 def num(x: float) -> str:
@@ -44,6 +46,13 @@ def merge(phrases: Iterable[Phrase], slots: range) -> list[str]:
         if p.slot not in best or p.covers > best[p.slot].covers:
             best[p.slot] = p
     return [best[s].text for s in sorted(best)]
+
+
+def model_phrases(models: Iterable[Any]) -> list[Phrase]:
+    """What the models' variants say of themselves, all together (for :func:`merge`)."""
+    return [p for m in models
+            for p in (*m.friction.page_phrases(), *m.noise_kind.page_phrases(),
+                      *m.restoring.page_phrases(m.noise_kind))]
 
 
 def gamma_words(gamma: float) -> str:

@@ -6,7 +6,8 @@ import math
 
 from analogue import Model, ShotNoise
 from analogue.variants import OrnsteinUhlenbeck
-from analogue.variants.words import CIRCUIT, EQUATION, REFERENCE, Phrase, merge
+from analogue.variants.words import (CIRCUIT, ELEMENT_TERMS, EQUATION, REFERENCE, Phrase, merge,
+                                    model_phrases)
 
 
 def test_merge_keeps_one_phrase_per_slot_the_covering_one_in_slot_order():
@@ -43,3 +44,17 @@ def test_the_reference_is_the_springs_or_else_the_noise_kinds():
         "the Monte Carlo for a spring"]
     assert refs(Model(1, 0.5, 0.2, 10.0, noise=OrnsteinUhlenbeck(0.2))) == [
         "the Monte Carlo for coloured noise (no exact theory yet)"]
+
+
+def test_a_member_is_filed_under_its_spring_then_its_noise_then_its_friction_law():
+    shot = ShotNoise(rate=1.0, mean=0.5)
+    cases = [(Model(1, 0.5, 0.2, 10.0, spring=1.0, noise=OrnsteinUhlenbeck(0.2)), "spring"),
+             (Model(1, 0.5, 0.2, math.inf, shot=shot, cubic=0.3), "shot"),
+             (Model(1, 0.5, 0.2, 10.0, noise=OrnsteinUhlenbeck(0.2)), "coloured"),
+             (Model(1, 0.5, 0.2, 10.0, cubic=0.3, stribeck=(0.2, 0.5)), "stribeck"),
+             (Model(1, 0.5, 0.2, 10.0, cubic=0.3), "cubic")]
+    for m, kind in cases:
+        assert m.restoring.member_kind(m) == kind, m
+    both = Model(1, 0.5, 0.2, math.inf, shot=shot, cubic=0.3, spring=1.0)
+    assert merge(model_phrases([both]), ELEMENT_TERMS) == [
+        "cubic network approximation", "inductor series resistance", "shot pulse width and edges"]
