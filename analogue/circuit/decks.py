@@ -124,11 +124,8 @@ def deck_seeds(seed: int, n_decks: int) -> list[int]:
 def _sample_stationary(model: Model, size: int, rng: np.random.Generator) -> np.ndarray:
     """Samples from p_s (eq. (6)) with the exact sampler
     (:func:`analogue.theory.exact.sample_stationary`)."""
-    if not model.is_gradient and model.epsilon > 0:
-        # Shot noise: the exact (Kolmogorov-Feller) law of the tanh-smoothed member needs a
-        # grid resolving epsilon (45k states for epsilon = 0.01, refused); the sgn law's
-        # differs from it only within the mapping's smoothing budget.
-        model = model.replace(epsilon=0.0)
+    # shot noise samples the sgn law's (analogue.variants.noise.Shot.sampled_model)
+    model = model.noise_kind.sampled_model(model)
     return np.asarray(sample_stationary(model, size, seed=rng), dtype=float)
 
 
@@ -344,12 +341,10 @@ def value_limits(mapping, v0, t_end: float) -> dict[str, float]:
     model = mapping.model_effective
     v0_max = float(np.max(np.abs(np.asarray(v0, dtype=float)))) if np.size(v0) else 0.0
     reach = v0_max + model.tau_m * abs(model.a) + model.tau_m * model.static_friction
-    if model.spring > 0:
-        reach += abs(model.spring * model.x0 - model.a) / math.sqrt(model.spring)
+    reach += model.restoring.energy_reach(model)   # 0 without a spring (analogue.variants)
     if math.isfinite(model.gamma):
         reach += math.sqrt(2.0 * VALUE_LEVEL * model.tau_m / model.gamma)
-    if model.shot is not None:
-        reach += model.shot.rate * model.tau_m * model.shot.mean + VALUE_LEVEL * model.shot.mean
+    reach += model.noise_kind.kick_reach(model.tau_m, VALUE_LEVEL)   # 0 without kicks
     # a floor for a circuit that should sit still (no noise, no force, v0 = 0): its numerical
     # noise, far below ngspice's voltage tolerance, in model units
     v_max = VALUE_SAFETY * reach + 1e3 * mapping.vntol / mapping.kappa
@@ -807,14 +802,12 @@ def run_ensemble(model: Model, spec: CircuitSpec, *, v0: Any, t_end: float, repl
         **info,
         "wall_time": _time.perf_counter() - t0,
     }
-    if mapping.model.shot is not None:
-        meta["shot_width"] = mapping.shot_width
+    meta.update(mapping.model.noise_kind.circuit_meta(mapping))   # shot: the pulse width
     z = None
     if noise is not None and math.isfinite(model.gamma):
         # The noise node holds the velocity noise, std sqrt(2/(gamma h)) (mapping): standardise.
         z = noise * math.sqrt(model.gamma * mapping.noise_dt / 2.0)
-    if mapping.model.shot is not None:
-        records["kicks"] = [k for d in decks for k in d.kicks]
+    records.update(mapping.model.noise_kind.deck_records(decks))   # shot: the kicks
     if "x_spring" in records:
         # The position is the spring's (issue 18): the inductor read-back, not the integral of
         # v, which a leaky inductor (R_L > 0) lets run away at the creep velocity (measured:

@@ -131,6 +131,24 @@ class Noise:
         reach (analogue.circuit.mapping.velocity_range; ``level``: jumps of ``level`` means)."""
         return lo, hi
 
+    def sampled_model(self, model: Any) -> Any:
+        """The model whose exact stationary law a circuit's ``v0 = "stationary"`` start draws
+        from (analogue.circuit.decks): ``model`` itself."""
+        return model
+
+    def kick_reach(self, tau_m: float, level: float) -> float:
+        """How far above its drift the kicks push the velocity (``level``: jumps of ``level``
+        means): 0 without kicks."""
+        return 0.0
+
+    def circuit_meta(self, mapping: Any) -> dict[str, Any]:
+        """This kind's entries of a circuit ensemble's meta (analogue.circuit.decks)."""
+        return {}
+
+    def deck_records(self, decks: Any) -> dict[str, Any]:
+        """This kind's records of a circuit ensemble, from its decks (analogue.circuit.decks)."""
+        return {}
+
     def jump_scales(self) -> list[float]:
         """Velocity scales of the kicks (the mean jump) for the circuit's smoothing."""
         return []
@@ -267,10 +285,9 @@ class Shot(Noise):
         return max(v_typ, self.shot.mean)
 
     def widen_range(self, lo: float, hi: float, tau_m: float, level: float) -> tuple[float, float]:
-        sh = self.shot
-        reach = sh.rate * tau_m * sh.mean + level * sh.mean
+        reach = self.kick_reach(tau_m, level)
         hi = max(hi, 0.0) + reach
-        if sh.two_sided:
+        if self.shot.two_sided:
             lo = min(lo, 0.0) - reach
         return lo, hi
 
@@ -327,6 +344,22 @@ class Shot(Noise):
 
     def mc_meta(self, n_kicks: int, scheme: str) -> dict[str, Any]:
         return {"kicks": int(n_kicks), "shot_scheme": scheme}
+
+    def sampled_model(self, model: Any) -> Any:
+        # The exact (Kolmogorov-Feller) law of the tanh-smoothed member needs a grid resolving
+        # epsilon (45k states for epsilon = 0.01, refused); the sgn law's differs from it only
+        # within the mapping's smoothing budget.
+        return model.replace(epsilon=0.0) if model.epsilon > 0 else model
+
+    def kick_reach(self, tau_m: float, level: float) -> float:
+        sh = self.shot
+        return sh.rate * tau_m * sh.mean + level * sh.mean
+
+    def circuit_meta(self, mapping: Any) -> dict[str, Any]:
+        return {"shot_width": mapping.shot_width}
+
+    def deck_records(self, decks: Any) -> dict[str, Any]:
+        return {"kicks": [k for d in decks for k in d.kicks]}
 
     def describe(self) -> list[str]:
         side = ("two-sided (each kick's sign +/- with probability 1/2)" if self.shot.two_sided

@@ -56,6 +56,11 @@ class Restoring:
         """This force's entries of a Monte Carlo ensemble's meta."""
         return {}
 
+    def energy_reach(self, model: Any) -> float:
+        """How far the start's spring energy lets the velocity swing beyond the free motion's
+        bound (analogue.circuit.decks.value_limits): 0 without a spring."""
+        return 0.0
+
     def describe(self) -> list[str]:
         """The restoring force in a page's model sentence."""
         return []
@@ -126,6 +131,10 @@ class Spring(Restoring):
             sub.R("leak", "ls", "lg", value("R_L", m.inductor_rs))
         sub.V("sense", "lg", sub.gnd, "0")
         sub.CCVS("xs", "xs", sub.gnd, "vsense", value("H_x", m.x_spring_gain))
+
+    def energy_reach(self, model: Any) -> float:
+        # the energy v^2/2 + (spring x - a)^2/(2 spring) of the start, all of it kinetic
+        return abs(self.spring * self.x0 - model.a) / math.sqrt(self.spring)
 
     def describe(self) -> list[str]:
         return [f"spring = {num(self.spring)}, released from x0 = {num(self.x0)}"]

@@ -58,3 +58,18 @@ def test_a_member_is_filed_under_its_spring_then_its_noise_then_its_friction_law
     both = Model(1, 0.5, 0.2, math.inf, shot=shot, cubic=0.3, spring=1.0)
     assert merge(model_phrases([both]), ELEMENT_TERMS) == [
         "cubic network approximation", "inductor series resistance", "shot pulse width and edges"]
+
+
+def test_circuit_dispatch_of_spring_and_kicks():
+    """What analogue.circuit.decks asks the variants: the spring's energy reach, the kicks'
+    reach, the shot kind's meta and records, the law its stationary start is drawn from."""
+    shot = ShotNoise(rate=2.0, mean=0.3)
+    m = Model(1.5, 0.5, 0.2, math.inf, epsilon=0.05, shot=shot, spring=4.0, x0=0.5)
+    assert m.restoring.energy_reach(m) == abs(4.0 * 0.5 - 0.2) / 2.0
+    assert m.noise_kind.kick_reach(1.5, 3.0) == 2.0 * 1.5 * 0.3 + 3.0 * 0.3
+    assert m.noise_kind.sampled_model(m).epsilon == 0.0
+    plain = Model(1.5, 0.5, 0.2, 10.0, epsilon=0.05)
+    assert plain.restoring.energy_reach(plain) == 0.0
+    assert plain.noise_kind.kick_reach(1.5, 3.0) == 0.0
+    assert plain.noise_kind.sampled_model(plain) is plain
+    assert plain.noise_kind.circuit_meta(None) == {} and plain.noise_kind.deck_records([]) == {}
