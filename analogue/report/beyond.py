@@ -25,7 +25,7 @@ from .html import Table
 from . import family_figures as FF
 from .html import Figure, Section
 from .prose import experiment_paragraphs
-from ..variants.words import ELEMENT_TERMS, merge, model_phrases
+from ..variants.words import ELEMENT_TERMS, merge, model_phrases, num
 
 __all__ = [
     "CHAPTER_TITLE",
@@ -51,10 +51,6 @@ __all__ = [
 
 
 
-def _num(x: float) -> str:
-    return f"{x:.4g}"
-
-
 def _member_kind(m: Model) -> str:
     """Which extension a member's text describes (the spring first: a spring member has the
     spring's analysis, Monte Carlo reference and no exact P(v = 0), whatever its noise)."""
@@ -72,29 +68,29 @@ def physics_text(m: Model) -> str:
         assert m.shot is not None
         side = m.noise_kind.side_words()
         text = (f"Shot noise instead of vibrations: the plate kicks the object at random times "
-                f"(Poisson, rate {_num(m.shot.rate)} per unit time; exponentially distributed "
-                f"velocity jumps of mean {_num(m.shot.mean)}, {side}) and does nothing in "
+                f"(Poisson, rate {num(m.shot.rate)} per unit time; exponentially distributed "
+                f"velocity jumps of mean {num(m.shot.mean)}, {side}) and does nothing in "
                 "between. Between kicks the object follows the deterministic dry-friction flow")
         if stuck_free:
-            text += (f", which here (|a| = {_num(abs(m.a))} < Delta(0) = "
-                     f"{_num(m.static_friction)}) reaches v = 0 in a finite time: the object "
+            text += (f", which here (|a| = {num(abs(m.a))} < Delta(0) = "
+                     f"{num(m.static_friction)}) reaches v = 0 in a finite time: the object "
                      "sticks until the next kick.")
             if not math.isfinite(m.gamma):
                 text += (" The stationary law therefore has an atom at v = 0 - a finite "
                          "probability of being exactly at rest, which Gaussian noise (a density "
                          "everywhere) never gives.")
         else:
-            text += (f", which here (|a| = {_num(abs(m.a))} >= Delta(0) = "
-                     f"{_num(m.static_friction)}) does not stop at v = 0: the object slides "
+            text += (f", which here (|a| = {num(abs(m.a))} >= Delta(0) = "
+                     f"{num(m.static_friction)}) does not stop at v = 0: the object slides "
                      "between kicks, and the stationary law has no atom at v = 0.")
         return text
     if kind == "coloured":
         return coloured_text(m)
     if kind == "spring":
-        return (f"A linear spring (spring = {_num(m.spring)}) on the object turns the steady "
-                f"slide into stick-slip oscillations: released from x0 = {_num(m.x0)} the object "
+        return (f"A linear spring (spring = {num(m.spring)}) on the object turns the steady "
+                f"slide into stick-slip oscillations: released from x0 = {num(m.x0)} the object "
                 f"swings back, Coulomb friction takes 2 Delta/spring = "
-                f"{_num(2 * m.delta / m.spring)} off the amplitude every half period, and it "
+                f"{num(2 * m.delta / m.spring)} off the amplitude every half period, and it "
                 "sticks once |spring x - a| < Delta; the noise unsticks it again. The state "
                 "(x, v) is two-dimensional, so the reference is the Monte Carlo, and the "
                 "stationary identities <v> = 0 and spring <x> = a - <Delta(v) sgn v> - cubic "
@@ -104,12 +100,12 @@ def physics_text(m: Model) -> str:
         d_s, v_s = m.stribeck
         between = m.delta < abs(m.a) < d_s
         return (f"Velocity weakening (the Stribeck curve): the friction drops from its static "
-                f"value delta_s = {_num(d_s)} to the kinetic Delta = {_num(m.delta)} over the "
-                f"speed v_s = {_num(v_s)}. For a force between Delta and delta_s both sticking "
+                f"value delta_s = {num(d_s)} to the kinetic Delta = {num(m.delta)} over the "
+                f"speed v_s = {num(v_s)}. For a force between Delta and delta_s both sticking "
                 "and sliding can be stable without noise, and the stationary law exp(-gamma U) "
                 f"can then have two peaks (a cusp at v = 0 and one at the sliding velocity); "
-                f"here a = {_num(m.a)} is {'between them' if between else 'not between them'}.")
-    return (f"A cubic viscous term (cubic = {_num(m.cubic)}: lubricated or hydrodynamic "
+                f"here a = {num(m.a)} is {'between them' if between else 'not between them'}.")
+    return (f"A cubic viscous term (cubic = {num(m.cubic)}: lubricated or hydrodynamic "
             "friction) confines fast velocities: the potential gains cubic v^4/4, the slide "
             "slows and the stationary law's fast tail is cut, so the variance shrinks against "
             "the paper's law at the same Delta.")
@@ -119,10 +115,10 @@ def coloured_text(m: Model) -> str:
     """Coloured noise (analogue.variants.coloured), with the member's tau_c, gamma, tau_m."""
     tau_c = m.noise_kind.tau_c  # type: ignore[attr-defined]
     text = (f"Coloured noise instead of white: the plate's force is white noise of intensity "
-            f"1/gamma (gamma = {_num(m.gamma)}) passed through a low-pass of correlation time "
-            f"tau_c = {_num(tau_c)} (an Ornstein-Uhlenbeck force, <eta(t) eta(t')> = "
-            f"exp(-|t - t'|/tau_c)/(gamma tau_c), variance {_num(1 / (m.gamma * tau_c))}; "
-            f"tau_c/tau_m = {_num(tau_c / m.tau_m)}). The state (v, eta) is two-dimensional "
+            f"1/gamma (gamma = {num(m.gamma)}) passed through a low-pass of correlation time "
+            f"tau_c = {num(tau_c)} (an Ornstein-Uhlenbeck force, <eta(t) eta(t')> = "
+            f"exp(-|t - t'|/tau_c)/(gamma tau_c), variance {num(1 / (m.gamma * tau_c))}; "
+            f"tau_c/tau_m = {num(tau_c / m.tau_m)}). The state (v, eta) is two-dimensional "
             "and not a gradient system: exp(-gamma U) is not its stationary law and there is no "
             "exact theory here, so the reference is the Monte Carlo of the same model, started "
             "where the circuit starts. In the circuit the held Gaussian source feeds an RC "
@@ -130,7 +126,7 @@ def coloured_text(m: Model) -> str:
     cf = m.noise_kind.closed_form_variance(m)
     if cf is not None:
         text += (f" At Delta = 0 the model is linear and Var v = tau_m^2/(gamma (tau_m + "
-                 f"tau_c)) = {_num(cf)}, against tau_m/gamma = {_num(m.tau_m / m.gamma)} for "
+                 f"tau_c)) = {num(cf)}, against tau_m/gamma = {num(m.tau_m / m.gamma)} for "
                  "white noise.")
     return text
 

@@ -9,7 +9,10 @@ rate 2.5 and mean 0.35 read "rate 1 ... mean 0.5"): :func:`description_mismatche
 says so next to it.
 
 Pure functions of the experiments (no files, no runs), so that a test can build the text of
-any experiment and compare its numbers with the model.
+any experiment and compare its numbers with the model.  What differs between the members of the
+family (the friction law, the spring, the noise kind) is said by the variants themselves
+(``describe``, ``stated_values``, ``page_phrases``: :mod:`analogue.variants.words`); this
+module composes their words and tests no model feature except the paper's own model.
 """
 from __future__ import annotations
 
@@ -25,9 +28,6 @@ __all__ = ["is_paper_experiment", "is_paper_report", "main_part", "model_sentenc
            "component_rows", "theory_kinds_text", "budget_text"]
 
 _log = logging.getLogger("analogue.report.prose")
-
-
-_num = num
 
 
 def is_paper_experiment(exp) -> bool:
@@ -54,28 +54,25 @@ def main_part(experiments) -> str:
 
 
 # ------------------------------------------------------------------------- the model
-_phrases = model_phrases
-
-
 def model_sentence(exp) -> str:
     """The experiment's parameters and what they imply, every number from ``exp``."""
     m = exp.model
-    items = [f"tau_m = {_num(m.tau_m)}", f"Delta = {_num(m.delta)}", f"a = {_num(m.a)}"]
+    items = [f"tau_m = {num(m.tau_m)}", f"Delta = {num(m.delta)}", f"a = {num(m.a)}"]
     if m.mass != 1:
-        items.append(f"mass = {_num(m.mass)}")
+        items.append(f"mass = {num(m.mass)}")
     items += [*m.friction.describe(), *m.restoring.describe()]
     text = (f"Model (reduced units): {', '.join(items)}; "
             f"{'; '.join(m.noise_kind.describe())}.")
     if m.is_paper:
         if m.regime == "stick":
-            t_a = ", ".join(f"t_a = {_num(m.stick_time(v0))} from v0 = {_num(v0)}"
+            t_a = ", ".join(f"t_a = {num(m.stick_time(v0))} from v0 = {num(v0)}"
                             for v0 in exp.v0)
             text += (f" Stick regime (|a| < Delta): without noise the motion stops at v = 0 "
                      f"({t_a}, eq. (31)).")
         else:
             text += (f" Slip regime (|a| > Delta): without noise the velocity relaxes to "
-                     f"v_ss = (a - Delta sgn a) tau_m = {_num(m.attractor)} (eq. (14)).")
-    v0s = ", ".join(_num(v) for v in exp.v0)
+                     f"v_ss = (a - Delta sgn a) tau_m = {num(m.attractor)} (eq. (14)).")
+    v0s = ", ".join(num(v) for v in exp.v0)
     diode = ("ideal diodes" if exp.spec.diode == "ideal" else f"{exp.spec.diode} diodes")
     element = (f"{exp.spec.coulomb} Coulomb element ({diode})" if m.delta > 0
                else "no Coulomb element (Delta = 0)")
@@ -84,8 +81,8 @@ def model_sentence(exp) -> str:
         # (no replica count: --quick runs fewer than the file's; the figures and the
         # provenance table give the counts each run had.  A member's runs have their own
         # lengths, given in its section.)
-        text += (f" Transition runs from v0 = {v0s} to t = {_num(exp.t_end)}, sampled every "
-                 f"{_num(exp.sample_dt)}.")
+        text += (f" Transition runs from v0 = {v0s} to t = {num(exp.t_end)}, sampled every "
+                 f"{num(exp.sample_dt)}.")
     return text
 
 
@@ -120,7 +117,7 @@ def description_mismatches(exp) -> list[str]:
             continue
         have = values[key]
         if not math.isclose(float(value), have, rel_tol=1e-3, abs_tol=1e-9):
-            item = f"{said}{value} (the model has {_num(have)})"
+            item = f"{said}{value} (the model has {num(have)})"
             if item not in out:
                 out.append(item)
     return out
@@ -158,7 +155,7 @@ def circuit_paragraph(experiments) -> str:
                      "bridge passes I_Delta tanh(V/(2 N V_T)))")
     if any(m.delta > 0 and s.coulomb != "diode-bridge" for m, s in zip(models, specs)):
         parts.append("a behavioural source for the Coulomb friction (B-source)")
-    parts += merge(_phrases(models), CIRCUIT)
+    parts += merge(model_phrases(models), CIRCUIT)
     parts.append("and an integrator node x (a VCCS into a capacitor) so that ngspice itself "
                  "integrates the position for the work W = F (x(t+tau) - x(t))")
     return (", ".join(parts) + ". Time is scaled by theta seconds per model time unit. "
@@ -184,7 +181,7 @@ def theory_kinds_text(experiments, members) -> str:
                    "(sgn friction, white noise); 'weak-noise' is the paper's saddle-point result, "
                    "whose budget includes the finite-noise correction exact(gamma) - weak-noise.")
     if members:
-        refs = merge(_phrases(e.model for e in members), REFERENCE)
+        refs = merge(model_phrases(e.model for e in members), REFERENCE)
         out.append("For the family's members the reference is " + ", ".join(refs) + ".")
     return " ".join(out)
 
@@ -213,7 +210,7 @@ def equation_text(experiments) -> str:
     """The reduced equation of the intro, with the terms the report's models have."""
     # the variants' terms between -v/tau_m (slot 0) and + a (slot 4): analogue.variants
     terms = merge([Phrase(0, "-v/tau_m"), Phrase(4, "+ a"),
-                   *_phrases(e.model for e in experiments)], EQUATION)
+                   *model_phrases(e.model for e in experiments)], EQUATION)
     return "dv/dt = " + " ".join(terms)
 
 
