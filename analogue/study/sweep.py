@@ -177,10 +177,7 @@ def sweep_parameters(model: Model) -> dict[str, tuple[float, float, str]]:
         "tau_m": (0.0, math.inf, ">"), "delta": (0.0, math.inf, ">="),
         "a": (-math.inf, math.inf, "any"), "gamma": (0.0, math.inf, ">"),
         "mass": (0.0, math.inf, ">"), "cubic": (0.0, math.inf, ">=")}
-    if model.stribeck is not None:
-        out["delta_s"] = (0.0, math.inf, ">=")
-        out["v_s"] = (0.0, math.inf, ">")
-    return out
+    return {**out, **model.friction.sweep_parameters()}   # Stribeck: delta_s, v_s
 
 
 def _range_text(low: float, rule: str) -> str:

@@ -221,6 +221,11 @@ class FrictionLaw:
         """The law's circuit element and equation term (slots: analogue.report.prose)."""
         return [Phrase(2, "- Delta sgn(v)")]
 
+    def sweep_parameters(self) -> dict[str, tuple[float, float, str]]:
+        """The law's own parameters a sweep may vary, ``{name: (low, high, rule)}``
+        (analogue.study.sweep.sweep_parameters); the Coulomb law's Delta is the model's."""
+        return {}
+
     def member_kind(self) -> str:
         """What a family member's text is filed under when neither its spring nor its noise
         decides (analogue.report.beyond): the cubic term's (so is a Coulomb law alone, a
@@ -419,6 +424,9 @@ class Stribeck(FrictionLaw):
     def member_kind(self) -> str:
         return "stribeck"
 
+    def sweep_parameters(self) -> dict[str, tuple[float, float, str]]:
+        return {"delta_s": (0.0, math.inf, ">="), "v_s": (0.0, math.inf, ">")}
+
 
 @dataclass(frozen=True)
 class Cubic(FrictionLaw):
@@ -524,6 +532,9 @@ class Cubic(FrictionLaw):
                 Phrase(13, "a cubic conductance g3 V^3 (cubic viscous friction)"),
                 Phrase(30, "cubic network approximation"),
                 *self.inner.page_phrases()]
+
+    def sweep_parameters(self) -> dict[str, tuple[float, float, str]]:
+        return self.inner.sweep_parameters()   # cubic itself is a model parameter, always swept
 
     def member_kind(self) -> str:
         return self.inner.member_kind()   # Stribeck with a cubic term files as Stribeck

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 from analogue import Model, ShotNoise
+from analogue.study.sweep import sweep_parameters
 from analogue.variants import OrnsteinUhlenbeck
 from analogue.variants.words import (CIRCUIT, ELEMENT_TERMS, EQUATION, REFERENCE, Phrase, merge,
                                     model_phrases)
@@ -73,3 +74,11 @@ def test_circuit_dispatch_of_spring_and_kicks():
     assert plain.noise_kind.kick_reach(1.5, 3.0) == 0.0
     assert plain.noise_kind.sampled_model(plain) is plain
     assert plain.noise_kind.circuit_meta(None) == {} and plain.noise_kind.deck_records([]) == {}
+
+
+def test_a_sweep_varies_the_stribeck_pair_only_where_the_law_has_it():
+    paper = set(sweep_parameters(Model(1, 0.5, 0.2, 10.0)))
+    assert paper == {"tau_m", "delta", "a", "gamma", "mass", "cubic"}
+    both = sweep_parameters(Model(1, 0.5, 0.2, 10.0, cubic=0.3, stribeck=(0.2, 0.5)))
+    assert set(both) - paper == {"delta_s", "v_s"}
+    assert both["v_s"][2] == ">" and both["delta_s"][2] == ">="
