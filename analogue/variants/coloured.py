@@ -153,34 +153,22 @@ class OrnsteinUhlenbeck(Noise):
                 scheme: str, parts: Any, noise_rng: Any, kick_rng: Any,
                 default: Callable[..., tuple[np.ndarray, np.ndarray, int]]
                 ) -> tuple[np.ndarray, np.ndarray, int]:
-        if parts is not None:
-            return self._held_input(model, v, n_steps, per, dt, parts)
         c = self.step_coefficients(model.tau_m, dt)
-        rows = v.size
-        n_out = n_steps // per + 1
-        v_out = np.empty((rows, n_out))
-        x_out = np.empty((rows, n_out))
-        v = v.copy()
-        v_out[:, 0], x_out[:, 0] = v, 0.0
-        x = np.zeros(rows)
-        eta = np.zeros(rows)
-        law, restoring = model.friction, model.restoring
-        for k in range(n_steps):
-            force = model.a - law.dry(v)
-            force = restoring.add_force(law.add_drift(force, v), model.x0 + x)
-            xi = noise_rng.standard_normal((2, rows))
-            v_new = (c["r"] * v + c["push"] * force + c["couple"] * eta
-                     + c["l21"] * xi[0] + c["l22"] * xi[1])
-            eta = c["rc"] * eta + c["l11"] * xi[0]
-            x += 0.5 * dt * (v + v_new)
-            v = v_new
-            if (k + 1) % per == 0:
-                v_out[:, (k + 1) // per] = v
-                x_out[:, (k + 1) // per] = x
-        return v_out, x_out, 0
+        if parts is not None:
+            drive = self._held_input(c, dt, parts)
+        else:
+            rows = v.size
 
-    def _held_input(self, model: Any, v: np.ndarray, n_steps: int, per: int, dt: float,
-                    parts: Any) -> tuple[np.ndarray, np.ndarray, int]:
+            def drive(k: int, v_det: np.ndarray, eta: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray]:
+                # the exact 2-D OU step: (v, eta) increments drawn jointly (l11, l21, l22)
+                xi = noise_rng.standard_normal((2, rows))
+                return (v_det + c["l21"] * xi[0] + c["l22"] * xi[1],
+                        c["rc"] * eta + c["l11"] * xi[0])
+        return self._integrate(model, v, n_steps, per, dt, c, drive)
+
+    def _held_input(self, c: dict[str, float], dt: float, parts: Any
+                    ) -> Callable[[int, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
         """Given noise (``simulate_sde(noise=..., noise_hold=...)``): the filter's white input
         held constant over each step (and over ``noise_hold`` steps), as the circuit's
         ``trrandom`` holds it over ``noise_dt``: ``u = sqrt(2/(gamma dt)) z`` (so that ``u dt``
@@ -191,9 +179,23 @@ class OrnsteinUhlenbeck(Noise):
         ``dt^2/(12 tau_m tau_c)`` (the held input's spectrum ``sinc^2(omega dt/2)`` through the
         two low-passes); the report's bandwidth term pairs it with a hold of ``noise_dt``."""
         ((noise, hold),) = parts
-        c = self.step_coefficients(model.tau_m, dt)
         held = c["push"] - c["couple"]
         amp = math.sqrt(2.0 / (self.gamma * dt))
+
+        def drive(k: int, v_det: np.ndarray, eta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            u = amp * noise[:, k // hold]
+            return v_det + held * u, c["rc"] * eta + (1.0 - c["rc"]) * u
+        return drive
+
+    @staticmethod
+    def _integrate(model: Any, v: np.ndarray, n_steps: int, per: int, dt: float,
+                   c: dict[str, float],
+                   drive: Callable[[int, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
+                   ) -> tuple[np.ndarray, np.ndarray, int]:
+        """The step loop both inputs share: the friction (and spring) held over a step, the
+        deterministic part ``r v + push force + couple eta`` and the input's part from
+        ``drive(k, v_det, eta) -> (v', eta')``; x by the trapezium rule; every ``per``-th
+        step recorded."""
         rows = v.size
         n_out = n_steps // per + 1
         v_out = np.empty((rows, n_out))
@@ -206,9 +208,7 @@ class OrnsteinUhlenbeck(Noise):
         for k in range(n_steps):
             force = model.a - law.dry(v)
             force = restoring.add_force(law.add_drift(force, v), model.x0 + x)
-            u = amp * noise[:, k // hold]
-            v_new = c["r"] * v + c["push"] * force + c["couple"] * eta + held * u
-            eta = c["rc"] * eta + (1.0 - c["rc"]) * u
+            v_new, eta = drive(k, c["r"] * v + c["push"] * force + c["couple"] * eta, eta)
             x += 0.5 * dt * (v + v_new)
             v = v_new
             if (k + 1) % per == 0:
