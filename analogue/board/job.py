@@ -26,6 +26,7 @@ import json
 import math
 import platform
 import time as _time
+from contextlib import ExitStack
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -48,7 +49,7 @@ from .design import BoardSpec, design_board
 from .netlist import build_board_deck, nominal_instance
 from .opamp import vendor_model_path
 from .report import write_report
-from .runner import noise_directory, run_board
+from .runner import noise_files, run_board
 from .schematic import draw_schematic
 from .trajectory import compare_paths, reference_paths
 
@@ -117,7 +118,18 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
                   vendor: tuple | None = None) -> Path:
     """Run the job; returns the path of index.html.  ``settings`` overrides the sizes of
     ``QUICK``/``FULL`` (tests use tiny ones).  ``vendor`` = (path, subckt): a downloaded op-amp
-    model for the nominal board (the Monte Carlo keeps the macromodel, whose offsets it draws)."""
+    model for the nominal board (the Monte Carlo keeps the macromodel, whose offsets it draws).
+    With the store disabled the DAC files live in a temporary directory that is removed when
+    the job ends, however it ends."""
+    with ExitStack() as cleanup:
+        return _run_board_job(experiment, out, quick=quick, store=store, workers=workers,
+                              seed=seed, log=log, settings=settings, vendor=vendor,
+                              cleanup=cleanup)
+
+
+def _run_board_job(experiment: str, out, *, quick: bool, store, workers, seed: int | None, log,
+                   settings: JobSettings | None, vendor: tuple | None,
+                   cleanup: ExitStack) -> Path:
     t_start = _time.perf_counter()
     if settings is not None and not isinstance(settings, JobSettings):
         raise TypeError(f"settings must be a JobSettings, got {type(settings).__name__}")
@@ -204,7 +216,7 @@ def run_board_job(experiment: str, out, *, quick: bool = False, store=None, work
     else:
         ref = fn_mc(run_board(design, nominal, v0=v0_mc, t_end=st.mc_t_end, sample_dt=SAMPLE_DT,
                               seed=seed, store=store, workers=workers))
-    ndir = noise_directory(store)
+    ndir = cleanup.enter_context(noise_files(store))
     exact_req = theory_observables(model, 0.0, thr)
     boards = []
     for i in range(st.boards):

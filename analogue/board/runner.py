@@ -11,8 +11,11 @@ differences are tolerance effects, not sampling noise.
 """
 from __future__ import annotations
 
+import shutil
 import tempfile
 import time as _time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -24,7 +27,7 @@ from ..ensemble import Ensemble
 from .design import BoardDesign
 from .netlist import BoardInstance, build_board_deck
 
-__all__ = ["noise_directory", "run_board"]
+__all__ = ["noise_directory", "noise_files", "run_board"]
 
 # Measured here (stick board, TL072 models, 1N4148 bridge, reltol 1e-3): ~20 accepted time
 # points per DAC hold and 0.07 s of ngspice per replica per model time unit at 2 replicas per
@@ -44,6 +47,19 @@ def noise_directory(store) -> Path:
     return d
 
 
+@contextmanager
+def noise_files(store) -> Iterator[Path]:
+    """:func:`noise_directory` for the length of a ``with`` block: a temporary one (the store
+    disabled) is removed when the block ends, however it ends, so a store-less run leaves no
+    DAC files behind in the temporary directory; the store's own is kept."""
+    d = noise_directory(store)
+    try:
+        yield d
+    finally:
+        if open_store(store) is None:
+            shutil.rmtree(d, ignore_errors=True)
+
+
 def run_board(design: BoardDesign, board: BoardInstance, *, v0, t_end: float, sample_dt: float,
               seed: int, store=None, workers=None, per_deck: int = DEFAULT_PER_DECK,
               reltol: float = DEFAULT_RELTOL, first_replica: int = 0, friction_kind="bridge",
@@ -60,19 +76,19 @@ def run_board(design: BoardDesign, board: BoardInstance, *, v0, t_end: float, sa
     store = runner.store
     v0 = np.atleast_1d(np.asarray(v0, dtype=float))
     times = time_grid(t_end, sample_dt)
-    ndir = noise_directory(store)
-    decks = []
-    for start in range(0, v0.size, per_deck):
-        part = v0[start:start + per_deck]
-        decks.append(build_board_deck(design, board, v0=part, t_end=t_end, sample_dt=sample_dt,
-                                      seed=seed, noise_dir=ndir,
-                                      first_replica=first_replica + start, reltol=reltol,
-                                      friction_kind=friction_kind, ota=ota, vendor=vendor))
-    t0 = _time.perf_counter()
-    # no op-amp output leaves its rails: a result beyond twice that is not this board's
-    v_max = 2.0 * board.rails * abs(design.to_model_v)
-    v, x, _, info = run_decks(decks, times, v0, runner=runner,
-                              limits={"v": v_max, "x": v_max * t_end})
+    with noise_files(store) as ndir:
+        decks = []
+        for start in range(0, v0.size, per_deck):
+            part = v0[start:start + per_deck]
+            decks.append(build_board_deck(design, board, v0=part, t_end=t_end,
+                                          sample_dt=sample_dt, seed=seed, noise_dir=ndir,
+                                          first_replica=first_replica + start, reltol=reltol,
+                                          friction_kind=friction_kind, ota=ota, vendor=vendor))
+        t0 = _time.perf_counter()
+        # no op-amp output leaves its rails: a result beyond twice that is not this board's
+        v_max = 2.0 * board.rails * abs(design.to_model_v)
+        v, x, _, info = run_decks(decks, times, v0, runner=runner,
+                                  limits={"v": v_max, "x": v_max * t_end})
     meta = {"source": "board", "board": board.label, "seed": seed, "model": design.model.as_dict(),
             "realised": design.realised.as_dict(), "deck_sha256": [d.sha256 for d in decks],
             "wall_time": _time.perf_counter() - t0, "reltol": reltol, **info}
