@@ -35,8 +35,9 @@ def test_member_runs(member, spec):
             simulate(model, v0=0.3, t_end=2.0, replicas=2, seed=1, circuit=SPECS[spec],
                      workers=1, store=False)
         return
-    ens, rec = simulate(model, v0=0.3, t_end=2.0, replicas=2, seed=1, circuit=SPECS[spec],
-                        workers=1, store=False, return_records=True)
+    ens = simulate(model, v0=0.3, t_end=2.0, replicas=2, seed=1, circuit=SPECS[spec],
+                   workers=1, store=False)
+    rec = ens.records
     assert ens.v.shape == (2, ens.t.size) and np.all(np.isfinite(ens.v)) and np.all(np.isfinite(ens.x))
     assert ens.v[0, 0] == pytest.approx(0.3)
     if model.spring > 0:

@@ -36,8 +36,9 @@ def test_spring_readback_follows_linear_ode(resistance, tmp_path):
     spec = CircuitSpec(inductor_resistance=resistance, allow_bias=True)
     m = map_model(model, spec)
     t_end = 20.0
-    ens, rec = simulate(model, v0=0.0, t_end=t_end, replicas=2, seed=3, sample_dt=0.05,
-                        circuit=spec, workers=1, store=False, return_records=True)
+    ens = simulate(model, v0=0.0, t_end=t_end, replicas=2, seed=3, sample_dt=0.05,
+                   circuit=spec, workers=1, store=False)
+    rec = ens.records
     v_ref, y_ref, x_ref = linear_solution(3.0, 1.0, 0.3, 1.0, m.spring_leak_time, ens.t)
     ideal = linear_solution(3.0, 1.0, 0.3, 1.0, math.inf, ens.t)
     err_y = np.max(np.abs(rec["x_spring"] - y_ref))
@@ -59,8 +60,9 @@ def test_spring_coulomb_ring_down():
     the circuit's first turning point and where it finally sticks (|spring x| <= Delta)."""
     model = Model(tau_m=1e3, delta=0.2, a=0.0, gamma=1e7, spring=1.0, x0=1.5)
     spec = CircuitSpec(inductor_resistance=0.0, smoothing=0.2, allow_bias=True)
-    ens, rec = simulate(model, v0=0.0, t_end=14.0, replicas=1, seed=5, sample_dt=0.01,
-                        circuit=spec, workers=1, store=False, return_records=True)
+    ens = simulate(model, v0=0.0, t_end=14.0, replicas=1, seed=5, sample_dt=0.01,
+                   circuit=spec, workers=1, store=False)
+    rec = ens.records
     x = rec["x_spring"][0]
     half = ens.t <= math.pi + 0.5
     # first turning point: -(x0 - 2 Delta/k) = -1.1 (damping tau_m = 1000 changes it by 1e-3)
@@ -84,8 +86,9 @@ def flow(v0, s, tau=1.0, delta=0.5, a=0.2):
 def test_shot_kicks_record_and_pathwise_flow():
     """The recorded kicks are the ones delivered: between kicks the circuit follows the exact
     dry-friction flow from the jumped velocity (error: smoothing width and pulse width)."""
-    ens, rec = simulate(SHOT, v0=0.0, t_end=30.0, replicas=4, seed=9, sample_dt=0.01,
-                        workers=1, store=False, return_records=True)
+    ens = simulate(SHOT, v0=0.0, t_end=30.0, replicas=4, seed=9, sample_dt=0.01,
+                   workers=1, store=False)
+    rec = ens.records
     m = map_model(SHOT)
     worst = 0.0
     for r, (tk, zk) in enumerate(rec["kicks"]):
@@ -145,7 +148,7 @@ def test_shot_stationary_moments_vs_exact():
     each slide), z-scores from the spread of per-replica time averages."""
     thr = 0.05
     ens = simulate(SHOT, v0=0.0, t_end=100.0, replicas=64, seed=51, sample_dt=0.01, workers=1,
-                   store=False)
+              store=False)
     sel = ens.t >= 5.0
     v = ens.v[:, sel]
     mean_ex, var_ex, p0_ex, pthr_ex = exact_shot_averages(1.0, 0.5, 0.2, 1.0, 0.5, thr, 400_000, 1)
@@ -173,8 +176,9 @@ def test_shot_pulses_deliver_the_recorded_jumps():
     # max_step; a bare capacitor needs no long steps
     spec = CircuitSpec(max_step=5.0)
     m = map_model(model, spec)
-    ens, rec = simulate(model, v0=0.0, t_end=40.0, replicas=2, seed=4, sample_dt=0.01,
-                        workers=1, store=False, return_records=True, circuit=spec)
+    ens = simulate(model, v0=0.0, t_end=40.0, replicas=2, seed=4, sample_dt=0.01,
+                   workers=1, store=False, circuit=spec)
+    rec = ens.records
     rel = []
     for r, (tk, zk) in enumerate(rec["kicks"]):
         for k, (t, z) in enumerate(zip(tk, zk)):

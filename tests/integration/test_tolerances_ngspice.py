@@ -20,8 +20,8 @@ def test_coarse_tolerance_rejected_by_measurement(monkeypatch, tmp_path):
     coarse = tl.Tolerances(0.05, 100.0, "gear")
     fine = tl.Tolerances(1e-4, 7.0, "gear")
     c = tl.choose_tolerances(STICK, CircuitSpec(), replicas=16, t_end=2.0,
-                             candidates=(coarse, fine), store=tmp_path, workers=2,
-                             run=analogue.simulate)
+                             candidates=(coarse, fine),
+                             runner=analogue.Runner(store=tmp_path, workers=2))
     d = c.as_dict()
     by = {(x["reltol"], x["method"]): x for x in d["candidates"]}
     assert not by[(0.05, "gear")]["accepted"]
