@@ -294,7 +294,12 @@ def _alive(pid: int) -> bool:
 
 
 DIRECT = textwrap.dedent("""
+    import signal
     import sys
+    # SIGHUP as a terminal session has it: an ignored SIGHUP is inherited across exec, and
+    # the guard rightly keeps a signal the user chose to ignore ignored (a suite started
+    # under nohup made this script ignore the test's SIGHUP and time out)
+    signal.signal(signal.SIGHUP, signal.SIG_DFL)
     from analogue.circuit import ngspice as ng
     deck = "t\\nC1 v1 0 1e-6\\nR1 v1 0 1e3\\n.tran 1e-5 1e-3 uic\\n.end\\n"
     try:
