@@ -34,7 +34,7 @@ study                       ``study.*``: settings, seeds, the observable catalog
                             by role (``runs``), circuit-free theory (``theory_curves``),
                             ``comparisons``, ``budget``, ``metrics``, the family members'
                             analysis (``members``), the schedule (``schedule``) and
-                            ``run.run_study`` -> ``StudyResult``; ``circuit.experiments``
+                            ``run.run_study`` -> ``StudyResult``; ``experiments``
                             (TOML experiments)
 pages                       ``report.*`` (figures, prose, the page from a ``StudyResult``;
                             ``analogue.report(...)`` itself), ``plots.*``, ``board.*`` (a

@@ -235,7 +235,7 @@ def main():
 def netlist(experiment, check):
     """Regenerate the SPICE decks in netlists/ from circuits/*.toml (only EXPERIMENT's, when
     given; a TOML file outside circuits/ gets its deck beside it, <stem>.cir)."""
-    from .circuit.experiments import regenerate_netlists
+    from .study.experiments import regenerate_netlists
     paths = regenerate_netlists(check=check,
                                 experiments=None if experiment is None else [experiment])
     if check:
@@ -257,7 +257,7 @@ def schematic(experiment, out):
     """Draw one replica of EXPERIMENT's circuit (a name or a TOML path) with its component
     values in SI units, as OUT (.svg or .png); `analogue schematic stick docs/schematic.svg`
     redraws the committed drawing."""
-    from .circuit.experiments import load_experiment
+    from .study.experiments import load_experiment
     from .circuit.schematic import draw
     exp = load_experiment(experiment)
     draw(exp.mapping(), out, title=f"{exp.name}: {exp.model.regime} regime")
@@ -417,7 +417,7 @@ def run(experiment, workers, scheduler, store, timeout, quick, progress):
 def report(experiment, out, workers, scheduler, store, timeout, quick, progress, sweeps):
     """Build the report of EXPERIMENT (a name or a TOML path: yours) from stored runs (runs
     what is missing)."""
-    from .circuit.experiments import load_experiment
+    from .study.experiments import load_experiment
     from .report import pipeline
     exp = load_experiment(experiment)  # validated before anything runs
     out = out or Path("report") / exp.name
@@ -511,7 +511,7 @@ def export(experiment, out, report_dir, workers, scheduler, store, timeout, quic
     these runs.  Read them back with analogue.open_ensemble(path) or
     xarray.open_dataset(path).
     """
-    from .circuit.experiments import load_experiment
+    from .study.experiments import load_experiment
     from .export import export_experiment
     exp = load_experiment(experiment)
     out = out or Path("export") / exp.name
@@ -682,7 +682,7 @@ def theory(quantity, experiment_arg, experiment, tau_m, delta, a, gamma, mass, e
     experiment = experiment_arg or experiment
     params = {}
     if experiment:
-        from .circuit.experiments import load_experiment
+        from .study.experiments import load_experiment
         params = load_experiment(experiment).model.as_dict()
     given = {"tau_m": tau_m, "delta": delta, "a": a, "gamma": gamma, "mass": mass, "epsilon": epsilon}
     params.update({key: val for key, val in given.items() if val is not None})

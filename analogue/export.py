@@ -32,7 +32,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from . import checks
-from .circuit.experiments import Experiment, load_experiment
+from .study.experiments import Experiment, load_experiment
 from .ensemble import Ensemble
 from .files import write_text
 from .study.members import is_member_experiment, member_runs, member_sizes

@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from ..circuit import ngspice as ng
-from ..circuit.experiments import load_experiment
+from ..study.experiments import load_experiment
 from ..ensemble import Ensemble
 from ..montecarlo import simulate_sde
 from ..study.metrics import validate_metrics

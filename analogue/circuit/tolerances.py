@@ -373,7 +373,7 @@ def select(results, *, replicas: int, t_end: float, t_cal: float,
 
 def reference_spec(spec: CircuitSpec, mapping, tightest: Tolerances) -> CircuitSpec:
     """The calibration reference: 100x tighter than ``tightest``, with its method, a quarter
-    of the step (as the report's check: :meth:`~analogue.circuit.experiments.Experiment.
+    of the step (as the report's check: :meth:`~analogue.study.experiments.Experiment.
     check_spec`, which says why the method is kept)."""
     max_step = spec.max_step if spec.max_step is not None else mapping.noise_dt
     return spec.replace(reltol=tightest.reltol / REFERENCE_FACTOR, trtol=FIXED_TRTOL,

@@ -13,7 +13,7 @@ import math
 import numpy as np
 from pathlib import Path
 
-from ..circuit.experiments import standard_circuit
+from ..study.experiments import standard_circuit
 from ..model import Model
 from ..study.members import (CHAPTER_TITLE, CHECK_REPLICAS, MEMBERS, MemberAnalysis, MemberRuns,  # noqa: F401
                              MemberSizes, analyse_member, is_member_experiment, member_runs,

@@ -1,7 +1,7 @@
 """From a study to a report directory: ``index.html`` (self-contained), PNGs, ``metrics.json``.
 
 ``build_paper_report`` is the main job (``analogue paper``): the paper's experiments
-(:data:`analogue.circuit.experiments.PAPER_EXPERIMENTS`, the standard circuits shipped with
+(:data:`analogue.study.experiments.PAPER_EXPERIMENTS`, the standard circuits shipped with
 the package, never the user's files), the paper's Figs. 1-9 with circuit data, the paper's open
 question settled by exact numerics, and every circuit-versus-theory comparison with its error
 budget.  ``build_experiment_report`` (``analogue report``, :func:`analogue.report`) does the
@@ -26,7 +26,7 @@ from pathlib import Path
 
 from markupsafe import Markup
 
-from ..circuit.experiments import (FIG1_EXPERIMENTS, PAPER_EXPERIMENTS, PAPER_FIGURE_TAGS,
+from ..study.experiments import (FIG1_EXPERIMENTS, PAPER_EXPERIMENTS, PAPER_FIGURE_TAGS,
                                    Experiment, standard_circuit)
 from ..circuit.mapping import map_model
 from ..files import write_text
@@ -75,7 +75,7 @@ def report(experiment, out=None, *, quick: bool = False, opts: RunOptions | None
     from Python (``analogue.report(...)``).
 
     ``experiment``: a name (``./circuits/<name>.toml``, else a standard experiment), a TOML
-    path or an :class:`~analogue.circuit.experiments.Experiment`; ``out``: the report
+    path or an :class:`~analogue.study.experiments.Experiment`; ``out``: the report
     directory (default ``report/<name>``); ``quick``: the quick sizes (ignored when ``opts``,
     a :class:`~analogue.study.settings.RunOptions`, is given: its own ``quick`` counts);
     ``runner``: how the decks run, an :class:`analogue.Runner` (its store, workers, scheduler,

@@ -14,7 +14,7 @@ from ..study.settings import (MAX_HOLD_DIVISOR, MIN_CHECK_REPLICAS, MIN_QUICK_CH
                               stationary_noise_dt)
 
 if TYPE_CHECKING:
-    from ..circuit.experiments import Experiment
+    from ..study.experiments import Experiment
 
 __all__ = ["RunOptions", "ReportSettings", "report_settings", "report_settings_from_dict",
            "QUICK_DIVISOR", "MIN_STATIONARY_REPLICAS", "MIN_CHECK_REPLICAS",

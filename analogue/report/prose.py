@@ -20,7 +20,7 @@ import logging
 import math
 import re
 from pathlib import Path
-from ..circuit.experiments import PAPER_EXPERIMENTS, standard_circuit
+from ..study.experiments import PAPER_EXPERIMENTS, standard_circuit
 from ..variants.words import CIRCUIT, EQUATION, REFERENCE, Phrase, merge, model_phrases, num
 
 __all__ = ["is_paper_experiment", "is_paper_report", "main_part", "model_sentence", "description_mismatches",

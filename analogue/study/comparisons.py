@@ -12,7 +12,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..circuit.experiments import Experiment
+from .experiments import Experiment
 from ..circuit.mapping import map_model
 from ..ensemble import Ensemble
 from ..theory.exact import sample_stationary

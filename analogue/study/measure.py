@@ -326,7 +326,7 @@ def _first_passage_theory(exp, i: int, v0: float, model_eff: Model, noise_dt: fl
 def measure_theory(exp, settings: ReportSettings, *, progress=None) -> MeasureTheory:
     """Everything the chapter compares with that needs no circuit data (exact spectra and
     first-passage laws, the held/white Monte Carlo pairs) for the experiment ``exp`` (an
-    :class:`analogue.circuit.experiments.Experiment` of the paper's model) with the report
+    :class:`analogue.study.experiments.Experiment` of the paper's model) with the report
     settings its runs use (``exp.report.for_options(opts)``)."""
     t0 = time.perf_counter()
     if not applies(exp.model):

@@ -26,7 +26,7 @@ quadrature), ``smoothing`` = exact(model at the circuit's epsilon) - exact(ideal
 ``element`` = the family's circuit terms of :func:`analogue.circuit.mapping.map_model`
 (cubic network approximation, inductor series resistance, shot pulse width/edges), relative
 terms times the theory value, ``integration`` = the first deck (8 replicas) of the stationary
-run (spring: of its run) re-run with :meth:`~analogue.circuit.experiments.Experiment.check_spec`
+run (spring: of its run) re-run with :meth:`~analogue.study.experiments.Experiment.check_spec`
 (100x tighter, the same noise), the paired difference (|d| + 2 SE); transition rows carry the
 stationary run's check only in their note (not re-run: it would double the chapter's ngspice).
 """
@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..circuit.experiments import Experiment, load_experiment, standard_circuit
+from .experiments import Experiment, load_experiment, standard_circuit
 from ..circuit.store_index import indexing_runs
 from ..ensemble import Ensemble
 from .. import checks

@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from ..circuit.experiments import Experiment, load_experiment
+from .experiments import Experiment, load_experiment
 from ..circuit.ngspice import interrupt_guard
 from ..circuit.simulate import POLL_S
 from ..ensemble import Ensemble

@@ -23,7 +23,7 @@ processes at once, the checks first (their decks are the longest), so every core
 (issue 10: the work report's stationary check alone was one 56 s deck on one core of two).
 
 Every circuit built here was validated when the experiment was loaded
-(:meth:`~analogue.circuit.experiments.Experiment.planned_circuits`).
+(:meth:`~analogue.study.experiments.Experiment.planned_circuits`).
 """
 from __future__ import annotations
 
@@ -38,7 +38,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..circuit.experiments import Experiment
+from .experiments import Experiment
 from ..cores import usable_cpus
 from ..circuit.deck_size import NOTIONAL_WORKERS
 from ..circuit.simulate import DEFAULT_REPLICAS_PER_DECK, POLL_S

@@ -26,7 +26,7 @@ from contextlib import contextmanager, nullcontext
 
 from threadpoolctl import threadpool_limits
 
-from ..circuit.experiments import Experiment
+from .experiments import Experiment
 from ..circuit import ngspice
 from ..circuit.simulate import POLL_S
 from ..cores import usable_cpus

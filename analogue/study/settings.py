@@ -28,7 +28,7 @@ sampling step whole numbers of holds.
 never more than the file's count) and halves the stationary length.
 
 The table is parsed with the rest of the file, by
-:func:`analogue.circuit.experiments.experiment_from_dict`, and travels with the experiment
+:func:`analogue.study.experiments.experiment_from_dict`, and travels with the experiment
 (``Experiment.report``); its cross-references to ``[experiment]`` (prehistory starting
 velocities and times, work windows) are checked there, before anything runs.
 

@@ -100,7 +100,7 @@ from typing import Any
 import numpy as np
 
 from .. import __version__, checks
-from ..circuit.experiments import Experiment, load_experiment
+from .experiments import Experiment, load_experiment
 from ..circuit.mapping import CircuitMapping, check_mapping_values, map_model
 from ..circuit.runner import Runner
 from ..circuit.simulate import simulate

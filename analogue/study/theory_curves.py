@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..circuit.experiments import Experiment
+from .experiments import Experiment
 from ..model import Model
 from ..theory.cache import cached_call
 from .observables import exact_stationary, exact_transition, weak_noise_transition

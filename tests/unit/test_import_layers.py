@@ -39,9 +39,9 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("theory", ("theory",)),
     ("estimators", ("estimators",)),
     ("runs", ("montecarlo", "circuit", "data")),
-    # circuit/experiments.py is the experiment itself (a TOML file -> model, circuit, report
-    # settings): the study layer's, where issue 20 moves it.
-    ("study", ("study", "circuit.experiments")),
+    # study/experiments.py is the experiment itself (a TOML file -> model, circuit, report
+    # settings); ``analogue.circuit.experiments`` is an alias of it (circuit/__init__)
+    ("study", ("study",)),
     ("pages", ("report", "plots", "board", "export")),
     ("cli", ("cli",)),
 )

@@ -65,12 +65,12 @@ import numpy as np
 from .. import model as _model_module
 from ..model import Model
 from .. import checks
-from ..study.figure_layout import fig5_layout
-from ..study.settings import ReportSettings, report_settings_from_dict
+from .figure_layout import fig5_layout
+from .settings import ReportSettings, report_settings_from_dict
 from ..theory import weak_noise
-from .mapping import (FIXED_TRTOL, CircuitMapping, CircuitSpec, check_mapping_values,
+from ..circuit.mapping import (FIXED_TRTOL, CircuitMapping, CircuitSpec, check_mapping_values,
                       check_spec_ranges, map_model)
-from .netlist import Deck, build_deck
+from ..circuit.netlist import Deck, build_deck
 
 __all__ = ["Experiment", "load_experiment", "experiment_from_dict", "regenerate_netlists",
            "netlist_path", "experiment_names", "standard_circuit", "resolve_experiment",
