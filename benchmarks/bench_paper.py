@@ -107,8 +107,10 @@ class _Sampler:
         self._stop.set()
         self._thread.join()
 
-    def summary(self, until: float | None, cores: int = 2) -> dict:
-        """CPU seconds and idle-machine wall estimate up to ``until`` s after the start."""
+    def summary(self, until: float | None, cores: int | None = None) -> dict:
+        """CPU seconds and idle-machine wall estimate up to ``until`` s after the start, on
+        ``cores`` cores (default: the cores this process may use)."""
+        cores = cores or len(os.sched_getaffinity(0))
         cpu_prev, est, cpu, busy, python = 0.0, 0.0, 0.0, [], 0.0
         t_prev = 0.0
         for t, c, r, own in self.samples:
@@ -119,19 +121,34 @@ class _Sampler:
             cpu, cpu_prev, t_prev, python = c, c, t, own
             busy.append(min(r, cores))
         return {"cpu_s": cpu, "python_cpu_s": python, "idle_estimate_s": est, "until_s": t_prev,
+                "cores": cores,
                 "mean_runnable": sum(busy) / len(busy) if busy else 0.0}
 
 
-def run_paper(code: Path, full: bool, store: Path | None = None) -> dict:
-    """One ``analogue paper`` run of the checkout ``code`` on an empty store; returns wall,
-    CPU and the metrics.json phase breakdown."""
+def _analogue_command() -> list[str]:
+    """The ``analogue`` console script beside this interpreter (a venv), else the one on PATH
+    (a machine where the package is on PYTHONPATH with a launcher, e.g. the devicekit)."""
     exe = Path(sys.executable).with_name("analogue")
+    if exe.exists():
+        return [str(exe)]
+    found = shutil.which("analogue")
+    if found is None:
+        raise SystemExit("no 'analogue' command beside this Python or on PATH")
+    return [found]
+
+
+def run_paper(code: Path, full: bool, store: Path | None = None, extra: tuple = (),
+              save: Path | None = None) -> dict:
+    """One ``analogue paper`` run of the checkout ``code`` on an empty store; returns wall,
+    CPU and the metrics.json phase breakdown.  ``extra``: more arguments of ``analogue
+    paper`` (e.g. ``("--sweeps",)``); ``save``: copy the run's metrics.json there."""
     with tempfile.TemporaryDirectory(prefix="bench-paper-") as tmp:
         st = store if store is not None else Path(tmp) / "store"
         out = Path(tmp) / "report"
         env = dict(os.environ, PYTHONPATH=str(code), ANALOGUE_STORE=str(st),
                    ANALOGUE_THEORY_CACHE=str(st / "theory"))
-        cmd = [str(exe), "paper", "--out", str(out), "--no-progress"] + ([] if full else ["--quick"])
+        cmd = (_analogue_command() + ["paper", "--out", str(out), "--no-progress"]
+               + ([] if full else ["--quick"]) + list(extra))
         u0, s0 = _children_cpu()
         load0 = os.getloadavg()[0]
         t0 = time.perf_counter()
@@ -150,6 +167,9 @@ def run_paper(code: Path, full: bool, store: Path | None = None) -> dict:
         metrics = json.loads((out / "metrics.json").read_text())
         if store is not None:
             shutil.copy(out / "metrics.json", store / "metrics.json")
+        if save is not None:
+            save.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy(out / "metrics.json", save)
     prov = metrics["provenance"]
     # the report's clock starts after the imports: its times are shifted by the difference
     shift = wall - prov["wall_time_s"]
@@ -160,7 +180,7 @@ def run_paper(code: Path, full: bool, store: Path | None = None) -> dict:
     for p in prov["phases"]:
         key = (p["phase"], p.get("thread", "main"))
         by_thread[key] = by_thread.get(key, 0.0) + p["seconds"]
-    return {"code": str(code), "wall_s": wall, "user_s": u1 - u0, "sys_s": s1 - s0,
+    return {"code": str(code), "args": " ".join(cmd[1:]), "wall_s": wall, "user_s": u1 - u0, "sys_s": s1 - s0,
             "load_1min": (load0, load1), "report_wall_s": prov["wall_time_s"],
             "paper_wall_s": prov.get("paper_wall_time_s"),
             "beyond_wall_s": prov.get("beyond_wall_time_s"),
@@ -172,7 +192,7 @@ def run_paper(code: Path, full: bool, store: Path | None = None) -> dict:
 
 def _print(r: dict) -> None:
     cpu = r["user_s"] + r["sys_s"]
-    print(f"\n## {r['code']}")
+    print(f"\n## {r['code']}: analogue {r.get('args', 'paper')}")
     paper = (f", paper's chapters complete at {r['paper_wall_s']:.1f} s"
              if r.get("paper_wall_s") is not None else "")
     print(f"wall {r['wall_s']:.1f} s (report {r['report_wall_s']:.1f} s{paper}), CPU {cpu:.1f} s "
@@ -196,8 +216,9 @@ def _print(r: dict) -> None:
             print(f"sampled ({what}, to {smp['until_s']:.1f} s): CPU {smp['cpu_s']:.1f} s "
                   f"(Python process {smp['python_cpu_s']:.1f}, ngspice "
                   f"{smp['cpu_s'] - smp['python_cpu_s']:.1f}), "
-                  f"mean runnable threads (clipped at 2) {smp['mean_runnable']:.2f}, "
-                  f"idle 2-core wall estimate {smp['idle_estimate_s']:.1f} s")
+                  f"mean runnable threads (clipped at {smp['cores']}) "
+                  f"{smp['mean_runnable']:.2f}, idle {smp['cores']}-core wall estimate "
+                  f"{smp['idle_estimate_s']:.1f} s")
     print("| phase | thread | seconds (sum over experiments) |")
     print("|---|---|---|")
     for (phase, thread), sec in sorted(r["phases"].items(), key=lambda kv: -kv[1]):

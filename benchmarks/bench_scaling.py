@@ -121,7 +121,10 @@ def simulate_scaling(counts: list[int], per_worker: int, t_end: float, dask: boo
                 client.close()
                 cluster.close()
             rows.append((n, weak, weak_load, strong, strong_load, dweak, dstrong, _load()))
-            print(f"  {n} workers done (load {_load():.2f})", flush=True)
+            # each row as it is measured (a run cut short by a time limit keeps them)
+            print(f"  {n} workers: weak {weak:.2f} s, strong {strong:.2f} s"
+                  + (f", Dask weak {dweak:.2f} s, strong {dstrong:.2f} s"
+                     if dweak is not None else "") + f" (load {_load():.2f})", flush=True)
     finally:
         for cluster, client in clusters.values():
             client.close()
@@ -146,10 +149,11 @@ def simulate_scaling(counts: list[int], per_worker: int, t_end: float, dask: boo
         print(line)
 
 
-def main_job(full: bool) -> dict:
-    """The paper job on an empty store (bench_paper), its critical path and deck-times."""
+def main_job(full: bool, extra: tuple = (), save: Path | None = None) -> dict:
+    """The paper job on an empty store (bench_paper), its critical path and deck-times;
+    ``extra``: more arguments of ``analogue paper``; ``save``: where its metrics.json goes."""
     import bench_paper
-    r = bench_paper.run_paper(ROOT, full)
+    r = bench_paper.run_paper(ROOT, full, extra=extra, save=save)
     bench_paper._print(r)
     return r
 
@@ -174,6 +178,13 @@ def main() -> None:
     ap.add_argument("--only", choices=("simulate", "job", "startup"), action="append",
                     help="run only these parts (repeatable; default: all)")
     ap.add_argument("--full", action="store_true", help="the full paper job as well")
+    ap.add_argument("--quick-job", action=argparse.BooleanOptionalAction, default=True,
+                    help="the quick paper job (default: yes; --no-quick-job with --full or "
+                         "--sweeps to time only those)")
+    ap.add_argument("--sweeps", action="store_true",
+                    help="the quick paper job with --sweeps (make paper's job) as well")
+    ap.add_argument("--save", type=Path, default=None,
+                    help="copy each job's metrics.json into this directory")
     ap.add_argument("--workers", type=int, nargs="*", default=None,
                     help="worker counts (default 1 .. usable cores)")
     ap.add_argument("--per-worker", type=int, default=2, help="decks per worker (weak)")
@@ -191,9 +202,15 @@ def main() -> None:
         simulate_scaling(counts, args.per_worker, args.t_end, not args.no_dask)
     jobs = []
     if "job" in parts:
-        jobs.append(("quick", main_job(False)))
-        if args.full:
-            jobs.append(("full", main_job(True)))
+        plan = [(name, full, extra) for name, full, extra, wanted in (
+            ("quick", False, (), args.quick_job), ("quick --sweeps", False, ("--sweeps",),
+                                                   args.sweeps),
+            ("full", True, (), args.full)) if wanted]
+        for name, full, extra in plan:
+            save = (args.save / f"metrics-{name.replace(' --', '-')}.json"
+                    if args.save is not None else None)
+            jobs.append((name, main_job(full, extra, save)))
+            sys.stdout.flush()
     d1 = deck_time()
     deck = 0.5 * (d0 + d1)
     print(f"\ndeck-time (reference deck, after): {d1:.3f} s (load {_load():.2f}); "
