@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from .experiments import Experiment, load_experiment
+from ..circuit.deck_pool import DeckPool
 from ..circuit.ngspice import interrupt_guard
 from ..circuit.simulate import POLL_S
 from ..ensemble import Ensemble
@@ -38,13 +39,15 @@ from .members import (CHAPTER_TITLE, MemberAnalysis, MemberRuns, analyse_member,
                       is_member_experiment, member_runs)
 from .metrics import Comparison, validate_metrics
 from .runs import ExperimentRuns, run_experiment_runs
-from .schedule import (CIRCUIT_THREADS, MEMBER_THREADS, NOW, SCHEDULER_CIRCUIT_THREADS,
-                       Failures, Phases, Workers, circuit_cost, member_cost, monte_carlo_pool,
+from .schedule import (CIRCUIT_THREADS, MEMBER_DECKS, NOW, PAPER_DECKS,
+                       SCHEDULER_CIRCUIT_THREADS, Failures, Phases, Workers, circuit_cost,
+                       member_cost, member_threads, members_at_once, monte_carlo_pool,
                        result_of, say)
 from .settings import RunOptions
 from .theory_curves import (CURVE_GROUPS, ExperimentTheory, FigureCurves, experiment_theory,
                             figure_curves)
 from .. import __version__
+from ..cores import usable_cpus
 
 __all__ = ["StudyResult", "StudyHooks", "run_study", "load", "experiment_section_title",
            "run_experiment", "RunSummary", "MemberRunSummary"]
@@ -112,6 +115,17 @@ class StudyResult:
     # what the page recorded (metrics.json's content: comparisons, provenance with the wall
     # time and the critical path, summary, failures); None until a page is written
     record: dict | None = None
+    # the study's one pool of local ngspice processes (analogue.circuit.deck_pool; None with
+    # a Dask scheduler): circuit work the hooks start (the sweeps) queues there too, at
+    # SWEEP_DECKS, through options_for()
+    deck_pool: DeckPool | None = field(default=None, repr=False)
+
+    def options_for(self, opts: RunOptions, priority: int) -> RunOptions:
+        """``opts`` with this study's deck pool at ``priority`` (:data:`analogue.study.
+        schedule.PAPER_DECKS` ...); ``opts`` itself without a pool (a Dask scheduler)."""
+        if self.deck_pool is None or opts.scheduler:
+            return opts
+        return replace(opts, executor=self.deck_pool.view(priority))
 
     def __repr__(self) -> str:
         s = self.summary()
@@ -271,13 +285,22 @@ def run_study(experiments: Iterable, *, members: Iterable = (), opts: RunOptions
                          + [load(n) for n in members],
                          quick=opts.quick, phases=Phases(origin=t0), failures=Failures(),
                          t0=t0, load0=load0)
+    # Locally, every deck of the study (the paper's runs and calibrations, the members', the
+    # sweeps') runs in one pool of `workers` ngspice processes, the paper's first (issue 22:
+    # never more processes than cores; before, each member's run started `workers` of its
+    # own beside the others', 2-3x the cores).  With a Dask scheduler the cluster is the pool.
+    decks = None
+    if not opts.scheduler and opts.executor is None:
+        decks = DeckPool(opts.workers or usable_cpus())
+        result.deck_pool = decks
     # ngspice runs in the circuit threads: this (main) thread's guard turns SIGINT/SIGTERM/
     # SIGHUP into RunInterrupted here (killing every ngspice group), whoever called us
     with interrupt_guard():
         pool = Workers(result.phases, "theory", 1, blas_limit=True)
         circuit = Workers(result.phases, "circuit",
                           SCHEDULER_CIRCUIT_THREADS if opts.scheduler else CIRCUIT_THREADS)
-        family = Workers(result.phases, "members", MEMBER_THREADS)
+        family = Workers(result.phases, "members",
+                         member_threads(len(result.members), members_at_once(opts)))
         mc = monte_carlo_pool()
         try:
             _schedule(result, opts, hooks or StudyHooks(), pool, circuit, family, mc)
@@ -287,6 +310,8 @@ def run_study(experiments: Iterable, *, members: Iterable = (), opts: RunOptions
             # pool, then every ngspice process is killed until their threads end
             family.close()
             mc.shutdown(wait=False, cancel_futures=True)
+            if decks is not None:
+                decks.shutdown(wait=False, cancel_futures=True)
             circuit.abort()
             family.abort()
             raise
@@ -295,6 +320,8 @@ def run_study(experiments: Iterable, *, members: Iterable = (), opts: RunOptions
             family.close()
             pool.close()
             mc.shutdown(wait=False, cancel_futures=True)
+            if decks is not None:
+                decks.shutdown(wait=False, cancel_futures=True)
 
 
 def _schedule(result: StudyResult, opts: RunOptions, hooks: StudyHooks, pool: Workers,
@@ -360,7 +387,7 @@ class _Schedule:
 
     def submit_runs(self) -> None:
         """The paper-model experiments' circuit runs, longest first."""
-        opts = self.opts
+        opts = self.result.options_for(self.opts, PAPER_DECKS)
         self.runs_f = {i: self.circuit.submit("circuit runs", self.experiments[i].name,
                                               lambda exp=self.experiments[i]:
                                               runs_task(exp, opts))
@@ -373,10 +400,16 @@ class _Schedule:
         8.5 s shorter (two members' ngspice made the last experiment's figures take 6.3 s of
         wall for ~2.4 CPU-s) but left the cores to the main thread alone for those seconds,
         and on a larger machine all but one idle."""
-        members, opts = self.result.members, self.opts
+        members = self.result.members
+        opts = self.result.options_for(self.opts, MEMBER_DECKS)
+        # with many cores the members start at once: their decks queue behind the paper's in
+        # the one deck pool, and their theory and Monte Carlo references fill the cores the
+        # paper's few decks leave idle; on a few cores they wait for the paper's circuit runs
+        # (their Python work would slow the paper's chapters: see above)
+        after = [] if members_at_once(self.opts) else [*self.runs_f.values()]
         for j in sorted(range(len(members)), key=lambda j: -member_cost(members[j])):
             self.members_f[j] = self.family.submit_after(
-                [*self.runs_f.values()], "family member (circuit and theory)",
+                after, "family member (circuit and theory)",
                 members[j].name, lambda exp=members[j]: member_task(exp, opts))
 
     def draw_ready(self, block: bool) -> None:

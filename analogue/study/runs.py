@@ -28,6 +28,7 @@ Every circuit built here was validated when the experiment was loaded
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
 import contextvars
 import math
 import threading
@@ -276,16 +277,27 @@ class SharedPool(cf.Executor):
     caller owns and shuts down), and ``started`` is set at the job's first submit, so that the
     jobs' first decks queue in the order the jobs were started (a job's later decks may
     interleave with the next job's: the order is a schedule, the results do not depend on
-    it)."""
+    it).  :meth:`cancel_queued` cancels this job's decks not yet started (a sibling job
+    failed), leaving other users of the pool alone."""
 
     def __init__(self, pool: cf.Executor):
         self.pool = pool
         self.started = threading.Event()
+        self._futures: list = []
+        self._lock = threading.Lock()
 
     def submit(self, fn, /, *args, **kwargs):
         fut = self.pool.submit(fn, *args, **kwargs)
+        with self._lock:
+            self._futures = [f for f in self._futures if not f.done()]
+            self._futures.append(fut)
         self.started.set()
         return fut
+
+    def cancel_queued(self) -> None:
+        with self._lock:
+            for f in self._futures:
+                f.cancel()
 
     def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
         pass  # the pool is the caller's
@@ -299,19 +311,26 @@ def _run_jobs(jobs: list[tuple[str, Callable[[Runner], Any]]], runner: Runner) -
     (:func:`analogue.circuit.store_index.collecting_keys`) see every deck.  The calling thread
     holds :func:`analogue.circuit.ngspice.interrupt_guard` meanwhile (a signal kills every
     ngspice process and raises there).  With a Dask scheduler address the jobs run one after
-    another on it (each simulate call connects on its own) with ``runner`` as it is."""
+    another on it (each simulate call connects on its own) with ``runner`` as it is.  With an
+    executor in ``runner`` (the study's one deck pool, :mod:`analogue.circuit.deck_pool`) the
+    decks go there, beside the other experiments' and members' decks, and a failure cancels
+    only this experiment's queued decks."""
     if runner.scheduler is not None:
         return {name: fn(runner) for name, fn in jobs}
     workers = default_workers(runner)
     out = {}
-    with _ng.interrupt_guard(), \
-            cf.ThreadPoolExecutor(max_workers=workers, thread_name_prefix="analogue-deck") as pool, \
-            cf.ThreadPoolExecutor(max_workers=len(jobs),
-                                  thread_name_prefix="analogue-run") as threads:
+    own = runner.executor is None
+    with _ng.interrupt_guard(), contextlib.ExitStack() as stack:
+        pool = (stack.enter_context(cf.ThreadPoolExecutor(
+            max_workers=workers, thread_name_prefix="analogue-deck")) if own else runner.executor)
+        threads = stack.enter_context(cf.ThreadPoolExecutor(
+            max_workers=len(jobs), thread_name_prefix="analogue-run"))
         futures = {}
+        views: list[SharedPool] = []
         try:
             for name, fn in jobs:
                 view = SharedPool(pool)
+                views.append(view)
                 fut = threads.submit(contextvars.copy_context().run, fn,
                                      runner.replace(executor=view))
                 futures[name] = fut
@@ -334,7 +353,10 @@ def _run_jobs(jobs: list[tuple[str, Callable[[Runner], Any]]], runner: Runner) -
         except BaseException:
             for fut in futures.values():
                 fut.cancel()
-            pool.shutdown(wait=False, cancel_futures=True)
+            for v in views:
+                v.cancel_queued()
+            if own:
+                pool.shutdown(wait=False, cancel_futures=True)
             raise
     return out
 

@@ -283,6 +283,34 @@ CIRCUIT_THREADS = 1
 SCHEDULER_CIRCUIT_THREADS = 2
 MEMBER_THREADS = 2
 
+# The priorities of the study's one deck pool (analogue.circuit.deck_pool: at most `workers`
+# ngspice processes, whoever queued the decks): a free process takes the paper's decks first,
+# then the members', then the sweep points'.
+PAPER_DECKS, MEMBER_DECKS, SWEEP_DECKS = 0, 1, 2
+
+# From this many usable cores on, the family members start with the paper's circuit runs
+# rather than after them, all at once (one thread each): the paper's experiments are a few
+# dozen decks apiece with serial calibrations before them, which leave most of a large
+# machine idle, and the deck pool keeps the members' decks behind the paper's.  Below it the
+# members' Python work (theory, Monte Carlo references: 14 CPU-s on the quick paper) would
+# take the cores the paper's chapters need (measured on 2 cores: the paper's chapters 8.5 s
+# later when the members started before its figures).
+MEMBERS_AT_ONCE_CORES = 8
+
+
+def members_at_once(opts) -> bool:
+    """Whether the members start at once (:data:`MEMBERS_AT_ONCE_CORES`): with a Dask
+    scheduler (the cluster, not this machine, runs the decks) or on that many local
+    workers."""
+    return bool(opts.scheduler) or (opts.workers or usable_cpus()) >= MEMBERS_AT_ONCE_CORES
+
+
+def member_threads(members: int, at_once: bool) -> int:
+    """Threads for the family members' analyses: one per member when they start at once
+    (:func:`members_at_once`: their decks share the study's one deck pool, so more threads
+    never mean more ngspice processes), else :data:`MEMBER_THREADS`."""
+    return max(MEMBER_THREADS, members) if at_once else MEMBER_THREADS
+
 def circuit_cost(exp: Experiment, opts: RunOptions) -> float:
     """A proxy for an experiment's ngspice time: its replica-time (replicas x model time of
     the transition and stationary runs; the integration checks scale with them).  Only its

@@ -77,6 +77,10 @@ class RunOptions:
     # the report's chapter "What experiments measure" also runs its two sweep curves (8
     # circuit points of the stick experiment at quick size: analogue.report.measure_chapter)
     sweeps: bool = False
+    # where the decks run locally: an executor the caller owns (the study's one pool of
+    # ngspice processes, analogue.circuit.deck_pool, seen at a priority); None: each run
+    # starts `workers` processes of its own.  Set by run_study, not by a user.
+    executor: Any = None
 
     def runner(self, **changes: Any) -> Runner:
         """These options as the :class:`analogue.Runner` every deck of the study runs with
@@ -85,6 +89,7 @@ class RunOptions:
         Runner.  The one way run options travel from the study to what runs decks (issue 20:
         no dict of run options between layers)."""
         return Runner(store=self.store, workers=self.workers, scheduler=self.scheduler or None,
+                      executor=None if self.scheduler else self.executor,
                       timeout=DEFAULT_TIMEOUT if self.timeout is None else self.timeout,
                       progress=self.progress).replace(**changes)
 

@@ -137,8 +137,10 @@ def test_a_runner_says_how_the_report_runs(tmp_path, monkeypatch):
     (opts,) = seen
     assert (opts.store, opts.workers, opts.timeout, opts.progress, opts.quick) == \
         (tmp_path / "store", 3, 99.0, False, True)
-    # the options give the decks back the very runner the report was handed (issue 20)
-    assert opts.runner() == runner
+    # the options give the decks back the very runner the report was handed (issue 20), with
+    # the study's one deck pool of its 3 workers as the executor (issue 22)
+    assert opts.runner().replace(executor=None) == runner
+    assert opts.runner().executor.workers == 3
     with pytest.deprecated_call():
         assert opts.simulate_kwargs()["store"] == tmp_path / "store"
     for bad in (dict(replicas_per_deck=8), dict(label="x")):

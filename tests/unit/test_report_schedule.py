@@ -86,6 +86,8 @@ def schedule(request, tmp_path, monkeypatch):
     comparisons have started: the main thread must take small's runs first."""
     threads = request.param
     monkeypatch.setattr(S, "CIRCUIT_THREADS", threads)
+    # a small machine's schedule (members after the paper's runs), whatever runs the test
+    monkeypatch.setattr(SCH, "usable_cpus", lambda: 2)
     monkeypatch.setenv("ANALOGUE_THEORY_CACHE", str(tmp_path / "theory"))
     big, small = _exp("big", 12.0, 21), _exp("small", 6.0, 22)
     events: list = []
@@ -194,8 +196,104 @@ def test_one_local_circuit_thread_two_with_a_scheduler(tmp_path, monkeypatch, sc
     def schedule_(result, opts, hooks, pool, circuit, family, mc=None):
         seen.update(circuit=len(circuit.threads), family=len(family.threads))
     monkeypatch.setattr(S, "_schedule", schedule_)
+    monkeypatch.setattr(SCH, "usable_cpus", lambda: 2)
     S.run_study([], opts=RunOptions(scheduler=scheduler, progress=False))
     assert seen == {"circuit": threads, "family": SCH.MEMBER_THREADS}
+
+
+def _members(names):
+    return [load_experiment(standard_circuit(n)) for n in names]
+
+
+@pytest.mark.parametrize("cores", [2, 16])
+def test_every_deck_of_a_study_goes_to_one_pool_paper_first(monkeypatch, cores):
+    """Issue 22, never more ngspice processes than cores: the paper's runs and every member
+    get views of the study's one deck pool of `workers` processes (paper's at the first
+    priority, members' after), not pools of their own (each member's run started `workers`
+    processes beside the others')."""
+    monkeypatch.setattr(SCH, "usable_cpus", lambda: cores)
+    monkeypatch.setattr(S, "usable_cpus", lambda: cores)
+    seen: dict = {}
+    lock = threading.Lock()
+
+    def runs(exp, opts, settings=None):
+        with lock:
+            seen[exp.name] = opts.runner().executor
+        return _fake_runs(exp, opts)
+
+    def member(exp, opts):
+        with lock:
+            seen[exp.name] = opts.runner().executor
+        raise RuntimeError("member stub")
+    monkeypatch.setattr(S, "run_experiment_runs", runs)
+    monkeypatch.setattr(S, "analyse", lambda runs, **kw: (_ for _ in ()).throw(
+        RuntimeError("not compared here")))
+    monkeypatch.setattr(S, "member_task", member)
+    result = S.run_study([_exp("small", 6.0, 22)], members=_members(["cubic", "shot"]),
+                         opts=RunOptions(quick=True, progress=False))
+    pool = result.deck_pool
+    assert pool is not None and pool.workers == cores
+    assert {v.pool for v in seen.values()} == {pool}
+    assert seen["small"].priority == SCH.PAPER_DECKS
+    assert seen["cubic"].priority == seen["shot"].priority == SCH.MEMBER_DECKS
+    assert SCH.PAPER_DECKS < SCH.MEMBER_DECKS < SCH.SWEEP_DECKS
+    # the pool is shut down with the study: nothing more can be queued
+    with pytest.raises(RuntimeError, match="shut down"):
+        pool.submit(lambda: None)
+
+
+def test_no_pool_with_a_scheduler(monkeypatch):
+    """On a Dask cluster the cluster is the pool: runs keep the runner as it is."""
+    seen = {}
+
+    def runs(exp, opts, settings=None):
+        seen["executor"] = opts.runner().executor
+        raise RuntimeError("stub")
+    monkeypatch.setattr(S, "run_experiment_runs", runs)
+    result = S.run_study([_exp("small", 6.0, 22)],
+                         opts=RunOptions(scheduler="tcp://127.0.0.1:8786", progress=False))
+    assert result.deck_pool is None and seen == {"executor": None}
+
+
+@pytest.mark.parametrize("cores, at_once", [(2, False), (7, False), (8, True), (16, True)])
+def test_members_start_at_once_on_many_cores(monkeypatch, cores, at_once):
+    """From MEMBERS_AT_ONCE_CORES usable cores on, the members start with the paper's runs,
+    one thread each (their decks queue behind the paper's in the one pool); below it they
+    wait for the paper's circuit runs, on MEMBER_THREADS threads."""
+    monkeypatch.setattr(SCH, "usable_cpus", lambda: cores)
+    monkeypatch.setattr(S, "usable_cpus", lambda: cores)
+    release = threading.Event()
+    events: list = []
+    lock = threading.Lock()
+
+    def runs(exp, opts, settings=None):
+        # the paper's runs end only once every member has started or after 3 s (a member
+        # that waits for the runs never starts before)
+        release.wait(3.0)
+        with lock:
+            events.append("runs done")
+        raise RuntimeError("stub")
+
+    def member(exp, opts):
+        with lock:
+            events.append(f"member {exp.name}")
+            if sum(e.startswith("member") for e in events) == 3:
+                release.set()
+        raise RuntimeError("member stub")
+    monkeypatch.setattr(S, "run_experiment_runs", runs)
+    monkeypatch.setattr(S, "member_task", member)
+    threads = {}
+    real = S.Workers
+
+    def workers(phases, name, n=1, **kw):
+        threads[name] = n
+        return real(phases, name, n, **kw)
+    monkeypatch.setattr(S, "Workers", workers)
+    S.run_study([_exp("small", 6.0, 22)], members=_members(["cubic", "shot", "stribeck"]),
+                opts=RunOptions(quick=True, progress=False))
+    first_members = events.index("runs done") == 3
+    assert first_members is at_once
+    assert threads["members"] == (3 if at_once else SCH.MEMBER_THREADS)
 
 
 def test_members_are_queued_longest_first(monkeypatch):
@@ -204,7 +302,7 @@ def test_members_are_queued_longest_first(monkeypatch):
     result keeps the given order."""
     started: list = []
     monkeypatch.setattr(SCH, "MEMBER_THREADS", 1)
-    monkeypatch.setattr(S, "MEMBER_THREADS", 1)
+    monkeypatch.setattr(SCH, "usable_cpus", lambda: 2)
 
     def member(exp, opts):
         started.append(exp.name)

@@ -1,0 +1,117 @@
+"""One pool of ngspice processes for everything a job runs, with priorities (issue 22: "more
+cores, less waiting, and never more processes than cores").
+
+A study runs several kinds of circuit work at once: the paper's experiments, the family
+members, the sweep points, each through :func:`analogue.simulate` with ``workers`` ngspice
+processes of its own.  Run side by side, each with its own pool, they started ``workers``
+processes apiece (two members and a sweep: 3 x 16 on a 16-core machine).  A
+:class:`DeckPool` holds ``workers`` threads, each running one deck (one ngspice process) at
+a time, shared by all of them: whatever runs beside what, at most ``workers`` ngspice
+processes run.  Each caller gets a :meth:`DeckPool.view` with a priority: a free thread takes
+the queued deck of the lowest priority first (then the earliest), so the paper's decks run
+before the members' and the members' before the sweeps', whatever order they were queued
+in.  The order is a schedule: no result depends on it (every deck's seed and split are fixed
+before it is queued).
+
+A view is a :class:`concurrent.futures.Executor` the caller owns (``Runner(executor=view)``):
+:func:`analogue.circuit.decks.run_decks` never shuts it down.  Shutting the pool down with
+``cancel_futures=True`` cancels every queued deck (an interrupt: the decks under way are
+killed by :func:`analogue.circuit.ngspice.interrupt_guard`).
+"""
+from __future__ import annotations
+
+import concurrent.futures as cf
+import itertools
+import queue
+import threading
+from typing import Any
+
+__all__ = ["DeckPool", "PoolView"]
+
+
+class DeckPool(cf.Executor):
+    """``workers`` threads running submitted callables, lowest priority first, FIFO within a
+    priority.  Threads are daemons: an interrupt never waits for a deck under way."""
+
+    def __init__(self, workers: int, *, name: str = "analogue-deck"):
+        if not isinstance(workers, int) or isinstance(workers, bool) or workers < 1:
+            raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
+        self.workers = workers
+        self._queue: queue.PriorityQueue = queue.PriorityQueue()
+        self._seq = itertools.count()
+        self._lock = threading.Lock()
+        self._closed = False
+        self._threads = [threading.Thread(target=self._run, name=f"{name}-{i}", daemon=True)
+                         for i in range(workers)]
+        for t in self._threads:
+            t.start()
+
+    def _run(self) -> None:
+        while True:
+            _, _, item = self._queue.get()
+            if item is None:
+                return
+            fut, fn, args, kwargs = item
+            if not fut.set_running_or_notify_cancel():
+                continue
+            try:
+                fut.set_result(fn(*args, **kwargs))
+            except BaseException as exc:  # handed to the waiting caller, as cf's pools do
+                fut.set_exception(exc)
+
+    def submit_at(self, priority: int, fn, /, *args, **kwargs) -> cf.Future:
+        """Queue ``fn(*args, **kwargs)`` at ``priority`` (lower runs first)."""
+        fut: cf.Future = cf.Future()
+        with self._lock:
+            if self._closed:
+                raise RuntimeError("cannot schedule new decks after the pool was shut down")
+            self._queue.put((priority, next(self._seq), (fut, fn, args, kwargs)))
+        return fut
+
+    def submit(self, fn, /, *args, **kwargs) -> cf.Future:
+        return self.submit_at(0, fn, *args, **kwargs)
+
+    def view(self, priority: int) -> PoolView:
+        """An executor whose decks queue at ``priority`` in this pool."""
+        return PoolView(self, priority)
+
+    def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
+        with self._lock:
+            if self._closed:
+                return
+            self._closed = True
+            if cancel_futures:
+                while True:
+                    try:
+                        _, _, item = self._queue.get_nowait()
+                    except queue.Empty:
+                        break
+                    if item is not None:
+                        item[0].cancel()
+            # after every queued deck (or at once, when they were cancelled)
+            for _ in self._threads:
+                self._queue.put((float("inf"), next(self._seq), None))
+        if wait:
+            for t in self._threads:
+                t.join()
+
+
+class PoolView(cf.Executor):
+    """A :class:`DeckPool` seen at one priority; the pool's owner shuts the pool down, so
+    :meth:`shutdown` here does nothing (as for any executor a caller passes in)."""
+
+    def __init__(self, pool: DeckPool, priority: int):
+        self.pool, self.priority = pool, priority
+
+    @property
+    def workers(self) -> int:
+        return self.pool.workers
+
+    def submit(self, fn, /, *args: Any, **kwargs: Any) -> cf.Future:
+        return self.pool.submit_at(self.priority, fn, *args, **kwargs)
+
+    def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
+        pass  # the pool is its owner's
+
+    def __repr__(self) -> str:
+        return f"PoolView(priority={self.priority}, workers={self.pool.workers})"

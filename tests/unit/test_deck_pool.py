@@ -1,0 +1,113 @@
+"""The study's one pool of ngspice processes (analogue.circuit.deck_pool, issue 22: never
+more processes than cores, the paper's decks first): plain functions as decks."""
+import threading
+import time
+
+import pytest
+
+from analogue import Runner
+from analogue.circuit.deck_pool import DeckPool
+from analogue.study.runs import _run_jobs
+
+
+def test_never_more_at_once_than_workers_whoever_submits():
+    pool = DeckPool(3)
+    lock = threading.Lock()
+    running, peak = [0], [0]
+
+    def deck():
+        with lock:
+            running[0] += 1
+            peak[0] = max(peak[0], running[0])
+        time.sleep(0.01)
+        with lock:
+            running[0] -= 1
+        return 1
+
+    views = [pool.view(p) for p in (0, 1, 2)]
+    submitters = [threading.Thread(target=lambda v=v: [v.submit(deck) for _ in range(20)])
+                  for v in views]
+    futs = []
+    for t in submitters:
+        t.start()
+    for t in submitters:
+        t.join()
+    futs = [pool.submit(deck) for _ in range(10)]
+    assert sum(f.result(timeout=10) for f in futs) == 10
+    pool.shutdown(wait=True)
+    assert peak[0] == 3
+
+
+def test_lower_priority_first_then_fifo():
+    pool = DeckPool(1)
+    gate = threading.Event()
+    order = []
+    pool.submit(gate.wait)          # holds the one worker while the rest is queued
+    futs = [pool.view(p).submit(order.append, (p, i))
+            for i, p in enumerate([2, 1, 0, 1, 0, 2])]
+    gate.set()
+    for f in futs:
+        f.result(timeout=10)
+    pool.shutdown()
+    assert order == [(0, 2), (0, 4), (1, 1), (1, 3), (2, 0), (2, 5)]
+
+
+def test_exception_reaches_the_caller_and_the_worker_goes_on():
+    pool = DeckPool(1)
+    bad = pool.submit(lambda: 1 / 0)
+    good = pool.submit(lambda: "ok")
+    with pytest.raises(ZeroDivisionError):
+        bad.result(timeout=10)
+    assert good.result(timeout=10) == "ok"
+    pool.shutdown()
+
+
+def test_shutdown_cancels_queued_decks_and_refuses_new_ones():
+    pool = DeckPool(1)
+    gate, started = threading.Event(), threading.Event()
+    first = pool.submit(lambda: started.set() or gate.wait(5))
+    assert started.wait(10)         # under way: shutting down does not cancel it
+    queued = [pool.view(1).submit(time.sleep, 0) for _ in range(5)]
+    pool.shutdown(wait=False, cancel_futures=True)
+    assert all(f.cancelled() for f in queued)
+    gate.set()
+    assert first.result(timeout=10) is True
+    with pytest.raises(RuntimeError, match="shut down"):
+        pool.view(0).submit(time.sleep, 0)
+    # a view's shutdown leaves the owner's pool alone
+    other = DeckPool(1)
+    other.view(0).shutdown(cancel_futures=True)
+    assert other.submit(lambda: 2).result(timeout=10) == 2
+    other.shutdown()
+
+
+@pytest.mark.parametrize("workers", [0, -1, 1.5, True])
+def test_bad_worker_count_is_refused_by_name(workers):
+    with pytest.raises(ValueError, match="workers must be an integer >= 1"):
+        DeckPool(workers)
+
+
+def test_an_experiments_jobs_on_the_study_pool_cancel_only_their_own_decks():
+    """_run_jobs with the study's pool as the runner's executor: its decks go there (no pool
+    of its own), and a failing job cancels this experiment's queued decks, not another
+    user's."""
+    pool = DeckPool(1)
+    gate = threading.Event()
+    pool.submit(gate.wait, 5)       # the one worker busy: everything below queues
+    other = [pool.view(1).submit(lambda: "member deck") for _ in range(3)]
+    names = []
+
+    def failing(runner):
+        f = runner.executor.submit(lambda: 1 / 0)
+        names.append(threading.current_thread().name)
+        gate.set()
+        return f.result()
+
+    def slow(runner):
+        return [runner.executor.submit(time.sleep, 0.05).result() for _ in range(3)]
+
+    runner = Runner(store=False, workers=1, progress=False, executor=pool.view(0))
+    with pytest.raises(ZeroDivisionError):
+        _run_jobs([("bad", failing), ("slow", slow)], runner)
+    assert [f.result(timeout=10) for f in other] == ["member deck"] * 3
+    pool.shutdown()
