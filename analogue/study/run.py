@@ -39,7 +39,7 @@ from .members import (CHAPTER_TITLE, MemberAnalysis, MemberRuns, analyse_member,
                       is_member_experiment, member_runs)
 from .metrics import Comparison, validate_metrics
 from .runs import ExperimentRuns, run_experiment_runs
-from .schedule import (CIRCUIT_THREADS, MEMBER_DECKS, NOW, PAPER_DECKS,
+from .schedule import (CIRCUIT_THREADS, MEMBER_DECKS, NOW, PAPER_DECKS, PAPER_RANK_STEP,
                        SCHEDULER_CIRCUIT_THREADS, Failures, Phases, Workers, circuit_cost,
                        member_cost, member_threads, members_at_once, monte_carlo_pool,
                        result_of, say)
@@ -298,7 +298,10 @@ def run_study(experiments: Iterable, *, members: Iterable = (), opts: RunOptions
     with interrupt_guard():
         pool = Workers(result.phases, "theory", 1, blas_limit=True)
         circuit = Workers(result.phases, "circuit",
-                          SCHEDULER_CIRCUIT_THREADS if opts.scheduler else CIRCUIT_THREADS)
+                          SCHEDULER_CIRCUIT_THREADS if opts.scheduler else
+                          max(1, len(result.experiments)) if members_at_once(opts)
+                          and decks is not None
+                          else CIRCUIT_THREADS)
         family = Workers(result.phases, "members",
                          member_threads(len(result.members), members_at_once(opts)))
         mc = monte_carlo_pool()
@@ -387,11 +390,15 @@ class _Schedule:
 
     def submit_runs(self) -> None:
         """The paper-model experiments' circuit runs, longest first."""
-        opts = self.result.options_for(self.opts, PAPER_DECKS)
-        self.runs_f = {i: self.circuit.submit("circuit runs", self.experiments[i].name,
-                                              lambda exp=self.experiments[i]:
-                                              runs_task(exp, opts))
-                       for i in self.order}
+        # each experiment's decks at its own priority in the study's deck pool, in this
+        # order: with a thread per experiment (many cores) the longest one's decks still go
+        # first and the others' fill the cores its calibrations and last decks leave idle
+        self.runs_f = {}
+        for rank, i in enumerate(self.order):
+            opts = self.result.options_for(self.opts, PAPER_DECKS + rank * PAPER_RANK_STEP)
+            self.runs_f[i] = self.circuit.submit("circuit runs", self.experiments[i].name,
+                                                 lambda exp=self.experiments[i], opts=opts:
+                                                 runs_task(exp, opts))
 
     def submit_members(self) -> None:
         """The members, longest first, once the paper's circuit runs are done, when ngspice

@@ -287,11 +287,14 @@ MEMBER_THREADS = 2
 # ngspice processes, whoever queued the decks): a free process takes the paper's decks first,
 # then the members', then the sweep points'.
 PAPER_DECKS, MEMBER_DECKS, SWEEP_DECKS = 0, 1, 2
+# the paper's experiments, longest first, at PAPER_DECKS + rank x this (all below the members')
+PAPER_RANK_STEP = 0.01
 
-# From this many usable cores on, the family members start with the paper's circuit runs
-# rather than after them, all at once (one thread each): the paper's experiments are a few
-# dozen decks apiece with serial calibrations before them, which leave most of a large
-# machine idle, and the deck pool keeps the members' decks behind the paper's.  Below it the
+# From this many usable cores on, the paper's experiments run their circuit work at once (a
+# circuit thread each) and the family members start with them rather than after them, one
+# thread each: the paper's experiments are a few dozen decks apiece with serial calibrations
+# before them, which leave most of a large machine idle, and the deck pool keeps the members'
+# decks behind the paper's, and the paper's longest experiment's before the others'.  Below it the
 # members' Python work (theory, Monte Carlo references: 14 CPU-s on the quick paper) would
 # take the cores the paper's chapters need (measured on 2 cores: the paper's chapters 8.5 s
 # later when the members started before its figures).

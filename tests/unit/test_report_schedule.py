@@ -294,6 +294,36 @@ def test_members_start_at_once_on_many_cores(monkeypatch, cores, at_once):
     first_members = events.index("runs done") == 3
     assert first_members is at_once
     assert threads["members"] == (3 if at_once else SCH.MEMBER_THREADS)
+    assert threads["circuit"] == 1
+
+
+@pytest.mark.parametrize("cores", [2, 16])
+def test_many_cores_run_the_papers_experiments_at_once_longest_first(monkeypatch, cores):
+    """From MEMBERS_AT_ONCE_CORES cores on, a circuit thread per experiment; each
+    experiment's decks at its own priority in the pool, longest first, all before the
+    members'."""
+    monkeypatch.setattr(SCH, "usable_cpus", lambda: cores)
+    monkeypatch.setattr(S, "usable_cpus", lambda: cores)
+    seen: dict = {}
+    lock = threading.Lock()
+
+    def runs(exp, opts, settings=None):
+        with lock:
+            seen[exp.name] = opts.runner().executor.priority
+        raise RuntimeError("stub")
+    monkeypatch.setattr(S, "run_experiment_runs", runs)
+    threads = {}
+    real = S.Workers
+
+    def workers(phases, name, n=1, **kw):
+        threads[name] = n
+        return real(phases, name, n, **kw)
+    monkeypatch.setattr(S, "Workers", workers)
+    S.run_study([_exp("small", 6.0, 22), _exp("big", 12.0, 21), _exp("mid", 9.0, 23)],
+                opts=RunOptions(quick=True, progress=False))
+    assert threads["circuit"] == (3 if cores >= SCH.MEMBERS_AT_ONCE_CORES else 1)
+    assert seen["big"] < seen["mid"] < seen["small"] < SCH.MEMBER_DECKS
+    assert seen["big"] == SCH.PAPER_DECKS
 
 
 def test_members_are_queued_longest_first(monkeypatch):
