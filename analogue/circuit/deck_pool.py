@@ -59,7 +59,7 @@ class DeckPool(cf.Executor):
             except BaseException as exc:  # handed to the waiting caller, as cf's pools do
                 fut.set_exception(exc)
 
-    def submit_at(self, priority: int, fn, /, *args, **kwargs) -> cf.Future:
+    def submit_at(self, priority: float, fn, /, *args, **kwargs) -> cf.Future:
         """Queue ``fn(*args, **kwargs)`` at ``priority`` (lower runs first)."""
         fut: cf.Future = cf.Future()
         with self._lock:
@@ -71,7 +71,7 @@ class DeckPool(cf.Executor):
     def submit(self, fn, /, *args, **kwargs) -> cf.Future:
         return self.submit_at(0, fn, *args, **kwargs)
 
-    def view(self, priority: int) -> PoolView:
+    def view(self, priority: float) -> PoolView:
         """An executor whose decks queue at ``priority`` in this pool."""
         return PoolView(self, priority)
 
@@ -100,7 +100,7 @@ class PoolView(cf.Executor):
     """A :class:`DeckPool` seen at one priority; the pool's owner shuts the pool down, so
     :meth:`shutdown` here does nothing (as for any executor a caller passes in)."""
 
-    def __init__(self, pool: DeckPool, priority: int):
+    def __init__(self, pool: DeckPool, priority: float):
         self.pool, self.priority = pool, priority
 
     @property

@@ -120,7 +120,7 @@ class StudyResult:
     # SWEEP_DECKS, through options_for()
     deck_pool: DeckPool | None = field(default=None, repr=False)
 
-    def options_for(self, opts: RunOptions, priority: int) -> RunOptions:
+    def options_for(self, opts: RunOptions, priority: float) -> RunOptions:
         """``opts`` with this study's deck pool at ``priority`` (:data:`analogue.study.
         schedule.PAPER_DECKS` ...); ``opts`` itself without a pool (a Dask scheduler)."""
         if self.deck_pool is None or opts.scheduler:
