@@ -125,6 +125,13 @@ class _Sampler:
                 "mean_runnable": sum(busy) / len(busy) if busy else 0.0}
 
 
+def _python_path(code: Path) -> str:
+    """``code`` first on PYTHONPATH, the caller's entries after it (a machine whose
+    dependencies sit on PYTHONPATH, e.g. the devicekit's wheels, keeps them)."""
+    rest = os.environ.get("PYTHONPATH", "")
+    return str(code) + (os.pathsep + rest if rest else "")
+
+
 def _analogue_command() -> list[str]:
     """The ``analogue`` console script beside this interpreter (a venv), else the one on PATH
     (a machine where the package is on PYTHONPATH with a launcher, e.g. the devicekit)."""
@@ -145,7 +152,7 @@ def run_paper(code: Path, full: bool, store: Path | None = None, extra: tuple = 
     with tempfile.TemporaryDirectory(prefix="bench-paper-") as tmp:
         st = store if store is not None else Path(tmp) / "store"
         out = Path(tmp) / "report"
-        env = dict(os.environ, PYTHONPATH=str(code), ANALOGUE_STORE=str(st),
+        env = dict(os.environ, PYTHONPATH=_python_path(code), ANALOGUE_STORE=str(st),
                    ANALOGUE_THEORY_CACHE=str(st / "theory"))
         cmd = (_analogue_command() + ["paper", "--out", str(out), "--no-progress"]
                + ([] if full else ["--quick"]) + list(extra))

@@ -160,7 +160,8 @@ def main_job(full: bool, extra: tuple = (), save: Path | None = None) -> dict:
 
 def startup(repeats: int) -> None:
     import bench_startup
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    from bench_paper import _python_path as bench_paper_path
+    env = {**os.environ, "PYTHONPATH": bench_paper_path(ROOT)}
     times: dict[str, list[float]] = {k: [] for k in bench_startup.COMMANDS}
     for _ in range(repeats):
         for name, cmd in bench_startup.COMMANDS.items():
