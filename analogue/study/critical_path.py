@@ -23,13 +23,16 @@ calibrations) plus their longest single deck (``circuit`` timing recorded by
 the phase, the phase's own duration.  An experiment's bandwidth term likewise takes the seconds its thread spent
 drawing the noise and computing the jackknives plus the CPU seconds of its longest Monte
 Carlo chunk (:func:`analogue.study.comparisons.bandwidth_terms`; the chunks are independent,
-one core each with unlimited cores).  A family member's phase counts whole (its decks are
-not recorded apart): an upper bound for its share.  Every duration is a measured one on the
+one core each with unlimited cores).  A family member counts its parts (the timing record of
+:func:`analogue.study.members.analyse_member`): its runs' calibrations, their longest deck,
+then its analysis after the runs (theory, Monte Carlo reference, estimates); without that
+record, or where it exceeds the phase, the phase's own duration.  Every duration is a measured one on the
 machine that ran the job, so the result is that machine's per-core speed with unlimited
 cores, not a prediction for another machine.
 """
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 
 #: phases that wait rather than work (excluded from the graph)
@@ -41,6 +44,7 @@ BANDWIDTH = "bandwidth term (held/white Monte Carlo)"
 CURVES = "theory curves"
 COMPARISONS = "comparisons"
 FIGURES = "figures"
+MEMBER = "family member (circuit and theory)"
 OPEN_QUESTION = "open question (exact rate functions)"
 OPEN_QUESTION_FIG = "figures: open question"
 FIG1 = "figures: Fig. 1"
@@ -104,6 +108,18 @@ def circuit_unlimited_s(phase_seconds: float, timing: Mapping | None) -> float:
     return min(phase_seconds, float(before) + float(longest))
 
 
+def member_unlimited_s(phase_seconds: float, timing: Mapping | None) -> float:
+    """A family member with unlimited cores: its runs (calibrations, then their longest deck:
+    :func:`circuit_unlimited_s`) followed by its analysis (``analysis_s``), at most the
+    phase's measured duration; the phase's duration without a complete timing record."""
+    if not timing or timing.get("analysis_s") is None:
+        return phase_seconds
+    runs = circuit_unlimited_s(math.inf, timing)
+    if not math.isfinite(runs):
+        return phase_seconds
+    return min(phase_seconds, runs + float(timing["analysis_s"]))
+
+
 def bandwidth_unlimited_s(phase_seconds: float, timing: Mapping | None) -> float:
     """An experiment's bandwidth term with unlimited cores: its thread's own seconds (noise
     draw, jackknives) plus its longest Monte Carlo chunk, at most the phase's measured
@@ -123,7 +139,8 @@ def report_graph(phases: Sequence[Mapping], circuit: Mapping | None = None,
                  bandwidth: Mapping | None = None) -> dict:
     """The report's dependency graph (module docstring) from its phase timeline: key
     ``(phase, experiment)`` -> ``(seconds, deps)``.  A phase recorded twice under one key
-    (none today) counts its total.  ``circuit``: experiment -> its circuit timing record;
+    (none today) counts its total.  ``circuit``: experiment (or family member) -> its
+    circuit timing record (a member's with its ``analysis_s``);
     ``bandwidth``: experiment -> its bandwidth terms' timing record."""
     circuit = circuit or {}
     bandwidth = bandwidth or {}
@@ -138,6 +155,8 @@ def report_graph(phases: Sequence[Mapping], circuit: Mapping | None = None,
             secs[key] = circuit_unlimited_s(secs[key], circuit.get(key[1]))
         elif key[0] == BANDWIDTH:
             secs[key] = bandwidth_unlimited_s(secs[key], bandwidth.get(key[1]))
+        elif key[0] == MEMBER:
+            secs[key] = member_unlimited_s(secs[key], circuit.get(key[1]))
     runs = [k for k in secs if k[0] == CIRCUIT]
     nodes: dict = {}
     for key, s in secs.items():

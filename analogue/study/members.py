@@ -36,6 +36,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -53,7 +54,13 @@ from .observables import jackknife_difference, subset
 from ..theory.kolmogorov_feller import default_spacing
 from ..theory import family
 from ..circuit.runner import Runner
-from ..circuit.simulate import simulate
+from ..circuit.decks import run_ensemble
+from ..circuit.deck_size import MIN_CALIBRATED_REPLICA_HOLDS as MIN_DECK_HOLDS
+from ..circuit.deck_size import choose_deck_size
+from ..circuit.tolerances import MIN_CALIBRATED_REPLICA_HOLDS as MIN_TOLERANCE_HOLDS
+from ..circuit.tolerances import resolve_spec
+from ..cores import usable_cpus
+from .runs import _run_jobs
 from ..montecarlo import simulate_sde
 from ..theory.exact import stationary_moments as _sm
 from ..theory.weak_noise_family import quasi_potential
@@ -294,17 +301,71 @@ def _null_se(o: C.Observable, law: C.LawMoments, n: int) -> float:
 
 
 # ------------------------------------------------------------------------------ runs
-def _circuit(exp: Experiment, *, v0, t_end: float, replicas: int, seed: int, sizes: MemberSizes,
-             runner: Runner, spec=None, per_deck: int | None = None) -> Ensemble:
-    """One circuit run through :func:`analogue.simulate` (seeded, stored).  ``per_deck``
-    fixes the deck size, so that a re-run of the first deck with ``spec`` (the integration
-    check) sees the same noise: a deck's noise depends on (seed, deck index, deck size).
-    ``runner``: how the decks run (:meth:`RunOptions.runner`)."""
-    if per_deck is not None:
-        runner = runner.replace(replicas_per_deck=per_deck)
-    return simulate(exp.model, v0=v0, t_end=t_end, replicas=replicas, seed=seed,
-                    sample_dt=sizes.sample_dt, circuit=exp.spec if spec is None else spec,
-                    runner=runner)
+@dataclass(frozen=True)
+class _Run:
+    """One circuit run of a member (seeded, stored), as :func:`analogue.simulate` makes it.
+    ``per_deck`` fixes the deck size, so that a re-run of the first deck with ``spec`` (the
+    integration check) sees the same noise: a deck's noise depends on (seed, deck index,
+    deck size); ``spec`` None: the experiment's circuit."""
+
+    name: str
+    v0: Any
+    t_end: float
+    replicas: int
+    seed: int
+    spec: Any = None
+    per_deck: int | None = None
+
+
+def _member_circuits(exp: Experiment, sizes: MemberSizes, runner: Runner, runs: list[_Run],
+                     t_start: float) -> tuple[dict[str, Ensemble], dict]:
+    """``{run name: ensemble}`` of a member's runs, each as :func:`analogue.simulate` makes
+    it (the same calibrations, store keys, decks and ``meta``), and their timing.
+
+    Every run's tolerances and deck size are chosen first (:func:`_calibrated`), then the
+    runs' decks share one pool of ``runner``'s workers, in the order given (longest first, as
+    the paper's runs: :func:`analogue.study.runs._run_jobs`).  Before, the runs went one
+    after another: the spring's 100x-tighter check (one deck of 8 replicas) started only
+    after the release run's four decks were done.  Timing: seconds from ``t_start`` to the
+    end of the calibrations (``before_decks_s``) and the longest deck run here
+    (``longest_deck_s``; 0 when every deck came from the store), which is what the runs take
+    with unlimited cores (:mod:`analogue.study.critical_path`); ``runner``: how the decks
+    run (:meth:`RunOptions.runner`)."""
+    jobs = [_calibrated(exp, r, runner) for r in runs]
+    t_decks = time.perf_counter()
+
+    def job(r: _Run, spec, per_deck: int, why: dict) -> Callable[[Runner], Ensemble]:
+        return lambda pool: run_ensemble(exp.model, spec, v0=r.v0, t_end=r.t_end,
+                                         replicas=r.replicas, seed=r.seed,
+                                         sample_dt=sizes.sample_dt,
+                                         runner=pool.replace(replicas_per_deck=per_deck), **why)
+    done = _run_jobs([(r.name, job(r, *j)) for r, j in zip(runs, jobs)], runner)
+    ran = [float(w) for e in done.values() for w in e.meta.get("ran_deck_wall_times") or ()
+           if w is not None]
+    return done, {"before_decks_s": round(t_decks - t_start, 3),
+                  "longest_deck_s": round(max(ran, default=0.0), 3), "decks_run": len(ran)}
+
+
+def _calibrated(exp: Experiment, r: _Run, runner: Runner) -> tuple[Any, int, dict]:
+    """(spec with its tolerances set, replicas per deck, ``meta`` records of how they were
+    chosen) of one run, chosen as :func:`analogue.simulate` chooses them when given this run
+    (its tolerance and deck-size calibrations, with their minimum sizes), to be run by
+    :func:`analogue.circuit.decks.run_ensemble`."""
+    spec = exp.spec if r.spec is None else r.spec
+    run = runner if r.per_deck is None else runner.replace(replicas_per_deck=r.per_deck)
+    tol = deck = None
+    if spec.unset_tolerances:
+        spec, tol = resolve_spec(exp.model, spec, replicas=r.replicas, t_end=r.t_end,
+                                 runner=run.for_calibration(),
+                                 min_replica_holds=MIN_TOLERANCE_HOLDS)
+    per_deck = run.replicas_per_deck
+    if per_deck is None:
+        deck = choose_deck_size(exp.model, spec, replicas=r.replicas, t_end=r.t_end,
+                                workers=run.workers or usable_cpus(),
+                                runner=run.for_calibration(), min_replica_holds=MIN_DECK_HOLDS)
+        per_deck = deck.replicas_per_deck
+    return spec, per_deck, {"tolerances": tol.as_dict() if tol is not None else None,
+                            "deck_size": deck.as_dict() if deck is not None else None}
 
 
 def _analysed(exp: Experiment, ens: Ensemble) -> Ensemble:
@@ -336,6 +397,9 @@ class MemberRuns:
     check: Ensemble
     stationary: Ensemble | None = None
     seeds: dict = field(default_factory=dict)
+    # how long the runs took: before_decks_s (calibrations), longest_deck_s, decks_run
+    # (_run_member_jobs); a member's critical path (analogue.study.critical_path)
+    timing: dict = field(default_factory=dict)
 
     @property
     def v0(self) -> float:
@@ -372,48 +436,50 @@ def member_runs(exp: Experiment, opts=None, *, quick: bool | None = None,
 def _release_runs(exp: Experiment, runner: Runner, *, sizes: MemberSizes, quick: bool, plan: SeedPlan,
                   tick: Callable) -> MemberRuns:
     """The spring's runs: the release from x0 at rest and its first deck 100x tighter."""
+    t_start = time.perf_counter()
     seed, name, m = plan.member_circuit, exp.name, exp.model
-    tick(f"{name}: circuit run from x0 = {m.x0:g} ({sizes.transition_replicas} replicas)")
-    circ = _circuit(exp, v0=0.0, t_end=sizes.stationary_t_end,
-                    replicas=sizes.transition_replicas, seed=seed, sizes=sizes, runner=runner,
-                    per_deck=CHECK_REPLICAS)
-    tick(f"{name}: integration check (first {CHECK_REPLICAS} replicas, 100x tighter)")
-    chk = _circuit(exp, v0=0.0, t_end=sizes.stationary_t_end, replicas=CHECK_REPLICAS,
-                   seed=seed, sizes=sizes, runner=runner, spec=exp.check_spec(),
-                   per_deck=CHECK_REPLICAS)
-    return MemberRuns(exp, sizes, quick, transition=circ, check=chk,
-                      seeds={"transition": seed, "check_transition": seed})
+    tick(f"{name}: circuit run from x0 = {m.x0:g} ({sizes.transition_replicas} replicas) and "
+         f"its integration check (first {CHECK_REPLICAS} replicas, 100x tighter)")
+    # the check first: one deck of 5x a nominal deck's cost
+    runs = [_Run("check", 0.0, sizes.stationary_t_end, CHECK_REPLICAS, seed,
+                 exp.check_spec(), CHECK_REPLICAS),
+            _Run("release", 0.0, sizes.stationary_t_end, sizes.transition_replicas, seed,
+                 per_deck=CHECK_REPLICAS)]
+    done, timing = _member_circuits(exp, sizes, runner, runs, t_start)
+    return MemberRuns(exp, sizes, quick, transition=done["release"], check=done["check"],
+                      seeds={"transition": seed, "check_transition": seed}, timing=timing)
 
 
 def _one_d_runs(exp: Experiment, runner: Runner, *, sizes: MemberSizes, quick: bool, plan: SeedPlan,
                 tick: Callable) -> MemberRuns:
     """A 1-D member's runs: stationary (from the start model's law), transition (from
     ``exp.v0[0]``, with ``histogram_times``) and the stationary run's first deck 100x
-    tighter."""
+    tighter; none needs another's result, so their decks share one pool."""
+    t_start = time.perf_counter()
     seed, name = plan.member_circuit, exp.name
     v0_stat = _stationary_start(exp, sizes, plan)
-    tick(f"{name}: stationary circuit run ({sizes.stationary_replicas} x "
-         f"{sizes.stationary_t_end:g})")
-    stat = _circuit(exp, v0=v0_stat, t_end=sizes.stationary_t_end,
-                    replicas=sizes.stationary_replicas, seed=seed, sizes=sizes, runner=runner,
-                    per_deck=CHECK_REPLICAS)
     v00 = float(exp.v0[0])
     times = [float(t) for t in exp.histogram_times]
-    trans = None   # no histogram_times: no transition run (max(times) crashed)
+    tick(f"{name}: stationary circuit run ({sizes.stationary_replicas} x "
+         f"{sizes.stationary_t_end:g})" + (f", transition circuit run from v0 = {v00:g} "
+                                            f"({sizes.transition_replicas} replicas)"
+                                            if times else "")
+         + f", integration check (first {CHECK_REPLICAS} stationary replicas, 100x tighter)")
+    # longest first: the check (one deck of 5x a nominal deck's cost), the stationary run,
+    # the transition run (no histogram_times: none; max(times) crashed)
+    runs = [_Run("check", v0_stat[:CHECK_REPLICAS], sizes.stationary_t_end, CHECK_REPLICAS,
+                 seed, exp.check_spec(), CHECK_REPLICAS),
+            _Run("stationary", v0_stat, sizes.stationary_t_end, sizes.stationary_replicas,
+                 seed, per_deck=CHECK_REPLICAS)]
     if times:
-        tick(f"{name}: transition circuit run from v0 = {v00:g} "
-             f"({sizes.transition_replicas} replicas)")
-        trans = _circuit(exp, v0=v00, t_end=max(times), replicas=sizes.transition_replicas,
-                         seed=plan.member_transition, sizes=sizes, runner=runner)
-    tick(f"{name}: integration check (first {CHECK_REPLICAS} stationary replicas, 100x tighter)")
-    chk = _circuit(exp, v0=v0_stat[:CHECK_REPLICAS], t_end=sizes.stationary_t_end,
-                   replicas=CHECK_REPLICAS, seed=seed, sizes=sizes, runner=runner,
-                   spec=exp.check_spec(), per_deck=CHECK_REPLICAS)
+        runs.append(_Run("transition", v00, max(times), sizes.transition_replicas,
+                         plan.member_transition))
+    done, timing = _member_circuits(exp, sizes, runner, runs, t_start)
     seeds = {"stationary": seed, "check_stationary": seed}
-    if trans is not None:
+    if times:
         seeds["transition"] = plan.member_transition
-    return MemberRuns(exp, sizes, quick, transition=trans, check=chk, stationary=stat,
-                      seeds=seeds)
+    return MemberRuns(exp, sizes, quick, transition=done.get("transition"), check=done["check"],
+                      stationary=done["stationary"], seeds=seeds, timing=timing)
 
 
 # the runs of each member class (catalogue.model_class); the others: _one_d_runs
@@ -495,10 +561,19 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
     res = MemberAnalysis(exp, sizes)
     setting = _Setting(exp, sizes, SeedPlan(exp.seed), stick_window(exp),
                        progress or (lambda *_: None))
+    t_start_runs = time.perf_counter()
     runs = member_runs(exp, opts, quick=quick, progress=progress)
     res.runs = runs
+    t_runs = time.perf_counter()
     _ANALYSES.get(C.model_class(exp.model), _analyse_exact)(setting, runs, res)
     res.wall_time = time.perf_counter() - t0
+    # its parts (the report's critical path, analogue.study.critical_path): the runs'
+    # calibrations (from the start) and longest deck, then the analysis after the runs
+    # (theory, Monte Carlo reference, estimates)
+    res.provenance["timing"] = {**runs.timing,
+                                "before_decks_s": round(runs.timing.get("before_decks_s", 0.0)
+                                                        + t_start_runs - t0, 3),
+                                "analysis_s": round(res.wall_time - (t_runs - t0), 3)}
     return res
 
 

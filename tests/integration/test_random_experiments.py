@@ -11,7 +11,7 @@ stick and slip) and each is reported at a tiny size:
 
 The circuit runs are SDE ensembles of the circuit's effective model (the circuit itself has its
 own tests; here the report's half is under test): paper-model experiments through
-``run_experiment_runs``, members through ``members._circuit``.  Everything after the runs
+``run_experiment_runs``, members through ``members._member_circuits``.  Everything after the runs
 (theory, budgets, comparisons, figures, prose, page) is the report's own code.  One draw (the
 first: Gaussian noise on the paper's model) also goes through ngspice itself, calibrations
 and integration checks included (:func:`test_one_random_experiment_through_ngspice`).
@@ -115,8 +115,7 @@ def fake_runs(exp, opts, settings=None) -> ExperimentRuns:
 _NOMINAL: dict = {}
 
 
-def fake_member_circuit(exp, *, v0, t_end, replicas, seed, sizes, runner, spec=None,
-                        per_deck=None) -> Ensemble:
+def fake_member_circuit(exp, *, v0, t_end, replicas, seed, sizes, spec=None) -> Ensemble:
     """A member's circuit run, from the SDE of its effective model (the spring's position read
     back as the inductor's would be).  The integration check (``spec`` given) re-runs the
     first rows of the nominal run on the same noise: here, exactly those rows (a zero
@@ -132,6 +131,18 @@ def fake_member_circuit(exp, *, v0, t_end, replicas, seed, sizes, runner, spec=N
         e = dataclasses.replace(e, records={"x_spring": m.x0 + e.x})
     _NOMINAL[key] = e
     return e
+
+
+def fake_member_circuits(exp, sizes, runner, runs, t_start):
+    """``members._member_circuits`` from the SDE (:func:`fake_member_circuit`): the nominal
+    runs first, then the checks (``spec`` given) that re-read their first rows."""
+    out = {r.name: fake_member_circuit(exp, v0=r.v0, t_end=r.t_end, replicas=r.replicas,
+                                       seed=r.seed, sizes=sizes)
+           for r in runs if r.spec is None}
+    out.update({r.name: fake_member_circuit(exp, v0=r.v0, t_end=r.t_end, replicas=r.replicas,
+                                            seed=r.seed, sizes=sizes, spec=r.spec)
+                for r in runs if r.spec is not None})
+    return out, {}
 
 
 def _sections(path: Path) -> dict:
@@ -216,7 +227,7 @@ def _check_report(exp, res, out: Path) -> None:
 def test_random_experiment_through_the_whole_report(tmp_path, monkeypatch, i):
     monkeypatch.setenv("ANALOGUE_THEORY_CACHE", str(tmp_path / "theory"))
     monkeypatch.setattr(S, "run_experiment_runs", fake_runs)
-    monkeypatch.setattr(M, "_circuit", fake_member_circuit)
+    monkeypatch.setattr(M, "_member_circuits", fake_member_circuits)
     exp = _experiment(tmp_path, i)
     out = tmp_path / exp.name
     res = analogue.report(exp, out=out, quick=True)

@@ -127,3 +127,30 @@ def test_bandwidth_term_counts_its_thread_and_longest_chunk():
     assert report_critical_path(tl, None, band)["critical_path_s"] == pytest.approx(21.5)
     assert report_critical_path(tl, None, {"e": {"draw_s": 1.0}})["critical_path_s"] == \
         pytest.approx(21.5)                                    # incomplete record: the phase
+
+
+def test_member_counts_its_calibrations_longest_deck_and_analysis():
+    """A family member with unlimited cores: its runs' calibrations + their longest deck,
+    then its analysis after the runs; never more than the phase, and the whole phase without
+    a complete record."""
+    tl = [_ph("family member (circuit and theory)", "m", 30.0, "members"),
+          _ph("family member (circuit and theory)", "n", 8.0, "members"),
+          _ph("figures and page", None, 2.0)]
+    assert report_critical_path(tl)["critical_path_s"] == pytest.approx(32.0)   # 30 + 2
+    timing = {"m": {"before_decks_s": 1.5, "longest_deck_s": 9.0, "decks_run": 5,
+                    "analysis_s": 3.5}}
+    crit = report_critical_path(tl, timing)
+    # m: 1.5 + 9 + 3.5 = 14, + page 2 = 16 (n, with no record, 8 + 2 = 10)
+    assert crit["critical_path_s"] == pytest.approx(16.0)
+    assert crit["chain"][0] == {"phase": "family member (circuit and theory)",
+                                "experiment": "m", "seconds": 14.0}
+    timing["m"]["analysis_s"] = 25.0                          # capped at the phase's 30 s
+    assert report_critical_path(tl, timing)["critical_path_s"] == pytest.approx(32.0)
+    for incomplete in ({"before_decks_s": 1.0, "longest_deck_s": 1.0},      # no analysis
+                       {"longest_deck_s": 1.0, "analysis_s": 1.0}):         # no calibrations
+        assert report_critical_path(tl, {"m": incomplete})["critical_path_s"] == \
+            pytest.approx(32.0)
+    # a paper experiment's record (no analysis_s) leaves a member of the same name whole
+    tl2 = [_ph("family member (circuit and theory)", "m", 30.0, "members")]
+    assert report_critical_path(tl2, {"m": {"before_decks_s": 0.0, "longest_deck_s": 1.0}}
+                                )["critical_path_s"] == pytest.approx(30.0)
