@@ -24,9 +24,10 @@ import concurrent.futures as cf
 import itertools
 import queue
 import threading
+import time
 from typing import Any
 
-__all__ = ["DeckPool", "PoolView"]
+__all__ = ["DeckPool", "PoolView", "WaitClock"]
 
 
 class DeckPool(cf.Executor):
@@ -115,3 +116,48 @@ class PoolView(cf.Executor):
 
     def __repr__(self) -> str:
         return f"PoolView(priority={self.priority}, workers={self.pool.workers})"
+
+
+class WaitClock(cf.Executor):
+    """An executor in front of another that measures how long its caller only waited for a
+    free process: ``blocked_s``, the seconds in which at least one of the decks submitted
+    through it was queued and none was running (the report's critical path takes the work
+    of a calibration, whose decks queue in a shared pool behind other runs' decks, as its
+    seconds less these: with unlimited cores a deck never waits).  Submits pass through;
+    :meth:`shutdown` does nothing (the executor is its owner's)."""
+
+    def __init__(self, executor: cf.Executor, clock=time.perf_counter):
+        self.executor, self.clock = executor, clock
+        self.blocked_s = 0.0
+        self._queued = self._running = 0
+        self._since: float | None = None     # start of the current blocked interval
+        self._lock = threading.Lock()
+
+    def _update(self, queued: int, running: int) -> None:
+        with self._lock:
+            self._queued += queued
+            self._running += running
+            now = self.clock()
+            blocked = self._queued > 0 and self._running == 0
+            if blocked and self._since is None:
+                self._since = now
+            elif not blocked and self._since is not None:
+                self.blocked_s += now - self._since
+                self._since = None
+
+    def submit(self, fn, /, *args: Any, **kwargs: Any) -> cf.Future:
+        def timed():
+            self._update(-1, +1)
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                self._update(0, -1)
+        self._update(+1, 0)
+        try:
+            return self.executor.submit(timed)
+        except BaseException:
+            self._update(-1, 0)
+            raise
+
+    def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
+        pass  # the executor is its owner's

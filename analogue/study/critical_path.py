@@ -24,11 +24,12 @@ the phase, the phase's own duration.  An experiment's bandwidth term likewise ta
 drawing the noise and computing the jackknives plus the CPU seconds of its longest Monte
 Carlo chunk (:func:`analogue.study.comparisons.bandwidth_terms`; the chunks are independent,
 one core each with unlimited cores).  A family member counts its parts (the timing record of
-:func:`analogue.study.members.analyse_member`): its runs' calibrations, their longest deck,
-then its analysis after the runs (theory, Monte Carlo reference, estimates); without that
-record, or where it exceeds the phase, the phase's own duration.  Every duration is a measured one on the
-machine that ran the job, so the result is that machine's per-core speed with unlimited
-cores, not a prediction for another machine.
+:func:`analogue.study.members.analyse_member`): its runs, each its own calibrations then its
+longest deck (a run with nothing to calibrate starts its decks at once), or, if longer, its
+circuit-free part beside them (theory, Monte Carlo references), then its estimates; without
+that record, or where it exceeds the phase, the phase's own duration.  Every duration is a
+measured one on the machine that ran the job, so the result is that machine's per-core
+speed with unlimited cores, not a prediction for another machine.
 """
 from __future__ import annotations
 
@@ -110,14 +111,24 @@ def circuit_unlimited_s(phase_seconds: float, timing: Mapping | None) -> float:
 
 def member_unlimited_s(phase_seconds: float, timing: Mapping | None) -> float:
     """A family member with unlimited cores: its runs (calibrations, then their longest deck:
-    :func:`circuit_unlimited_s`) followed by its analysis (``analysis_s``), at most the
-    phase's measured duration; the phase's duration without a complete timing record."""
+    :func:`circuit_unlimited_s`; with a record per run (``runs``), the runs at once, each
+    its own calibrations then its longest deck) and, beside them from the start, its
+    circuit-free part
+    (``reference_s``: theory, Monte Carlo references; 0 when not recorded), then its
+    estimates (``analysis_s``), at most the phase's measured duration; the phase's duration
+    without a complete timing record."""
     if not timing or timing.get("analysis_s") is None:
         return phase_seconds
     runs = circuit_unlimited_s(math.inf, timing)
     if not math.isfinite(runs):
         return phase_seconds
-    return min(phase_seconds, runs + float(timing["analysis_s"]))
+    per_run = timing.get("runs")
+    if per_run:
+        # its runs at once, each its own calibrations then its longest deck
+        runs = float(timing["before_decks_s"]) + max(
+            float(r["calibration_s"]) + float(r["longest_deck_s"]) for r in per_run.values())
+    parallel = max(runs, float(timing.get("reference_s") or 0.0))
+    return min(phase_seconds, parallel + float(timing["analysis_s"]))
 
 
 def bandwidth_unlimited_s(phase_seconds: float, timing: Mapping | None) -> float:

@@ -33,8 +33,10 @@ stationary run's check only in their note (not re-run: it would double the chapt
 from __future__ import annotations
 
 import math
+import threading
 import time
 from collections.abc import Callable
+from concurrent.futures import Future
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -55,12 +57,14 @@ from ..theory.kolmogorov_feller import default_spacing
 from ..theory import family
 from ..circuit.runner import Runner
 from ..circuit.decks import run_ensemble
+from ..circuit.deck_pool import WaitClock
 from ..circuit.deck_size import MIN_CALIBRATED_REPLICA_HOLDS as MIN_DECK_HOLDS
 from ..circuit.deck_size import choose_deck_size
 from ..circuit.tolerances import MIN_CALIBRATED_REPLICA_HOLDS as MIN_TOLERANCE_HOLDS
 from ..circuit.tolerances import resolve_spec
 from ..cores import usable_cpus
 from .runs import _run_jobs
+from .schedule import result_of
 from ..montecarlo import simulate_sde
 from ..theory.exact import stationary_moments as _sm
 from ..theory.weak_noise_family import quasi_potential
@@ -322,28 +326,47 @@ def _member_circuits(exp: Experiment, sizes: MemberSizes, runner: Runner, runs: 
     """``{run name: ensemble}`` of a member's runs, each as :func:`analogue.simulate` makes
     it (the same calibrations, store keys, decks and ``meta``), and their timing.
 
-    Every run's tolerances and deck size are chosen first (:func:`_calibrated`), then the
-    runs' decks share one pool of ``runner``'s workers, in the order given (longest first, as
-    the paper's runs: :func:`analogue.study.runs._run_jobs`).  Before, the runs went one
-    after another: the spring's 100x-tighter check (one deck of 8 replicas) started only
-    after the release run's four decks were done.  Timing: seconds from ``t_start`` to the
-    end of the calibrations (``before_decks_s``) and the longest deck run here
-    (``longest_deck_s``; 0 when every deck came from the store), which is what the runs take
-    with unlimited cores (:mod:`analogue.study.critical_path`); ``runner``: how the decks
-    run (:meth:`RunOptions.runner`)."""
-    jobs = [_calibrated(exp, r, runner) for r in runs]
-    t_decks = time.perf_counter()
+    The runs share one pool of ``runner``'s workers, started in the order given (longest
+    first, as the paper's runs: :func:`analogue.study.runs._run_jobs`); each chooses its
+    tolerances and deck size (:func:`_calibrated`) and runs its decks, so that a run with
+    nothing to calibrate (the integration check: its tolerances and deck size are given)
+    starts its decks at once.  Before, the runs went one after another: the spring's
+    100x-tighter check (one deck of 8 replicas over its 40 tau_m) started only after the
+    release run's calibrations and four decks.  Timing (:mod:`analogue.study.critical_path`:
+    what the runs take with unlimited cores): ``before_decks_s`` from ``t_start`` to the
+    runs' start, then per run its calibrations' seconds and its longest deck (``runs``), and
+    the longest deck of all (``longest_deck_s``; 0 when every deck came from the store);
+    ``runner``: how the decks run (:meth:`RunOptions.runner`).  A run's calibrations count
+    their seconds less those in which they only waited for a free ngspice process
+    (:class:`analogue.circuit.deck_pool.WaitClock`): measured on the quick paper (2 cores),
+    the spring's release run took 28.1 s to calibrate, queued behind its 25.4 s check deck."""
+    timing: dict = {}
 
-    def job(r: _Run, spec, per_deck: int, why: dict) -> Callable[[Runner], Ensemble]:
-        return lambda pool: run_ensemble(exp.model, spec, v0=r.v0, t_end=r.t_end,
-                                         replicas=r.replicas, seed=r.seed,
-                                         sample_dt=sizes.sample_dt,
-                                         runner=pool.replace(replicas_per_deck=per_deck), **why)
-    done = _run_jobs([(r.name, job(r, *j)) for r, j in zip(runs, jobs)], runner)
-    ran = [float(w) for e in done.values() for w in e.meta.get("ran_deck_wall_times") or ()
-           if w is not None]
-    return done, {"before_decks_s": round(t_decks - t_start, 3),
-                  "longest_deck_s": round(max(ran, default=0.0), 3), "decks_run": len(ran)}
+    def job(r: _Run) -> Callable[[Runner], Ensemble]:
+        def run(pool: Runner) -> Ensemble:
+            t = time.perf_counter()
+            clock = WaitClock(pool.executor) if pool.executor is not None else None
+            spec, per_deck, why = _calibrated(exp, r, pool if clock is None
+                                              else pool.replace(executor=clock))
+            # its calibrations' own seconds: not those it only waited for a free ngspice
+            # process (behind the other runs' decks), which unlimited cores would not
+            timing[r.name] = time.perf_counter() - t - (clock.blocked_s if clock else 0.0)
+            return run_ensemble(exp.model, spec, v0=r.v0, t_end=r.t_end, replicas=r.replicas,
+                                seed=r.seed, sample_dt=sizes.sample_dt,
+                                runner=pool.replace(replicas_per_deck=per_deck), **why)
+        return run
+    t_jobs = time.perf_counter()
+    done = _run_jobs([(r.name, job(r)) for r in runs], runner)
+
+    def ran(e: Ensemble) -> list[float]:
+        return [float(w) for w in e.meta.get("ran_deck_wall_times") or () if w is not None]
+    return done, {"before_decks_s": round(t_jobs - t_start, 3),
+                  "longest_deck_s": round(max((w for e in done.values() for w in ran(e)),
+                                              default=0.0), 3),
+                  "decks_run": sum(len(ran(e)) for e in done.values()),
+                  "runs": {name: {"calibration_s": round(timing[name], 3),
+                                  "longest_deck_s": round(max(ran(e), default=0.0), 3)}
+                           for name, e in done.items()}}
 
 
 def _calibrated(exp: Experiment, r: _Run, runner: Runner) -> tuple[Any, int, dict]:
@@ -561,20 +584,44 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
     res = MemberAnalysis(exp, sizes)
     setting = _Setting(exp, sizes, SeedPlan(exp.seed), stick_window(exp),
                        progress or (lambda *_: None))
+    cls = C.model_class(exp.model)
+    # the circuit-free part (theory, Monte Carlo references, noise pairs) beside the runs,
+    # which mostly wait for their decks (in the study's deck pool)
+    reference = _in_thread(lambda: _REFERENCES.get(cls, _exact_reference)(setting),
+                           f"analogue-{exp.name}-reference")
     t_start_runs = time.perf_counter()
     runs = member_runs(exp, opts, quick=quick, progress=progress)
     res.runs = runs
-    t_runs = time.perf_counter()
-    _ANALYSES.get(C.model_class(exp.model), _analyse_exact)(setting, runs, res)
+    ref, reference_s = result_of(reference)
+    t_ref = time.perf_counter()
+    _ANALYSES.get(cls, _analyse_exact)(setting, runs, res, ref)
     res.wall_time = time.perf_counter() - t0
     # its parts (the report's critical path, analogue.study.critical_path): the runs'
-    # calibrations (from the start) and longest deck, then the analysis after the runs
-    # (theory, Monte Carlo reference, estimates)
+    # calibrations (from the start) and longest deck; beside them its circuit-free part
+    # (reference_s, from the start); then, once both are done, the estimates (analysis_s)
     res.provenance["timing"] = {**runs.timing,
                                 "before_decks_s": round(runs.timing.get("before_decks_s", 0.0)
                                                         + t_start_runs - t0, 3),
-                                "analysis_s": round(res.wall_time - (t_runs - t0), 3)}
+                                "reference_s": round(reference_s, 3),
+                                "analysis_s": round(res.wall_time - (t_ref - t0), 3)}
     return res
+
+
+def _in_thread(fn: Callable[[], Any], name: str) -> Future:
+    """``fn()`` and its wall seconds, in a daemon thread (as the study's Workers: an interrupt
+    does not wait for numerics under way), as a future."""
+    fut: Future = Future()
+
+    def run() -> None:
+        if not fut.set_running_or_notify_cancel():
+            return
+        t = time.perf_counter()
+        try:
+            fut.set_result((fn(), time.perf_counter() - t))
+        except BaseException as exc:  # handed to whoever waits for the result
+            fut.set_exception(exc)
+    threading.Thread(target=run, name=name, daemon=True).start()
+    return fut
 
 
 @dataclass(frozen=True)
@@ -589,17 +636,12 @@ class _Setting:
     tick: Callable
 
 
-def _analyse_spring(s: _Setting, runs: MemberRuns, res: MemberAnalysis) -> None:
-    """The spring (state (x, v)): the release run against the Monte Carlo, and the stationary
-    identities."""
-    exp, sizes, plan, thr, tick = s.exp, s.sizes, s.plan, s.thr, s.tick
-    m, m_eff, burn, seed, name = (exp.model, exp.mapping().model_effective, exp.burn_in,
-                                  plan.member_circuit, exp.name)
-
-    assert runs.transition is not None   # the spring's release run
-    circ, chk = _analysed(exp, runs.transition), _analysed(exp, runs.check)
-    first = _xs_subset(circ, np.arange(CHECK_REPLICAS))
-    tick(f"{name}: Monte Carlo reference ({sizes.mc_replicas} replicas)")
+def _spring_reference(s: _Setting) -> dict:
+    """The spring's circuit-free part: its Monte Carlo reference, the ideal model and the
+    circuit's smoothed one on the same noise (the release from x0 at rest)."""
+    exp, sizes, plan = s.exp, s.sizes, s.plan
+    m, m_eff = exp.model, exp.mapping().model_effective
+    s.tick(f"{exp.name}: Monte Carlo reference ({sizes.mc_replicas} replicas)")
     mc = simulate_sde(m, v0=0.0, t_end=sizes.stationary_t_end, replicas=sizes.mc_replicas,
                       seed=plan.member_monte_carlo, sample_dt=sizes.sample_dt)
     mc.meta["_x0"] = m.x0
@@ -607,6 +649,19 @@ def _analyse_spring(s: _Setting, runs: MemberRuns, res: MemberAnalysis) -> None:
                           replicas=sizes.mc_replicas, seed=plan.member_monte_carlo,
                           sample_dt=sizes.sample_dt)
     mc_eff.meta["_x0"], mc_eff.meta["_model_eff"] = m.x0, m_eff
+    return {"mc": mc, "mc_eff": mc_eff}
+
+
+def _analyse_spring(s: _Setting, runs: MemberRuns, res: MemberAnalysis, ref: dict) -> None:
+    """The spring (state (x, v)): the release run against the Monte Carlo (``ref``:
+    :func:`_spring_reference`), and the stationary identities."""
+    exp, sizes, plan, thr = s.exp, s.sizes, s.plan, s.thr
+    m, burn, seed, name = exp.model, exp.burn_in, plan.member_circuit, exp.name
+
+    assert runs.transition is not None   # the spring's release run
+    circ, chk = _analysed(exp, runs.transition), _analysed(exp, runs.check)
+    first = _xs_subset(circ, np.arange(CHECK_REPLICAS))
+    mc, mc_eff = ref["mc"], ref["mc_eff"]
     obs = C.member_observables(m)
     fns = _estimators(exp, obs, thr)
     integ = _paired(fns, chk, first)
@@ -654,19 +709,16 @@ def _analyse_spring(s: _Setting, runs: MemberRuns, res: MemberAnalysis) -> None:
                                               "plan": plan.describe()})
 
 
-def _analyse_exact(s: _Setting, runs: MemberRuns, res: MemberAnalysis) -> None:
-    """A 1-D member with an exact solver: every row against the exact finite-noise numerics
-    of :mod:`analogue.theory.family`."""
+def _exact_reference(s: _Setting) -> dict:
+    """A 1-D member's circuit-free part (:func:`_analyse_exact` reads it): the exact values
+    of its rows for the ideal and the smoothed model, the transition laws, the held-minus-
+    white noise pairs (:func:`_band`) and the exact laws its figures draw."""
     exp, sizes, plan, thr, tick = s.exp, s.sizes, s.plan, s.thr, s.tick
-    m, m_eff, burn, seed, name = (exp.model, exp.mapping().model_effective, exp.burn_in,
-                                  plan.member_circuit, exp.name)
-    assert runs.stationary is not None   # 1-D members have one
-    stat, chk = _analysed(exp, runs.stationary), _analysed(exp, runs.check)
-    trans = None if runs.transition is None else _analysed(exp, runs.transition)
+    m, m_eff = exp.model, exp.mapping().model_effective
     v00 = float(exp.v0[0])
     # no histogram_times: no transition run, stationary rows only
-    times = [float(t) for t in exp.histogram_times] if trans is not None else []
-    tick(f"{name}: exact theory")
+    times = [float(t) for t in exp.histogram_times]
+    tick(f"{exp.name}: exact theory")
     obs = C.member_observables(m, v0=v00, times=times)
     stat_obs = [o for o in obs if o.run == C.STATIONARY]
     trans_obs = [o for o in obs if o.run == C.TRANSITION]
@@ -679,17 +731,57 @@ def _analyse_exact(s: _Setting, runs: MemberRuns, res: MemberAnalysis) -> None:
         laws = dict(zip(times, _transition_laws(exp, m, v00, times, thr)))
         if not pure_shot:
             exact_eff.update(_transition_theory(exp, m_eff, v00, times, trans_obs, thr))
+    groups: list[tuple] = [(C.STATIONARY, stat_obs,
+                            family.sample_stationary(m, 128, plan.member_band_v0),
+                            sizes.stationary_t_end)]
+    if times:
+        groups.append((C.TRANSITION, trans_obs, v00, max(times)))
+    bands = {run: _band(exp, _estimators(exp, run_obs, thr), v0_band, T,
+                        128 if np.ndim(v0_band) else 256, plan.member_band,
+                        sample_dt=sizes.sample_dt)
+             for run, run_obs, v0_band, T in groups}
+    # the figures' exact laws
+    v, dens, atom = family.stationary_law(m, h=_h(exp) / 2)
+    fig: dict = {"v": v, "density": dens, "atom": atom}
+    if m.stribeck is not None or m.cubic > 0:
+        fig["paper_density"], _ = _paper_law(m, v)
+        fig["paper_moments"] = _sm(m.replace(stribeck=None, cubic=0.0))
+    if m.shot is None:
+        fig["weak_noise"] = weak_noise_law(m, v, dens)
+    if times:
+        vt = np.linspace(min(v.min(), v00), max(v.max(), v00), 1201)
+        fig["propagator"] = {
+            "v": vt, "density": family.propagator(m, vt, np.asarray(times), v00, h=_h(exp)),
+            "atom": (np.atleast_1d(family.propagator_atom(m, np.asarray(times), v00, h=_h(exp)))
+                     if m.shot is not None else np.zeros(len(times)))}
+    return {"obs": obs, "exact": exact, "exact_eff": exact_eff, "laws": laws, "bands": bands,
+            "figures": fig, "moments": family.stationary_moments(m)}
+
+
+def _analyse_exact(s: _Setting, runs: MemberRuns, res: MemberAnalysis, ref: dict) -> None:
+    """A 1-D member with an exact solver: every row against the exact finite-noise numerics
+    of :mod:`analogue.theory.family` (``ref``: :func:`_exact_reference`)."""
+    exp, sizes, plan, thr, tick = s.exp, s.sizes, s.plan, s.thr, s.tick
+    m, burn, seed, name = exp.model, exp.burn_in, plan.member_circuit, exp.name
+    assert runs.stationary is not None   # 1-D members have one
+    stat, chk = _analysed(exp, runs.stationary), _analysed(exp, runs.check)
+    trans = None if runs.transition is None else _analysed(exp, runs.transition)
+    v00 = float(exp.v0[0])
+    # no histogram_times: no transition run, stationary rows only
+    times = [float(t) for t in exp.histogram_times] if trans is not None else []
+    obs = ref["obs"]
+    stat_obs = [o for o in obs if o.run == C.STATIONARY]
+    trans_obs = [o for o in obs if o.run == C.TRANSITION]
+    exact, exact_eff, laws = ref["exact"], ref["exact_eff"], ref["laws"]
+    pure_shot = C.model_class(m) == C.SHOT_MEMBER
     integ = _paired(_estimators(exp, stat_obs, thr), chk,
                     _xs_subset(stat, np.arange(CHECK_REPLICAS)))
     bias = exp.mapping().bias
-    groups: list[tuple] = [(stat_obs, stat, family.sample_stationary(m, 128, plan.member_band_v0),
-                            sizes.stationary_t_end)]
+    groups: list[tuple] = [(stat_obs, stat, ref["bands"][C.STATIONARY])]
     if trans is not None:
-        groups.append((trans_obs, trans, v00, max(times)))
-    for run_obs, ens, v0_band, T in groups:
+        groups.append((trans_obs, trans, ref["bands"][C.TRANSITION]))
+    for run_obs, ens, band in groups:
         fns = _estimators(exp, run_obs, thr)
-        band = _band(exp, fns, v0_band, T, 128 if np.ndim(v0_band) else 256, plan.member_band,
-                     sample_dt=sizes.sample_dt)
         for o in run_obs:
             c, se = _jk(fns[o.label], ens)
             th_model = float(exact[o.label])
@@ -726,18 +818,19 @@ def _analyse_exact(s: _Setting, runs: MemberRuns, res: MemberAnalysis) -> None:
             res.comparisons.append(compare(name, o.label, c, se, th_model, "exact", b, note))
 
     # figure data: histograms and exact laws (computed here: the figures only draw)
-    v, dens, atom = family.stationary_law(m, h=_h(exp) / 2)
+    laws_fig = ref["figures"]
     vs = _after(stat, burn).ravel()
-    fig = {"v": v, "density": dens, "atom": atom, "samples": vs, "threshold": thr,
+    fig = {"v": laws_fig["v"], "density": laws_fig["density"], "atom": laws_fig["atom"],
+           "samples": vs, "threshold": thr,
            "atom_measured": float(np.mean(np.abs(vs) < thr)), "label": name}
     if m.stribeck is not None or m.cubic > 0:
-        base = m.replace(stribeck=None, cubic=0.0)  # the paper's law at the same Delta
-        fig["paper_density"], _ = _paper_law(m, v)
+        # the paper's law at the same Delta
+        fig["paper_density"] = laws_fig["paper_density"]
         fig["paper_label"] = f"paper's law (Delta = {m.delta:g}, no extension)"
-        bm = _sm(base)
+        bm = laws_fig["paper_moments"]
         res.facts.update(paper_mean=bm.mean, paper_variance=bm.variance)
     if m.shot is None:
-        wnl = weak_noise_law(m, v, dens)
+        wnl = laws_fig["weak_noise"]
         fig.update(wnl)
         res.facts.update(weak_noise_l1=wnl["weak_noise_l1"],
                          u_minima=[float(x) for x in wnl["u_minima"]],
@@ -745,17 +838,13 @@ def _analyse_exact(s: _Setting, runs: MemberRuns, res: MemberAnalysis) -> None:
                          u_barrier_tops=[float(x) for x in wnl["u_barrier_tops"]])
     res.figures["stationary"] = fig
     if trans is not None:
-        vt = np.linspace(min(v.min(), v00), max(v.max(), v00), 1201)
         res.figures["propagator"] = {
-            "times": times, "v0": v00, "v": vt,
-            "density": family.propagator(m, vt, np.asarray(times), v00, h=_h(exp)),
-            "atom": (np.atleast_1d(family.propagator_atom(m, np.asarray(times), v00, h=_h(exp)))
-                     if m.shot is not None else np.zeros(len(times))),
+            "times": times, "v0": v00, **laws_fig["propagator"],
             "samples": [trans.at(t) for t in times], "threshold": thr}
     if m.a != 0:
         tick(f"{name}: work rate function")
         res.figures["rate_function"] = rate_function_data(m, stat, burn)
-    sm = family.stationary_moments(m)
+    sm = ref["moments"]
     res.facts.update(mean=sm.mean, variance=sm.variance, p_zero=sm.p_zero,
                      p_zero_measured=fig["atom_measured"])
     res.provenance = _prov(exp, stat, sizes, {
@@ -764,17 +853,45 @@ def _analyse_exact(s: _Setting, runs: MemberRuns, res: MemberAnalysis) -> None:
         "band": plan.member_band, "plan": plan.describe()})
 
 
-def _analyse_monte_carlo(s: _Setting, runs: MemberRuns, res: MemberAnalysis) -> None:
+def _monte_carlo_reference(s: _Setting) -> dict:
+    """The circuit-free part of a 1-D member without exact theory
+    (:func:`_analyse_monte_carlo` reads it): per run (stationary, transition) the Monte Carlo
+    of the ideal and of the smoothed model from the circuit's own start states (the stationary
+    run's draws, the transition run's v0) and the held-minus-white noise pair (:func:`_band`)."""
+    exp, sizes, plan, thr, tick = s.exp, s.sizes, s.plan, s.thr, s.tick
+    m, m_eff = exp.model, exp.mapping().model_effective
+    v00 = float(exp.v0[0])
+    times = [float(t) for t in exp.histogram_times]
+    obs = C.member_observables(m, v0=v00, times=times)
+    v0_stat = _stationary_start(exp, sizes, plan)   # the stationary run's start states
+    tick(f"{exp.name}: Monte Carlo reference ({sizes.mc_replicas} replicas)")
+    groups: list[tuple] = [(C.STATIONARY, _resampled(v0_stat, sizes.mc_replicas),
+                            sizes.stationary_t_end, _resampled(v0_stat, 128), 128)]
+    if times:
+        groups.append((C.TRANSITION, v00, max(times), v00, 256))
+    out: dict = {}
+    for run, v0, T, v0_band, n_band in groups:
+        fns = _estimators(exp, [o for o in obs if o.run == run], thr)
+        mc, mc_eff = (monte_carlo_reference(model, v0=v0, t_end=T, replicas=sizes.mc_replicas,
+                                            seed=plan.member_monte_carlo,
+                                            sample_dt=sizes.sample_dt) for model in (m, m_eff))
+        out[run] = (mc, mc_eff, _band(exp, fns, v0_band, T, n_band, plan.member_band,
+                                      sample_dt=sizes.sample_dt))
+    return out
+
+
+def _analyse_monte_carlo(s: _Setting, runs: MemberRuns, res: MemberAnalysis,
+                         ref: dict) -> None:
     """A 1-D member without exact theory (coloured noise, catalogue.MONTE_CARLO_MEMBER): every
-    row against the Monte Carlo of the same model (:func:`monte_carlo_reference`, from the
+    row against the Monte Carlo of the same model (``ref``: :func:`_monte_carlo_reference`, from the
     circuit's own start states: the stationary run's draws, the transition run's v0).  SE: the
     circuit's and the Monte Carlo's replica jackknives in quadrature; smoothing: the Monte
     Carlo at the circuit's epsilon minus the reference on the same noise (paired); bandwidth:
     the held-input minus white-input Monte Carlo on common increments (:func:`_band`);
     integration: the stationary run's first deck re-run 100x tighter; element: the catalogue's
     terms."""
-    exp, sizes, plan, thr, tick = s.exp, s.sizes, s.plan, s.thr, s.tick
-    m, m_eff, name = exp.model, exp.mapping().model_effective, exp.name
+    exp, sizes, plan, thr = s.exp, s.sizes, s.plan, s.thr
+    m, name = exp.model, exp.name
     assert runs.stationary is not None   # 1-D members have one
     stat, chk = _analysed(exp, runs.stationary), _analysed(exp, runs.check)
     trans = None if runs.transition is None else _analysed(exp, runs.transition)
@@ -786,20 +903,12 @@ def _analyse_monte_carlo(s: _Setting, runs: MemberRuns, res: MemberAnalysis) -> 
     integ = _paired(_estimators(exp, stat_obs, thr), chk,
                     _xs_subset(stat, np.arange(CHECK_REPLICAS)))
     bias = exp.mapping().bias
-    v0_stat = _stationary_start(exp, sizes, plan)   # the stationary run's start states
-    tick(f"{name}: Monte Carlo reference ({sizes.mc_replicas} replicas)")
-    groups: list[tuple] = [(stat_obs, stat, _resampled(v0_stat, sizes.mc_replicas),
-                            sizes.stationary_t_end)]
+    groups: list[tuple] = [(stat_obs, stat, *ref[C.STATIONARY])]
     if trans is not None:
-        groups.append((trans_obs, trans, v00, max(times)))
+        groups.append((trans_obs, trans, *ref[C.TRANSITION]))
     stationary: dict = {}
-    for run_obs, ens, v0, T in groups:
+    for run_obs, ens, mc, mc_eff, band in groups:
         fns = _estimators(exp, run_obs, thr)
-        mc, mc_eff = (monte_carlo_reference(model, v0=v0, t_end=T, replicas=sizes.mc_replicas,
-                                            seed=plan.member_monte_carlo,
-                                            sample_dt=sizes.sample_dt) for model in (m, m_eff))
-        band = _band(exp, fns, _resampled(v0_stat, 128) if ens is stat else v00, T,
-                     128 if ens is stat else 256, plan.member_band, sample_dt=sizes.sample_dt)
         for o in run_obs:
             c, se = _jk(fns[o.label], ens)
             ref, se_r = _jk(fns[o.label], mc)
@@ -857,8 +966,12 @@ def _resampled(v0: np.ndarray, n: int) -> np.ndarray:
 
 
 # the analysis of each member class (catalogue.model_class); the others: _analyse_exact
-_ANALYSES: dict[str, Callable[[_Setting, MemberRuns, MemberAnalysis], None]] = {
+_ANALYSES: dict[str, Callable[[_Setting, MemberRuns, MemberAnalysis, dict], None]] = {
     C.SPRING_MEMBER: _analyse_spring, C.MONTE_CARLO_MEMBER: _analyse_monte_carlo}
+# ... and its circuit-free part (theory, Monte Carlo references, noise pairs), which runs
+# beside the circuit runs; the others: _exact_reference
+_REFERENCES: dict[str, Callable[[_Setting], dict]] = {
+    C.SPRING_MEMBER: _spring_reference, C.MONTE_CARLO_MEMBER: _monte_carlo_reference}
 
 
 

@@ -30,6 +30,10 @@ def test_pooled_member_runs_are_simulate_s_runs(tmp_path):
     assert set(done) == {"check", "nominal", "free"}
     assert timing["decks_run"] == sum(len(e.meta["deck_sha256"]) for e in done.values())
     assert timing["longest_deck_s"] > 0 and timing["before_decks_s"] >= 0
+    per_run = timing["runs"]
+    assert set(per_run) == set(done)
+    assert max(r["longest_deck_s"] for r in per_run.values()) == timing["longest_deck_s"]
+    assert all(r["calibration_s"] >= 0 for r in per_run.values())
     for r in runs:
         run = runner if r.per_deck is None else runner.replace(replicas_per_deck=r.per_deck)
         ref = simulate(exp.model, v0=r.v0, t_end=r.t_end, replicas=r.replicas, seed=r.seed,

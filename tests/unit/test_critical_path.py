@@ -154,3 +154,28 @@ def test_member_counts_its_calibrations_longest_deck_and_analysis():
     tl2 = [_ph("family member (circuit and theory)", "m", 30.0, "members")]
     assert report_critical_path(tl2, {"m": {"before_decks_s": 0.0, "longest_deck_s": 1.0}}
                                 )["critical_path_s"] == pytest.approx(30.0)
+
+
+def test_member_circuit_free_part_runs_beside_its_runs():
+    """A member's theory and Monte Carlo references run beside its circuit runs: the longer
+    of the two, then its estimates."""
+    tl = [_ph("family member (circuit and theory)", "m", 30.0, "members")]
+    timing = {"m": {"before_decks_s": 1.0, "longest_deck_s": 6.0, "reference_s": 4.0,
+                    "analysis_s": 2.0}}
+    assert report_critical_path(tl, timing)["critical_path_s"] == pytest.approx(9.0)  # 7 + 2
+    timing["m"]["reference_s"] = 12.0
+    assert report_critical_path(tl, timing)["critical_path_s"] == pytest.approx(14.0)  # 12 + 2
+
+
+def test_member_runs_each_count_their_own_calibrations_and_longest_deck():
+    """A member's runs start at once: a run with nothing to calibrate (the integration
+    check) does not wait for another run's calibrations."""
+    tl = [_ph("family member (circuit and theory)", "m", 40.0, "members")]
+    timing = {"m": {"before_decks_s": 0.5, "longest_deck_s": 15.0, "reference_s": 3.0,
+                    "analysis_s": 2.0,
+                    "runs": {"check": {"calibration_s": 0.0, "longest_deck_s": 15.0},
+                             "release": {"calibration_s": 10.0, "longest_deck_s": 3.0}}}}
+    # 0.5 + max(0 + 15, 10 + 3) + 2 = 17.5 (calibrations first for all: 0.5 + 10 + 15 + 2)
+    assert report_critical_path(tl, timing)["critical_path_s"] == pytest.approx(17.5)
+    timing["m"]["runs"]["release"]["longest_deck_s"] = 9.0          # 10 + 9 = 19 > 15
+    assert report_critical_path(tl, timing)["critical_path_s"] == pytest.approx(21.5)

@@ -6,7 +6,7 @@ import time
 import pytest
 
 from analogue import Runner
-from analogue.circuit.deck_pool import DeckPool
+from analogue.circuit.deck_pool import DeckPool, WaitClock
 from analogue.study.runs import _run_jobs
 
 
@@ -111,3 +111,32 @@ def test_an_experiments_jobs_on_the_study_pool_cancel_only_their_own_decks():
         _run_jobs([("bad", failing), ("slow", slow)], runner)
     assert [f.result(timeout=10) for f in other] == ["member deck"] * 3
     pool.shutdown()
+
+
+def test_wait_clock_counts_only_the_time_no_deck_of_its_caller_ran():
+    """WaitClock.blocked_s: the seconds in which its caller's decks were all queued (the
+    pool's one process busy with another caller's deck), not those in which one ran; a fake
+    clock that moves only when the test moves it makes the sums exact."""
+    now = [0.0]
+    pool = DeckPool(1)
+    try:
+        gate, started = threading.Event(), threading.Event()
+        other = pool.submit(lambda: (started.set(), gate.wait(10)))
+        assert started.wait(10)
+        clock = WaitClock(pool, clock=lambda: now[0])
+
+        def deck():
+            now[0] += 3.0            # running: not blocked
+            return 7
+        f = clock.submit(deck)       # queued at t = 0 behind the other caller's deck
+        now[0] = 5.0
+        gate.set()                   # the process is free at t = 5: blocked 5 s
+        assert f.result(10) == 7 and other.result(10)
+        assert clock.blocked_s == 5.0
+        g = clock.submit(deck)       # a free process: never blocked
+        assert g.result(10) == 7
+        assert clock.blocked_s == 5.0
+        clock.shutdown()             # the pool is its owner's: still running
+        assert pool.submit(lambda: 1).result(10) == 1
+    finally:
+        pool.shutdown()
