@@ -592,9 +592,9 @@ def analyse_member(exp: Experiment | str, opts=None, *, quick: bool | None = Non
     t_start_runs = time.perf_counter()
     runs = member_runs(exp, opts, quick=quick, progress=progress)
     res.runs = runs
-    ref, reference_s = result_of(reference)
+    pre, reference_s = result_of(reference)
     t_ref = time.perf_counter()
-    _ANALYSES.get(cls, _analyse_exact)(setting, runs, res, ref)
+    _ANALYSES.get(cls, _analyse_exact)(setting, runs, res, pre)
     res.wall_time = time.perf_counter() - t0
     # its parts (the report's critical path, analogue.study.critical_path): the runs'
     # calibrations (from the start) and longest deck; beside them its circuit-free part
@@ -652,8 +652,8 @@ def _spring_reference(s: _Setting) -> dict:
     return {"mc": mc, "mc_eff": mc_eff}
 
 
-def _analyse_spring(s: _Setting, runs: MemberRuns, res: MemberAnalysis, ref: dict) -> None:
-    """The spring (state (x, v)): the release run against the Monte Carlo (``ref``:
+def _analyse_spring(s: _Setting, runs: MemberRuns, res: MemberAnalysis, pre: dict) -> None:
+    """The spring (state (x, v)): the release run against the Monte Carlo (``pre``:
     :func:`_spring_reference`), and the stationary identities."""
     exp, sizes, plan, thr = s.exp, s.sizes, s.plan, s.thr
     m, burn, seed, name = exp.model, exp.burn_in, plan.member_circuit, exp.name
@@ -661,7 +661,7 @@ def _analyse_spring(s: _Setting, runs: MemberRuns, res: MemberAnalysis, ref: dic
     assert runs.transition is not None   # the spring's release run
     circ, chk = _analysed(exp, runs.transition), _analysed(exp, runs.check)
     first = _xs_subset(circ, np.arange(CHECK_REPLICAS))
-    mc, mc_eff = ref["mc"], ref["mc_eff"]
+    mc, mc_eff = pre["mc"], pre["mc_eff"]
     obs = C.member_observables(m)
     fns = _estimators(exp, obs, thr)
     integ = _paired(fns, chk, first)
@@ -758,9 +758,9 @@ def _exact_reference(s: _Setting) -> dict:
             "figures": fig, "moments": family.stationary_moments(m)}
 
 
-def _analyse_exact(s: _Setting, runs: MemberRuns, res: MemberAnalysis, ref: dict) -> None:
+def _analyse_exact(s: _Setting, runs: MemberRuns, res: MemberAnalysis, pre: dict) -> None:
     """A 1-D member with an exact solver: every row against the exact finite-noise numerics
-    of :mod:`analogue.theory.family` (``ref``: :func:`_exact_reference`)."""
+    of :mod:`analogue.theory.family` (``pre``: :func:`_exact_reference`)."""
     exp, sizes, plan, thr, tick = s.exp, s.sizes, s.plan, s.thr, s.tick
     m, burn, seed, name = exp.model, exp.burn_in, plan.member_circuit, exp.name
     assert runs.stationary is not None   # 1-D members have one
@@ -769,17 +769,17 @@ def _analyse_exact(s: _Setting, runs: MemberRuns, res: MemberAnalysis, ref: dict
     v00 = float(exp.v0[0])
     # no histogram_times: no transition run, stationary rows only
     times = [float(t) for t in exp.histogram_times] if trans is not None else []
-    obs = ref["obs"]
+    obs = pre["obs"]
     stat_obs = [o for o in obs if o.run == C.STATIONARY]
     trans_obs = [o for o in obs if o.run == C.TRANSITION]
-    exact, exact_eff, laws = ref["exact"], ref["exact_eff"], ref["laws"]
+    exact, exact_eff, laws = pre["exact"], pre["exact_eff"], pre["laws"]
     pure_shot = C.model_class(m) == C.SHOT_MEMBER
     integ = _paired(_estimators(exp, stat_obs, thr), chk,
                     _xs_subset(stat, np.arange(CHECK_REPLICAS)))
     bias = exp.mapping().bias
-    groups: list[tuple] = [(stat_obs, stat, ref["bands"][C.STATIONARY])]
+    groups: list[tuple] = [(stat_obs, stat, pre["bands"][C.STATIONARY])]
     if trans is not None:
-        groups.append((trans_obs, trans, ref["bands"][C.TRANSITION]))
+        groups.append((trans_obs, trans, pre["bands"][C.TRANSITION]))
     for run_obs, ens, band in groups:
         fns = _estimators(exp, run_obs, thr)
         for o in run_obs:
@@ -818,7 +818,7 @@ def _analyse_exact(s: _Setting, runs: MemberRuns, res: MemberAnalysis, ref: dict
             res.comparisons.append(compare(name, o.label, c, se, th_model, "exact", b, note))
 
     # figure data: histograms and exact laws (computed here: the figures only draw)
-    laws_fig = ref["figures"]
+    laws_fig = pre["figures"]
     vs = _after(stat, burn).ravel()
     fig = {"v": laws_fig["v"], "density": laws_fig["density"], "atom": laws_fig["atom"],
            "samples": vs, "threshold": thr,
@@ -844,7 +844,7 @@ def _analyse_exact(s: _Setting, runs: MemberRuns, res: MemberAnalysis, ref: dict
     if m.a != 0:
         tick(f"{name}: work rate function")
         res.figures["rate_function"] = rate_function_data(m, stat, burn)
-    sm = ref["moments"]
+    sm = pre["moments"]
     res.facts.update(mean=sm.mean, variance=sm.variance, p_zero=sm.p_zero,
                      p_zero_measured=fig["atom_measured"])
     res.provenance = _prov(exp, stat, sizes, {
@@ -881,9 +881,9 @@ def _monte_carlo_reference(s: _Setting) -> dict:
 
 
 def _analyse_monte_carlo(s: _Setting, runs: MemberRuns, res: MemberAnalysis,
-                         ref: dict) -> None:
+                         pre: dict) -> None:
     """A 1-D member without exact theory (coloured noise, catalogue.MONTE_CARLO_MEMBER): every
-    row against the Monte Carlo of the same model (``ref``: :func:`_monte_carlo_reference`, from the
+    row against the Monte Carlo of the same model (``pre``: :func:`_monte_carlo_reference`, from the
     circuit's own start states: the stationary run's draws, the transition run's v0).  SE: the
     circuit's and the Monte Carlo's replica jackknives in quadrature; smoothing: the Monte
     Carlo at the circuit's epsilon minus the reference on the same noise (paired); bandwidth:
@@ -903,9 +903,9 @@ def _analyse_monte_carlo(s: _Setting, runs: MemberRuns, res: MemberAnalysis,
     integ = _paired(_estimators(exp, stat_obs, thr), chk,
                     _xs_subset(stat, np.arange(CHECK_REPLICAS)))
     bias = exp.mapping().bias
-    groups: list[tuple] = [(stat_obs, stat, *ref[C.STATIONARY])]
+    groups: list[tuple] = [(stat_obs, stat, *pre[C.STATIONARY])]
     if trans is not None:
-        groups.append((trans_obs, trans, *ref[C.TRANSITION]))
+        groups.append((trans_obs, trans, *pre[C.TRANSITION]))
     stationary: dict = {}
     for run_obs, ens, mc, mc_eff, band in groups:
         fns = _estimators(exp, run_obs, thr)
