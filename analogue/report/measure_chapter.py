@@ -24,11 +24,13 @@ from ..study import measure
 from ..theory.bias_transport import diffusion_exponent
 from .html import Figure, Section, Table
 from ..study.metrics import Budget, Comparison, compare
+from ..study.schedule import result_of
 from ..study.sweep import BUDGET_TERMS, sweep
 from .prose import is_paper_experiment
 
-__all__ = ["CHAPTER_TITLE", "MEASURE_EXPERIMENTS", "THEORY_PHASE", "wants", "theory_tasks",
-           "chapter", "ChapterResult", "summary_rows"]
+__all__ = ["CHAPTER_TITLE", "MEASURE_EXPERIMENTS", "THEORY_PHASE", "SWEEP_PHASE", "wants",
+           "theory_tasks", "sweep_experiment", "sweep_tasks", "chapter", "measure_part",
+           "wants_sweeps", "add_sweeps", "finish", "ChapterResult", "summary_rows"]
 
 CHAPTER_TITLE = "What experiments measure"
 #: The paper's experiments the chapter measures (the work experiment repeats the stick
@@ -64,6 +66,8 @@ class ChapterResult:
     analyses: list = field(default_factory=list)      # MeasureAnalysis
     comparisons: list = field(default_factory=list)   # Comparison
     sections: list = field(default_factory=list)      # Section
+    # figures, paragraphs and error of the section until it is written (finish)
+    draft: dict | None = None
 
 
 def _table(comps: list[Comparison]) -> Table:
@@ -224,16 +228,50 @@ def sweep_comparisons(ds, obs: str, experiment: str) -> list[Comparison]:
     return out
 
 
-def run_sweeps(exp, opts, out: Path, attempt) -> tuple[list, list, list[str]]:
+#: The phase of a sweep's own thread in the report (``f"{SWEEP_PHASE}: {name}"``): it waits
+#: for its points' threads (each point its own phase, "sweep point"), then puts their
+#: results and the theory curves into the dataset.
+SWEEP_PHASE = "waiting for sweep points"
+
+
+def sweep_experiment(experiments, opts):
+    """The experiment the sweep curves are drawn for (the paper's stick experiment, when
+    the chapter measures it and ``opts.sweeps`` asks for them), or None."""
+    if opts is None or not getattr(opts, "sweeps", False):
+        return None
+    return next((e for e in experiments if e.name == SWEEP_EXPERIMENT and wants(e)), None)
+
+
+def sweep_tasks(exp, opts, *, phases=None) -> dict[str, Callable]:
+    """``{phase: function}``: the chapter's sweeps of ``exp`` (:data:`SWEEPS`), for the
+    study's circuit work (:meth:`analogue.study.run.StudyHooks.circuit_background`: they start
+    with the circuit work, not after the paper's chapters).  Each runs its points at once
+    (:func:`analogue.study.sweep.sweep`), every deck where ``opts`` says (the study's one deck
+    pool, ``opts.executor``: never more ngspice processes than ``workers`` in all), each
+    point recorded in ``phases``."""
+    runner = opts.runner(progress=False)
+    return {f"{SWEEP_PHASE}: {name}": (
+        lambda vary=vary: sweep(exp, vary, quick=True, runner=runner, phases=phases))
+        for name, (vary, _obs, _figure) in SWEEPS.items()}
+
+
+def run_sweeps(exp, opts, out: Path, attempt, futures: dict | None = None
+               ) -> tuple[list, list, list[str]]:
     """The two sweep curves of the chapter for ``exp`` (the paper's stick experiment):
     ``(comparisons, figures, errors)``; each sweep's circuit runs go through the run store
     like every other, with the report's runner (``opts.runner()``: store, workers, scheduler,
-    timeout), silent."""
+    timeout), silent.  ``futures`` (``{name: Future}`` of :func:`sweep_tasks`, started
+    earlier): their datasets instead of running the sweeps here."""
     comps, figs, errors = [], [], []
     runner = opts.runner(progress=False)
     for name, (vary, obs, figure) in SWEEPS.items():
-        ds, err = attempt(CHAPTER_TITLE, f"sweep: {name}", lambda vary=vary: sweep(
-            exp, vary, quick=True, runner=runner), exp.name)
+        fut = (futures or {}).get(name)
+        if fut is not None:
+            ds, err = attempt(CHAPTER_TITLE, f"sweep: {name}",
+                              lambda fut=fut: result_of(fut), exp.name)
+        else:
+            ds, err = attempt(CHAPTER_TITLE, f"sweep: {name}", lambda vary=vary: sweep(
+                exp, vary, quick=True, runner=runner), exp.name)
         if ds is None:
             errors.append(f"sweep {name}: {err}")
             continue
@@ -265,12 +303,25 @@ SWEEP_NOTE = ("The issue's curves over a parameter (the mobility: drift against 
 
 
 def chapter(all_runs, futures: dict, out: Path, attempt, *, paper_comps=(),
-            opts=None) -> ChapterResult:
+            opts=None, sweeps: dict | None = None) -> ChapterResult:
     """The chapter from the report's runs (``all_runs``: ExperimentRuns) and the futures of
     :func:`theory_tasks` (``{experiment: Future}``).  ``attempt(section, stage, fn, experiment)`` runs a
     piece and records its failure (the pipeline's ``_Failures.attempt``).  ``paper_comps``:
     the experiments' own comparisons (the drift and D_x rows the text quotes).  ``opts``
-    (RunOptions): where the sweep curves' runs go, when ``opts.sweeps``."""
+    (RunOptions): where the sweep curves' runs go, when ``opts.sweeps``; ``sweeps``: their
+    futures when they were started earlier (:func:`sweep_tasks`).  The pipeline calls its
+    three parts itself (:func:`measure_part`, :func:`add_sweeps`, :func:`finish`), to wait
+    for the sweeps between them."""
+    res = measure_part(all_runs, futures, out, attempt, paper_comps=paper_comps)
+    if wants_sweeps(res, all_runs, opts):
+        add_sweeps(res, all_runs, opts, out, attempt, futures=sweeps)
+    return finish(res)
+
+
+def measure_part(all_runs, futures: dict, out: Path, attempt, *,
+                 paper_comps=()) -> ChapterResult:
+    """The chapter without its sweep curves: analyses, comparisons, figures and text, kept
+    in ``res.draft`` until :func:`finish` writes the section."""
     res = ChapterResult()
     if not futures:
         return res
@@ -308,21 +359,53 @@ def chapter(all_runs, futures: dict, out: Path, attempt, *, paper_comps=(),
         _fp_text(a, [c for c in comps if c.experiment == a.experiment]) for a in res.analyses)))
     paragraphs.append(Markup("<b>Drift and diffusion under a bias.</b> ") + escape(" ".join(
         _transport_text(a, list(paper_comps)) for a in res.analyses)))
-    sweep_figs: list = []
+    res.draft = {"figures": figs + fp_figs, "paragraphs": paragraphs, "error": err,
+                 "sweep_figures": []}
+    return res
+
+
+def _sweep_pair(res: ChapterResult, all_runs):
     a0 = next((a for a in res.analyses if a.experiment == SWEEP_EXPERIMENT), None)
     runs0 = next((r for r in all_runs if a0 is not None and r.exp.name == a0.experiment), None)
-    if opts is not None and getattr(opts, "sweeps", False) and a0 is not None and runs0:
-        sweep_comps, sweep_figs, errs = run_sweeps(runs0.exp, opts, out, attempt)
-        a0.extra = sweep_comps   # the experiment's chapter rows (and so metrics.json's)
-        res.comparisons.extend(sweep_comps)
-        comps = res.comparisons
-        err = "; ".join(x for x in [err, *errs] if x) or None
-        paragraphs.append(Markup("<b>Curves over a parameter.</b> ") + escape(
-            _sweep_text(sweep_comps)))
-    res.sections.insert(0, Section(CHAPTER_TITLE, _intro(comps, "" if sweep_figs else SWEEP_NOTE)
-                                   + paragraphs, figures=figs + fp_figs + sweep_figs,
-                                   tables=[_table(comps)],
-                                   error=err))
+    return a0, runs0
+
+
+def wants_sweeps(res: ChapterResult, all_runs, opts) -> bool:
+    """Whether the chapter draws the sweep curves: asked for (``opts.sweeps``) and the
+    stick experiment measured."""
+    a0, runs0 = _sweep_pair(res, all_runs)
+    return (res.draft is not None and opts is not None and getattr(opts, "sweeps", False)
+            and a0 is not None and runs0 is not None)
+
+
+def add_sweeps(res: ChapterResult, all_runs, opts, out: Path, attempt,
+               futures: dict | None = None) -> None:
+    """The sweep curves' comparisons, figures and text into the chapter (``futures``: the
+    sweeps started earlier, :func:`sweep_tasks`; else they run here)."""
+    a0, runs0 = _sweep_pair(res, all_runs)
+    assert a0 is not None and runs0 is not None and res.draft is not None
+    sweep_comps, sweep_figs, errs = run_sweeps(runs0.exp, opts, out, attempt, futures)
+    a0.extra = sweep_comps   # the experiment's chapter rows (and so metrics.json's)
+    res.comparisons.extend(sweep_comps)
+    d = res.draft
+    d["error"] = "; ".join(x for x in [d["error"], *errs] if x) or None
+    d["paragraphs"].append(Markup("<b>Curves over a parameter.</b> ") + escape(
+        _sweep_text(sweep_comps)))
+    d["sweep_figures"] = sweep_figs
+
+
+def finish(res: ChapterResult) -> ChapterResult:
+    """The chapter's section from its draft (:func:`measure_part`, :func:`add_sweeps`)."""
+    d = res.draft
+    if d is None:
+        return res
+    comps = res.comparisons
+    res.sections.insert(0, Section(CHAPTER_TITLE, _intro(comps, "" if d["sweep_figures"]
+                                                         else SWEEP_NOTE)
+                                   + d["paragraphs"],
+                                   figures=d["figures"] + d["sweep_figures"],
+                                   tables=[_table(comps)], error=d["error"]))
+    res.draft = None
     return res
 
 

@@ -18,6 +18,7 @@ finished: it is written as a failed section with its error, ``metrics.json`` lis
 """
 from __future__ import annotations
 
+import concurrent.futures as cf
 import json
 import time
 from concurrent.futures import Future
@@ -40,8 +41,9 @@ from ..study.members import CHAPTER_TITLE, MEMBERS, MemberRuns
 # run_experiment (``analogue run``) runs circuits only: the study's; importable from here as before
 from ..study.run import (MemberRunSummary, RunSummary, StudyHooks, StudyResult, load as _load,  # noqa: F401
                          run_experiment, run_study)
+from ..circuit.simulate import POLL_S
 from ..study.runs import ExperimentRuns
-from ..study.schedule import Failures, result_of, say as _log
+from ..study.schedule import SWEEP_DECKS, Failures, result_of, say as _log
 from ..study.settings import RunOptions
 from . import beyond, figures, measure_chapter, prose
 from .html import Figure, Section, Table, write_page
@@ -261,6 +263,18 @@ class _Drawer(StudyHooks):
         self.fig1_section: Section | None = None
         self.measure_f: dict = {}        # experiment -> future of its measure theory
         self.measured = measure_chapter.ChapterResult()
+        self.sweep_f: dict = {}          # sweep name -> future of its dataset
+
+    def circuit_background(self, result: StudyResult) -> dict:
+        # the chapter's sweep curves (--sweeps), with the circuit work (issue 22: they waited
+        # for the paper's chapters and ran point after point, 93 s of the quick paper's 95 s
+        # critical path): both sweeps' points at once, every deck in the study's one deck
+        # pool after the paper's and the members' (with a Dask scheduler, on the cluster)
+        exp = measure_chapter.sweep_experiment(self.experiments, self.opts)
+        if exp is None:
+            return {}
+        return measure_chapter.sweep_tasks(exp, result.options_for(self.opts, SWEEP_DECKS),
+                                           phases=result.phases)
 
     def background(self) -> dict:
         # the chapter "What experiments measure" (stick, slip): exact theory and Monte Carlo
@@ -277,6 +291,9 @@ class _Drawer(StudyHooks):
         result.figures[runs.exp.name] = [f.path for f in self.figs[runs.exp.name][0]]
 
     def background_ready(self, result: StudyResult, phase: str, future: Future) -> None:
+        if phase.startswith(measure_chapter.SWEEP_PHASE):
+            self.sweep_f[phase.rpartition(": ")[2]] = future
+            return
         if phase.startswith(measure_chapter.THEORY_PHASE):
             self.measure_f[phase.rpartition(": ")[2]] = future
             return
@@ -308,13 +325,28 @@ class _Drawer(StudyHooks):
         _log(f"{prose.main_part(result.experiments)} are complete "
              f"({time.perf_counter() - result.t0:.0f} s)")
         if self.measure_f:
-            with result.phases(f"{measure_chapter.CHAPTER_TITLE} (comparisons, figures)"):
-                self.measured = measure_chapter.chapter(
-                    list(result.runs.values()), self.measure_f, self.out,
-                    result.failures.attempt,
-                    paper_comps=[c for a in result.analyses.values() for c in a.comparisons],
-                    opts=self.opts)
-            result.measured = {a.experiment: a for a in self.measured.analyses}
+            self._measure_chapter(result)
+
+    def _measure_chapter(self, result: StudyResult) -> None:
+        """The chapter "What experiments measure": its own part, then (waiting for them, a
+        phase that is no work) the sweep curves started with the circuit work."""
+        mc, all_runs = measure_chapter, list(result.runs.values())
+        attempt = result.failures.attempt
+        with result.phases(f"{mc.CHAPTER_TITLE} (comparisons, figures)"):
+            res = mc.measure_part(
+                all_runs, self.measure_f, self.out, attempt,
+                paper_comps=[c for a in result.analyses.values() for c in a.comparisons])
+        if mc.wants_sweeps(res, all_runs, self.opts):
+            if self.sweep_f:
+                with result.phases("waiting for the sweep curves"):
+                    futures = list(self.sweep_f.values())
+                    while cf.wait(futures, timeout=POLL_S).not_done:
+                        pass  # (polled: see result_of)
+            with result.phases(f"{mc.CHAPTER_TITLE} (sweep curves)"):
+                mc.add_sweeps(res, all_runs, self.opts, self.out, attempt,
+                              futures=self.sweep_f or None)
+        self.measured = mc.finish(res)
+        result.measured = {a.experiment: a for a in self.measured.analyses}
 
 
 def build_report(names, out: Path, opts: RunOptions, title: str, chapter=()) -> Path:

@@ -50,7 +50,12 @@ from .. import __version__
 from ..cores import usable_cpus
 
 __all__ = ["StudyResult", "StudyHooks", "run_study", "load", "experiment_section_title",
-           "run_experiment", "RunSummary", "MemberRunSummary"]
+           "run_experiment", "RunSummary", "MemberRunSummary", "PAGE_CIRCUIT_THREADS"]
+
+#: Threads of the hooks' circuit work (:meth:`StudyHooks.circuit_background`): the report's
+#: two sweep curves at once.  Each thread only waits for its sweep's point threads, whose
+#: decks go to the study's one deck pool (analogue.circuit.deck_pool).
+PAGE_CIRCUIT_THREADS = 2
 
 
 def load(name_or_exp) -> Experiment:
@@ -84,6 +89,15 @@ class StudyHooks:
     def main_complete(self, result: StudyResult) -> None:
         """Every experiment on the paper's model is compared and drawn (the family members'
         circuit work started when the paper's circuit runs were done)."""
+
+    def circuit_background(self, result: StudyResult) -> dict[str, Callable[[], Any]]:
+        """Circuit work of the page's own (phase name -> function; the measurement chapter's
+        sweep curves), queued like the family members (on a few cores once the paper's
+        circuit runs are done), each on its own thread (:data:`PAGE_CIRCUIT_THREADS`), its
+        decks in the study's deck pool (``result.options_for(opts, SWEEP_DECKS)``);
+        each future is handed to :meth:`background_ready` when it is done, and at the latest
+        before :meth:`main_complete` (then perhaps still running: wait for it there)."""
+        return {}
 
 
 @dataclass
@@ -304,23 +318,27 @@ def run_study(experiments: Iterable, *, members: Iterable = (), opts: RunOptions
                           else CIRCUIT_THREADS)
         family = Workers(result.phases, "members",
                          member_threads(len(result.members), members_at_once(opts)))
+        page = Workers(result.phases, "page circuit", PAGE_CIRCUIT_THREADS)
         mc = monte_carlo_pool()
         try:
-            _schedule(result, opts, hooks or StudyHooks(), pool, circuit, family, mc)
+            _schedule(result, opts, hooks or StudyHooks(), pool, circuit, family, mc, page=page)
             return result
         except BaseException:
             # an interrupt (failures are caught in _schedule): nothing new starts in either
             # pool, then every ngspice process is killed until their threads end
             family.close()
+            page.close()
             mc.shutdown(wait=False, cancel_futures=True)
             if decks is not None:
                 decks.shutdown(wait=False, cancel_futures=True)
             circuit.abort()
             family.abort()
+            page.abort()
             raise
         finally:
             circuit.close()
             family.close()
+            page.close()
             pool.close()
             mc.shutdown(wait=False, cancel_futures=True)
             if decks is not None:
@@ -328,7 +346,7 @@ def run_study(experiments: Iterable, *, members: Iterable = (), opts: RunOptions
 
 
 def _schedule(result: StudyResult, opts: RunOptions, hooks: StudyHooks, pool: Workers,
-              circuit: Workers, family: Workers, mc=None) -> None:
+              circuit: Workers, family: Workers, mc=None, page: Workers | None = None) -> None:
     """The schedule (issue 10: the paper's chapters first, every core busy):
 
     - circuit runs longest first: the longest experiment's runs finish early, and its long
@@ -340,13 +358,18 @@ def _schedule(result: StudyResult, opts: RunOptions, hooks: StudyHooks, pool: Wo
       that both are ready when its runs are; the hooks' background tasks last; the
       bandwidth terms' Monte Carlo chunks run on the threads of ``mc`` (every core);
     - the family members' circuit work starts once the paper's circuit runs are done (the
-      cores ngspice used are free), beside the paper's last comparisons and figures.
+      cores ngspice used are free), beside the paper's last comparisons and figures, and so
+      does the page's own (the hooks' :meth:`~StudyHooks.circuit_background`: the sweep
+      curves, which waited for the paper's chapters before, 93 s on the critical path of
+      the quick paper).
 
     Its phases, in the order they start, are the methods of :class:`_Schedule`."""
     plan = _Schedule(result, opts, hooks, pool, circuit, family)
     plan.submit_theory(mc)
     plan.submit_runs()
     plan.submit_members()
+    if page is not None:
+        plan.submit_page_circuit(page)
     plan.compare_as_runs_complete()
     plan.complete_paper()
     plan.collect_members()
@@ -418,6 +441,18 @@ class _Schedule:
             self.members_f[j] = self.family.submit_after(
                 after, "family member (circuit and theory)",
                 members[j].name, lambda exp=members[j]: member_task(exp, opts))
+
+    def submit_page_circuit(self, page: Workers) -> None:
+        """The hooks' circuit work (:meth:`StudyHooks.circuit_background`), queued on
+        ``page`` like the members (its decks in the study's deck pool at
+        :data:`~analogue.study.schedule.SWEEP_DECKS`: the hook asks
+        :meth:`StudyResult.options_for`); its futures join
+        the background tasks handed to :meth:`StudyHooks.background_ready`."""
+        # (as the members: at once on many cores, their decks queue behind the others' in
+        # the study's deck pool; on a few cores once the paper's circuit runs are done)
+        after = [] if members_at_once(self.opts) else [*self.runs_f.values()]
+        for phase, fn in self.hooks.circuit_background(self.result).items():
+            self.background[phase] = page.submit_after(after, phase, None, fn)
 
     def draw_ready(self, block: bool) -> None:
         """Hand the hooks every experiment whose theory curves are in (all: ``block``), in

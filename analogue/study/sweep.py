@@ -72,6 +72,16 @@ Seeds: each point's runs get seeds derived from the experiment's seed, the strea
 :func:`point_seed`), so the same model in a wider, finer or other sweep is the same stored
 run.
 
+Points at once (issue 22: more cores, less waiting, never more processes than cores): the
+points run on a thread each (:func:`point_threads`), every deck of every point on one
+executor of ``workers`` processes (or the caller's executor, or the Dask cluster), so the
+sweep never runs more ngspice processes than the runner allows; the numbers are those of the
+points one after another, bit for bit (the seeds are functions of the point's model).
+Measured (``benchmarks/bench_sweep.py --chapter``: the report's two 4-point sweeps of the
+quick stick experiment, empty store, workers = 2, this shared 2-core machine at load
+3.4-4.8): 140 s one point after another, 92 s at once (0.66), the same CPU (122 and 118 s,
+ngspice's 106 and 102), both datasets identical.
+
 Supported experiments: the paper's model and the one-dimensional family members with
 Gaussian noise only (cubic, Stribeck): the exact stationary law and the first-passage theory
 are those of a 1-D gradient model.  Spring and shot-noise experiments are refused.
@@ -86,11 +96,14 @@ point with an empty store (15 CPU s, 12 of them ngspice's), 5 s from the store
 """
 from __future__ import annotations
 
+import concurrent.futures as cf
+import contextvars
 import datetime as _dt
 import hashlib
 import json
 import logging
 import math
+import threading
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -102,8 +115,10 @@ import numpy as np
 from .. import __version__, checks
 from .experiments import Experiment, load_experiment
 from ..circuit.mapping import CircuitMapping, check_mapping_values, map_model
-from ..circuit.runner import Runner
-from ..circuit.simulate import simulate
+from ..circuit import ngspice as _ng
+from ..circuit.runner import Runner, is_client
+from ..circuit.simulate import POLL_S, simulate
+from ..cores import usable_cpus
 from ..estimators.first_passage import first_passage, sampling_bias_bound
 from ..estimators.resampling import jackknife, jackknife_difference
 from ..estimators.transport import window_diffusion
@@ -534,9 +549,12 @@ def _runner(runner: Runner | None, given: Mapping[str, Any]) -> Runner:
     return runner
 
 
-def _point(plan: SweepPlan, i: int, runner: Runner) -> dict[str, Any]:
+def _point(plan: SweepPlan, i: int, runner: Runner,
+           stop: threading.Event | None = None) -> dict[str, Any]:
     """Circuit, theory and budget of grid point ``i``: ``{obs: (value, se, theory, terms)}``
-    plus ``"_info"`` (seeds, censoring, provenance bits)."""
+    plus ``"_info"`` (seeds, censoring, provenance bits).  ``stop`` (set when another point
+    failed or the sweep was interrupted): checked before each stage, which then raises
+    CancelledError instead of starting."""
     exp, settings = plan.exp, plan.settings
     model, mapping, point = plan.models[i], plan.mappings[i], plan.points[i]
     model_eff = mapping.model_effective
@@ -554,19 +572,28 @@ def _point(plan: SweepPlan, i: int, runner: Runner) -> dict[str, Any]:
         now = time.perf_counter()
         timing[name] = timing.get(name, 0.0) + now - clock
         clock = now
+        if stop is not None and stop.is_set():
+            raise cf.CancelledError(f"sweep point {where}: stopped (another point failed or "
+                                    f"the sweep was interrupted)")
 
+    lap("circuit_s")   # (nothing yet: only the stop check)
     log.info("%s: %s: stationary run", exp.name, where)
+    t_run = time.perf_counter()
     stat = simulate(model, v0="stationary", t_end=settings.stationary_t_end,
                     replicas=settings.stationary_replicas, seed=seeds["sweep_stationary"],
                     sample_dt=exp.sample_dt, circuit=stat_spec,
                     runner=runner.replace(label=f"sweep {exp.name} {where} stationary"[:100]))
+    runs_s = [(stat, time.perf_counter() - t_run)]
+    lap("circuit_s")
     fp = None
     if plan.fp_v0 is not None:
         log.info("%s: %s: first-passage run from v0=%g", exp.name, where, plan.fp_v0)
+        t_run = time.perf_counter()
         fp = simulate(model, v0=plan.fp_v0, t_end=exp.t_end, replicas=plan.fp_replicas,
                       seed=seeds["sweep_first_passage"], sample_dt=exp.sample_dt,
                       circuit=stat_spec, runner=runner.replace(
                           label=f"sweep {exp.name} {where} first passage"[:100]))
+        runs_s.append((fp, time.perf_counter() - t_run))
     lap("circuit_s")
 
     log.info("%s: %s: theory and held-noise Monte Carlo pair", exp.name, where)
@@ -660,8 +687,224 @@ def _point(plan: SweepPlan, i: int, runner: Runner) -> dict[str, Any]:
                     "first_passage_noise_dt": fp.meta.get("noise_dt") if fp is not None else None,
                     "epsilon": mapping.epsilon,
                     "wall_time_s": float(stat.meta.get("wall_time", 0.0))
-                    + (float(fp.meta.get("wall_time", 0.0)) if fp is not None else 0.0)}
+                    + (float(fp.meta.get("wall_time", 0.0)) if fp is not None else 0.0),
+                    "unlimited_s": _unlimited_s(runs_s, timing)}
     return out
+
+
+def _unlimited_s(runs: list, timing: Mapping[str, float]) -> float:
+    """The point's seconds with unlimited cores (the report's critical path, issue 22): per
+    circuit run, its work outside the decks (tolerance and deck-size calibrations, store
+    reads: the run's wall time less its decks' span) plus its longest deck run here (0 from
+    the store), then the point's Python stages (theory, estimates, Monte Carlo pair).  On a
+    machine whose cores the points share, a point's phase also holds its decks' waits for a
+    free process; this is what it would take alone with a core per deck."""
+    total = 0.0
+    for ens, wall in runs:
+        decks = float(ens.meta.get("wall_time") or 0.0)
+        ran = [float(w) for w in ens.meta.get("ran_deck_wall_times") or () if w is not None]
+        total += max(0.0, wall - decks) + max(ran, default=0.0)
+    return round(total + sum(timing.get(k, 0.0) for k in ("theory_s", "estimates_s",
+                                                          "monte_carlo_s")), 3)
+
+
+# ------------------------------------------------------------------------- points at once
+class _DeckView(cf.Executor):
+    """The sweep's view of the deck executor its points share: submits go to ``pool`` and
+    are remembered, so that a failed or interrupted sweep cancels the decks it queued (each
+    run's ``run_decks`` then unwinds within its poll and kills its own ngspice group) without
+    shutting down an executor the caller owns (its :meth:`shutdown` does nothing).
+
+    It also times each point's batches of decks (the decks one thread submits until all of
+    them are done: one ``run_decks`` call): the batch's span, and its longest deck's own
+    ngspice wall time (``info["wall_time"]``, not its wait for a free process), for the
+    point's seconds with unlimited cores (:meth:`take`)."""
+
+    def __init__(self, pool: cf.Executor):
+        self.pool = pool
+        self._futures: set = set()
+        self._lock = threading.Lock()
+        self._open: dict[int, dict] = {}              # thread -> its batch under way
+        self._done: dict[int, list] = {}              # thread -> [(span, longest deck)]
+
+    def submit(self, fn, /, *args, **kwargs):
+        fut = self.pool.submit(fn, *args, **kwargs)
+        me = threading.get_ident()
+        with self._lock:
+            self._futures = {f for f in self._futures if not f.done()}
+            self._futures.add(fut)
+            batch = self._open.get(me)
+            if batch is None:
+                batch = self._open[me] = {"t0": time.perf_counter(), "left": 0, "longest": 0.0}
+            batch["left"] += 1
+        fut.add_done_callback(lambda f, me=me, batch=batch: self._deck_done(me, batch, f))
+        return fut
+
+    def _deck_done(self, me: int, batch: dict, fut: cf.Future) -> None:
+        wall = 0.0
+        if not fut.cancelled() and fut.exception() is None:
+            out = fut.result()
+            info = out.get("info") if isinstance(out, Mapping) else None
+            if isinstance(info, Mapping) and isinstance(info.get("wall_time"), (int, float)):
+                wall = float(info["wall_time"])
+        with self._lock:
+            batch["longest"] = max(batch["longest"], wall)
+            batch["left"] -= 1
+            if batch["left"] == 0:
+                if self._open.get(me) is batch:
+                    del self._open[me]
+                self._done.setdefault(me, []).append(
+                    (time.perf_counter() - batch["t0"], batch["longest"]))
+
+    def take(self, thread: int) -> list[tuple[float, float]]:
+        """``[(span, longest deck)]`` of the batches ``thread`` submitted (and forget them)."""
+        with self._lock:
+            return self._done.pop(thread, [])
+
+    def cancel_all(self) -> None:
+        with self._lock:
+            futures, self._futures = list(self._futures), set()
+        for f in futures:
+            f.cancel()
+
+    def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
+        pass  # the pool is its owner's (the sweep's own, or the caller's)
+
+
+def point_threads(n_points: int, runner: Runner, max_concurrent_points: int | None = None
+                  ) -> int:
+    """How many points of a sweep run at once: ``max_concurrent_points`` when given (1: one
+    after another), else every point up to twice the deck processes plus two (locally
+    ``runner.workers``, else the usable CPUs; on Dask the same count of the local CPUs).
+    A point's circuit work is a chain (tolerance calibration, deck-size calibration, the
+    stationary decks, the first-passage decks) with its Python work (theory, estimates, the
+    held/white Monte Carlo pair) after it, so about two points per deck process keep the
+    processes busy; more would only hold more points' arrays in memory at once."""
+    if max_concurrent_points is not None:
+        cap = checks.integer("max_concurrent_points", max_concurrent_points, minimum=1)
+    else:
+        workers = runner.workers if runner.workers is not None else usable_cpus()
+        cap = 2 * workers + 2
+    return max(1, min(n_points, cap))
+
+
+def _run_points(plan: SweepPlan, runner: Runner, threads: int, phases=None) -> list[dict]:
+    """Every point's :func:`_point`, ``threads`` at once (1: one after another, in order).
+
+    Concurrently, every deck of every point goes to one deck executor: locally (no
+    scheduler, no executor) a pool of ``runner.workers`` threads (default the usable CPUs),
+    so the sweep never runs more ngspice processes than that however many points run; the
+    caller's executor when one is given; on a Dask scheduler each run's decks go to the
+    cluster as they would one point at a time.  Results do not depend on the order (each
+    point's seeds are a function of its model, each deck's of its run: :func:`point_seed`),
+    so they are those of the sequential sweep, bit for bit.
+
+    The calling thread waits in polls under :func:`analogue.circuit.ngspice.interrupt_guard`
+    (a no-op outside the main thread, whose caller's guard then covers it): SIGINT, SIGTERM
+    or SIGHUP kill every ngspice process and raise here; the first point that fails stops
+    the others (their queued decks cancelled, their running ngspice groups killed by their
+    own runs as they unwind, no new stage started) and its error is raised once the point
+    threads have ended (at most ~10 s are waited for a point in pure numerics).
+    ``phases`` (:class:`analogue.study.schedule.Phases`): each point that completes is
+    recorded as the phase ``"sweep point"`` of experiment ``"<name> <param>=<value>"`` (its
+    wall and thread CPU seconds, and ``unlimited_s``: its seconds with unlimited cores, its
+    batches of decks counted as their longest deck (:class:`_DeckView`), where the sweep
+    holds the deck executor; else :func:`_unlimited_s`)."""
+    n = len(plan.points)
+
+    def one(i: int, run: Runner, stop: threading.Event | None = None) -> dict:
+        if phases is None:
+            return _point(plan, i, run, stop)
+        t0, c0 = time.perf_counter(), time.thread_time()
+        res = _point(plan, i, run, stop)
+        dt = time.perf_counter() - t0
+        unlimited = res["_info"]["unlimited_s"]
+        if isinstance(run.executor, _DeckView):
+            # the point's own time less its batches' spans (waits for a free process
+            # included), plus each batch's longest deck: every deck on its own core
+            batches = run.executor.take(threading.get_ident())
+            unlimited = dt - sum(b[0] for b in batches) + sum(b[1] for b in batches)
+        # as Phases records a phase (list.append: safe from any thread), with the point's
+        # seconds with unlimited cores for the critical path
+        phases.items.append({"phase": "sweep point", "experiment": point_label(plan, i),
+                             "thread": "sweep", "start_s": round(t0 - phases.origin, 3),
+                             "seconds": round(dt, 3),
+                             "cpu_s": round(time.thread_time() - c0, 3),
+                             "unlimited_s": round(max(0.0, min(dt, unlimited)), 3)})
+        log.info("phase done: sweep point (%s): %.1f s", point_label(plan, i), dt)
+        return res
+
+    if threads <= 1:
+        return [one(i, runner) for i in range(n)]
+    owned: cf.ThreadPoolExecutor | None = None
+    view: _DeckView | None = None
+    if runner.scheduler is None and runner.executor is None:
+        workers = runner.workers if runner.workers is not None else usable_cpus()
+        owned = cf.ThreadPoolExecutor(max_workers=workers,
+                                      thread_name_prefix="analogue-sweep-deck")
+        view = _DeckView(owned)
+    elif runner.executor is not None and not is_client(runner.executor):
+        view = _DeckView(runner.executor)
+    run = runner if view is None else runner.replace(executor=view)
+    stop = threading.Event()
+    pool = cf.ThreadPoolExecutor(max_workers=threads, thread_name_prefix="analogue-sweep-point")
+    futures: list[cf.Future] = []
+    try:
+        with _ng.interrupt_guard():
+            try:
+                # each point with a copy of the caller's context (the run store's key
+                # collectors, analogue.circuit.store_index, see every deck)
+                futures = [pool.submit(contextvars.copy_context().run, one, i, run, stop)
+                           for i in range(n)]
+                pending = set(futures)
+                while pending:   # polled: a signal the kernel gave another thread lands here
+                    done, pending = cf.wait(pending, timeout=POLL_S,
+                                            return_when=cf.FIRST_EXCEPTION)
+                    if any(not f.cancelled() and f.exception() is not None for f in done):
+                        break
+                failed = [f for f in futures if f.done() and not f.cancelled()
+                          and f.exception() is not None
+                          and not isinstance(f.exception(), cf.CancelledError)]
+                if failed:
+                    failed[0].result()
+                return [f.result() for f in futures]
+            except BaseException as exc:
+                _stop_points(futures, stop, view, owned,
+                             interrupted=not isinstance(exc, Exception))
+                raise
+    finally:
+        pool.shutdown(wait=all(f.done() for f in futures), cancel_futures=True)
+        if owned is not None:
+            owned.shutdown(wait=False, cancel_futures=True)
+
+
+def _stop_points(futures: list[cf.Future], stop: threading.Event, view: _DeckView | None,
+                 owned: cf.ThreadPoolExecutor | None, *, interrupted: bool,
+                 wait_s: float = 10.0) -> None:
+    """After a point failed or an interrupt: no new point or stage starts, the decks queued
+    are cancelled and the point threads are waited for (``wait_s`` at most); after an
+    interrupt every ngspice process of this process is killed again and again meanwhile (a
+    point whose deck was killed may reach its next run before it sees ``stop``)."""
+    stop.set()
+    for f in futures:
+        f.cancel()
+    if view is not None:
+        view.cancel_all()
+    if owned is not None:
+        owned.shutdown(wait=False, cancel_futures=True)
+    deadline = time.monotonic() + wait_s
+    while not all(f.done() for f in futures) and time.monotonic() < deadline:
+        if interrupted:
+            _ng.terminate_all()
+        cf.wait(futures, timeout=0.05)
+    if interrupted:
+        _ng.terminate_all()
+
+
+def point_label(plan: SweepPlan, i: int) -> str:
+    """``"<experiment> <param>=<value>[, ...]"``: point ``i`` of ``plan`` in the report's
+    phases (one per point: the critical path counts the longest, not their sum)."""
+    return f"{plan.exp.name} " + ", ".join(f"{k}={v:g}" for k, v in plan.points[i].items())
 
 
 # ------------------------------------------------------------------------------ dataset
@@ -782,7 +1025,8 @@ def _dataset(plan: SweepPlan, results: list[dict], wall: float):
 def sweep(experiment: Experiment | str | Path, vary: Mapping[str, Any], *, quick: bool = False,
           out: str | Path | None = None, runner: Any = None, workers: int | None = None,
           scheduler: str | None = None, executor: Any = None, store: Any = None,
-          progress: bool | None = None, timeout: float | None = None):
+          progress: bool | None = None, timeout: float | None = None,
+          max_concurrent_points: int | None = None, phases: Any = None):
     """Sweep ``experiment`` over a grid of model parameters: circuit and exact theory at every
     point (module docstring for the observables, errors and budget).
 
@@ -810,6 +1054,13 @@ def sweep(experiment: Experiment | str | Path, vary: Mapping[str, Any], *, quick
     workers, scheduler, executor, store, progress, timeout
         The same as keywords (folded into a Runner); passing one with ``runner=`` is a
         TypeError.
+    max_concurrent_points : int, optional
+        How many points run at once (1: one after another; default: :func:`point_threads`).
+        Concurrent points share one deck executor: locally never more than ``workers``
+        ngspice processes in all.  The numbers are the same either way, bit for bit (each
+        point's seeds depend on its model only).
+    phases : analogue.study.schedule.Phases, optional
+        Where each point is recorded as the phase ``"sweep point"`` (the report's timeline).
 
     Returns
     -------
@@ -829,7 +1080,8 @@ def sweep(experiment: Experiment | str | Path, vary: Mapping[str, Any], *, quick
             raise ValueError(f"out: {str(out)!r} exists and is not a directory")
     run = _runner(runner, {"workers": workers, "scheduler": scheduler, "executor": executor,
                            "store": store, "progress": progress, "timeout": timeout})
-    results = [_point(plan, i, run) for i in range(len(plan.points))]
+    threads = point_threads(len(plan.points), run, max_concurrent_points)
+    results = _run_points(plan, run, threads, phases=phases)
     ds = _dataset(plan, results, time.perf_counter() - t0)
     if out is not None:
         write_sweep(ds, Path(out) / "sweep.nc")

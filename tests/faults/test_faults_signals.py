@@ -386,3 +386,60 @@ def test_a_signal_between_starting_and_tracking_ngspice_waits_for_the_tracking()
                 time.sleep(0.05)          # the Python-level handler has run by now
                 reached = True
     assert reached
+
+
+SWEEP_TOML = CLI_TOML.replace('name = "sigtest"', 'name = "sigsweep"').replace(
+    "stationary_t_end = 10.0", "stationary_t_end = 60.0")
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
+def test_cli_sweep_with_points_at_once_interrupted_cleans_up(tmp_path, sig):
+    """``analogue sweep`` runs its points at once (issue 22), their decks on one pool of
+    ``--workers`` processes, from threads of its own: a signal still kills every ngspice it
+    started, exits with 128 + signal and one line, leaves no temporary directory or store
+    temporary file, and writes no sweep.nc (nothing half-written)."""
+    tmp, store, toml, marker, env = _workspace(tmp_path, "sigsweep.toml", SWEEP_TOML)
+    exe = Path(sys.executable).with_name("analogue")
+    out = tmp_path / "out"
+    cmd = [str(exe), "sweep", str(toml), "--vary", "a=0:0.4:3", "--out", str(out),
+           "--store", str(store), "--workers", "2", "--no-progress"]
+    proc = subprocess.Popen(cmd, env=env, cwd=tmp_path, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    seen = _interrupt_when_busy(proc, store, tmp, marker, sig)
+    t0 = time.monotonic()
+    _, err = proc.communicate(timeout=60)
+    assert time.monotonic() - t0 < 15
+    _assert_clean(marker, proc.pid, tmp, store, seen)
+    assert "Traceback" not in err
+    assert proc.returncode == 128 + sig, (proc.returncode, err)
+    last = [ln for ln in err.splitlines() if ln.strip()][-1]
+    assert signal.Signals(sig).name in last, err
+    assert not (out / "sweep.nc").exists()
+    assert not [p for p in out.rglob("*") if p.is_file()] if out.exists() else True
+
+
+SWEEP_SCRIPT = textwrap.dedent("""
+    import sys
+    import analogue
+    toml, store, out = sys.argv[1], sys.argv[2], sys.argv[3]
+    analogue.sweep(toml, {"a": [0.0, 0.2, 0.4]}, out=out, store=store, workers=2,
+                   progress=False)
+""")
+
+
+def test_uncaught_sigterm_in_a_sweep_script_still_cleans_up(tmp_path):
+    """A script calling analogue.sweep (no command line's guard around it): the sweep's own
+    guard, held by the thread that waits for its points, kills every ngspice its point
+    threads started and unwinds them; nothing is written."""
+    tmp, store, script, marker, env = _workspace(tmp_path, "sweep.py", SWEEP_SCRIPT)
+    toml = tmp_path / "sigsweep.toml"
+    toml.write_text(SWEEP_TOML)
+    out = tmp_path / "out"
+    proc = subprocess.Popen([sys.executable, str(script), str(toml), str(store), str(out)],
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    seen = _interrupt_when_busy(proc, store, tmp, marker, signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode != 0
+    assert "RunInterrupted" in err
+    _assert_clean(marker, proc.pid, tmp, store, seen)
+    assert not (out / "sweep.nc").exists()

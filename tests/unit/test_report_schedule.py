@@ -193,7 +193,7 @@ def test_one_local_circuit_thread_two_with_a_scheduler(tmp_path, monkeypatch, sc
     take an experiment's runs one after another) two experiments run at once."""
     seen = {}
 
-    def schedule_(result, opts, hooks, pool, circuit, family, mc=None):
+    def schedule_(result, opts, hooks, pool, circuit, family, mc=None, page=None):
         seen.update(circuit=len(circuit.threads), family=len(family.threads))
     monkeypatch.setattr(S, "_schedule", schedule_)
     monkeypatch.setattr(SCH, "usable_cpus", lambda: 2)
@@ -377,3 +377,55 @@ def test_a_phase_records_its_threads_cpu_seconds(monkeypatch):
     (item,) = phases.items
     assert item["cpu_s"] == 2.5
     assert item["phase"] == "exact theory" and item["thread"] == "theory"
+
+
+def test_the_pages_circuit_work_starts_after_the_paper_runs_not_its_chapters(tmp_path,
+                                                                              monkeypatch):
+    """The hooks' circuit work (the measurement chapter's sweeps, issue 22) is queued once the
+    paper's circuit runs are done, runs beside the comparisons, and its future is handed to
+    the page before main_complete, still running: the page waits for it there, in a
+    "waiting for" phase of its own."""
+    monkeypatch.setenv("ANALOGUE_THEORY_CACHE", str(tmp_path / "theory"))
+    events: list = []
+    lock = threading.Lock()
+    gate = threading.Event()
+
+    def runs(exp, opts, settings=None):
+        r = _fake_runs(exp, opts)
+        with lock:
+            events.append("runs done")
+        return r
+
+    def sweep():
+        with lock:
+            events.append("sweep start")
+        assert gate.wait(120)       # a hang detector: opened by main_complete
+        return 42
+
+    class Hooks(S.StudyHooks):
+        handed: dict = {}
+        value = None
+
+        def circuit_background(self, result):
+            return {"sweep curves": sweep}
+
+        def background_ready(self, result, phase, future):
+            with lock:
+                events.append(("handed", phase, future.done()))
+            self.handed[phase] = future
+
+        def main_complete(self, result):
+            with lock:
+                events.append("main complete")
+            gate.set()
+            self.value = self.handed["sweep curves"].result(timeout=120)
+
+    monkeypatch.setattr(S, "run_experiment_runs", runs)
+    hooks = Hooks()
+    result = S.run_study([_exp("small", 6.0, 22)], opts=RunOptions(quick=True, progress=False),
+                         hooks=hooks)
+    assert hooks.value == 42
+    assert events.index("runs done") < events.index("sweep start")
+    assert events.index(("handed", "sweep curves", False)) < events.index("main complete")
+    (phase,) = [p for p in result.phases.items if p["phase"] == "sweep curves"]
+    assert phase["thread"] == "page circuit"

@@ -203,3 +203,40 @@ def test_cli_offers_the_sweep_curves():
     for cmd in ("report", "paper"):
         r = CliRunner().invoke(main, [cmd, "--help"])
         assert r.exit_code == 0 and "--sweeps" in r.output
+
+
+def test_the_report_starts_its_sweeps_in_the_studys_deck_pool(tmp_path, monkeypatch):
+    """With --sweeps the page hands the study its two sweeps as circuit work (issue 22: not
+    after the paper's chapters): each with the report's runner, its decks in the study's one
+    deck pool behind the paper's and the members' (SWEEP_DECKS), each point a phase; without
+    --sweeps, or without the paper's stick experiment, nothing."""
+    from analogue.circuit.deck_pool import DeckPool, PoolView
+    from analogue.report.pipeline import _Drawer
+    from analogue.study.schedule import SWEEP_DECKS, Phases
+    from analogue.study.run import StudyResult
+    seen = []
+    monkeypatch.setattr(measure_chapter, "sweep", lambda exp, vary, **kw: seen.append(
+        (exp.name, vary, kw)) or len(seen))
+    stick = load_experiment(standard_circuit("stick"))
+    pool = DeckPool(1)
+    try:
+        result = StudyResult(experiments=[stick], members=[], quick=True, phases=Phases(),
+                             failures=None, t0=0.0, load0=(0, 0, 0), deck_pool=pool)
+        opts = RunOptions(quick=True, sweeps=True, workers=1, store=tmp_path / "s")
+        tasks = _Drawer(tmp_path, opts, [stick]).circuit_background(result)
+        assert sorted(tasks) == sorted(f"{measure_chapter.SWEEP_PHASE}: {n}"
+                                       for n in measure_chapter.SWEEPS)
+        assert [fn() for fn in tasks.values()] == [1, 2]
+        for (name, vary, kw), (want, _o, _f) in zip(seen, measure_chapter.SWEEPS.values()):
+            assert name == "stick" and vary == want and kw["quick"] is True
+            assert kw["phases"] is result.phases
+            view = kw["runner"].executor
+            assert isinstance(view, PoolView) and view.pool is pool
+            assert view.priority == SWEEP_DECKS
+            assert kw["runner"].store == tmp_path / "s" and kw["runner"].progress is False
+        assert _Drawer(tmp_path, RunOptions(quick=True), [stick]).circuit_background(
+            result) == {}
+        slip = load_experiment(standard_circuit("slip"))
+        assert _Drawer(tmp_path, opts, [slip]).circuit_background(result) == {}
+    finally:
+        pool.shutdown()

@@ -179,3 +179,36 @@ def test_a_failed_write_leaves_nothing_behind(tmp_path):
     with xr.open_dataset(tmp_path / "sweep.nc") as back:
         np.testing.assert_array_equal(back["mean_v"].values, [0.1, 0.2])
     assert [p.name for p in tmp_path.iterdir()] == ["sweep.nc"]
+
+
+def test_the_deck_view_times_each_threads_batches_and_cancels_its_decks():
+    """The sweep's view of its shared deck pool (issue 22): a thread's decks submitted
+    together are one batch, counted as its longest deck's own wall time (info["wall_time"],
+    not its wait for a free process) over its span; cancel_all cancels what is still queued,
+    and the pool itself is not shut down (it is its owner's)."""
+    import concurrent.futures as cf
+    import threading
+
+    from analogue.study.sweep import _DeckView
+    gate, go = threading.Event(), threading.Event()
+
+    def deck(w):
+        assert go.wait(30)            # (all three submitted before any ends: one batch)
+        return {"info": {"wall_time": w}}
+    with cf.ThreadPoolExecutor(max_workers=1) as pool:
+        view = _DeckView(pool)
+        futs = [view.submit(deck, w) for w in (0.5, 2.0, 1.0)]
+        go.set()
+        cf.wait(futs)
+        (batch,) = view.take(threading.get_ident())
+        assert batch[1] == 2.0 and batch[0] >= 0
+        assert view.take(threading.get_ident()) == []
+        started = threading.Event()
+        blocker = view.submit(lambda: started.set() or gate.wait(30))
+        assert started.wait(30)
+        queued = view.submit(lambda: {"info": {"wall_time": 1.0}})
+        view.cancel_all()
+        gate.set()
+        view.shutdown(wait=True)
+        assert queued.cancelled() and blocker.result(timeout=30) is True
+        assert pool.submit(lambda: 3).result(timeout=30) == 3    # still the owner's, open
