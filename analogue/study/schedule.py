@@ -251,9 +251,10 @@ class Workers:
 # quick paper (2-core machine, load 1.7-3.3, two member threads).  Only their order is used:
 # the members are queued longest first.  In the order of MEMBERS (cubic, stribeck, spring,
 # shot) the spring started third and ran alone on one thread for its last 11 s (the job's
-# members took 33 s; longest first would make it about 29 s).  The spring's cost is its Monte
-# Carlo reference (the position feeds back into the force at every step), not its decks, so
-# circuit_cost (replica-time) does not order the members.
+# members took 33 s; longest first would make it about 29 s).  The spring's cost is its
+# integration check, one deck of 8 replicas over its whole release run (40 tau_m = 120, 100x
+# tighter: 13.4 s of its 23.1 s at load ~4, its Monte Carlo reference 3.2 s beside it), which
+# circuit_cost (replica-time) does not weigh, so it does not order the members.
 MEMBER_SECONDS = {"spring": 22.7, "cubic": 15.2, "stribeck": 10.5, "shot": 6.7}
 
 
