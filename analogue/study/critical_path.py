@@ -9,14 +9,13 @@ _schedule` waits on its futures):
 - roots (need nothing): an experiment's ``exact theory`` and ``bandwidth term``, the ``open
   question``, its ``circuit runs``, each ``family member`` (its wait for the paper's chapters
   is a choice of schedule on few cores, not a data dependency);
-- ``theory curves`` (e) <- ``circuit runs`` (e);
+- ``theory curves`` (e) <- ``circuit runs: stationary`` (e): the calibrations and the
+  stationary run's longest deck (the curves need that run alone, and start when it is in:
+  ``run_experiment_runs(on_stationary=)``); without that record, <- ``circuit runs`` (e);
 - ``comparisons`` (e) <- ``circuit runs``, ``exact theory`` and ``bandwidth term`` (e);
 - ``figures`` (e) <- ``comparisons`` and ``theory curves`` (e);
 - ``figures: open question`` <- ``open question``;  ``figures: Fig. 1`` <- every
   ``circuit runs``;
-- each ``sweep point`` (the measurement chapter's sweeps) is a root, counted by the seconds
-  it records with unlimited cores (``unlimited_s``: its wall less its waits for a free
-  ngspice process); the chapter's ``... (sweep curves)`` <- every ``sweep point``;
 - ``figures and page`` <- everything else.
 
 The ``waiting for ...`` phases are not work and are left out.  With unlimited cores an
@@ -46,6 +45,9 @@ CIRCUIT = "circuit runs"
 THEORY = "exact theory"
 BANDWIDTH = "bandwidth term (held/white Monte Carlo)"
 CURVES = "theory curves"
+#: an experiment's circuit runs up to its stationary run (a node of its own where the timing
+#: says when that run is in: its theory curves start there)
+STATIONARY_RUN = "circuit runs: stationary"
 COMPARISONS = "comparisons"
 FIGURES = "figures"
 MEMBER = "family member (circuit and theory)"
@@ -53,8 +55,6 @@ OPEN_QUESTION = "open question (exact rate functions)"
 OPEN_QUESTION_FIG = "figures: open question"
 FIG1 = "figures: Fig. 1"
 PAGE = "figures and page"
-SWEEP_POINT = "sweep point"
-SWEEP_CURVES_SUFFIX = "(sweep curves)"
 
 
 def longest_chain(nodes: Mapping) -> tuple[float, list]:
@@ -165,9 +165,7 @@ def report_graph(phases: Sequence[Mapping], circuit: Mapping | None = None,
         if p["phase"].startswith(WAITING_PREFIX):
             continue
         key = (p["phase"], p.get("experiment"))
-        # a phase that knows its own seconds with unlimited cores records them (a sweep
-        # point: its wall less its waits for a free ngspice process, analogue.study.sweep)
-        secs[key] = secs.get(key, 0.0) + float(p.get("unlimited_s", p["seconds"]))
+        secs[key] = secs.get(key, 0.0) + float(p["seconds"])
     for key in list(secs):
         if key[0] == CIRCUIT:
             secs[key] = circuit_unlimited_s(secs[key], circuit.get(key[1]))
@@ -177,10 +175,21 @@ def report_graph(phases: Sequence[Mapping], circuit: Mapping | None = None,
             secs[key] = member_unlimited_s(secs[key], circuit.get(key[1]))
     runs = [k for k in secs if k[0] == CIRCUIT]
     nodes: dict = {}
+    # an experiment whose theory curves start with its stationary run (its runs' timing
+    # records that run's longest deck): the curves wait for its calibrations and that deck
+    stationary = {}
+    for key in runs:
+        t = circuit.get(key[1]) or {}
+        if t.get("stationary_longest_deck_s") is not None and \
+                t.get("before_decks_s") is not None:
+            stationary[key[1]] = min(secs[key], float(t["before_decks_s"])
+                                     + float(t["stationary_longest_deck_s"]))
+    for exp, s in stationary.items():
+        nodes[(STATIONARY_RUN, exp)] = (s, [])
     for key, s in secs.items():
         phase, exp = key
         if phase == CURVES:
-            deps: list = [(CIRCUIT, exp)]
+            deps: list = [(STATIONARY_RUN if exp in stationary else CIRCUIT, exp)]
         elif phase == COMPARISONS:
             deps = [(CIRCUIT, exp), (THEORY, exp), (BANDWIDTH, exp)]
         elif phase == FIGURES:
@@ -189,8 +198,6 @@ def report_graph(phases: Sequence[Mapping], circuit: Mapping | None = None,
             deps = [(OPEN_QUESTION, None)]
         elif phase == FIG1:
             deps = runs
-        elif phase.endswith(SWEEP_CURVES_SUFFIX):
-            deps = [k for k in secs if k[0] == SWEEP_POINT]
         elif phase == PAGE:
             deps = [k for k in secs if k[0] != PAGE]
         else:

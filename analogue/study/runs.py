@@ -361,9 +361,37 @@ def _run_jobs(jobs: list[tuple[str, Callable[[Runner], Any]]], runner: Runner) -
     return out
 
 
+def _ran(e: Ensemble) -> list[float]:
+    """Wall seconds of each deck of ``e`` run in this job (none: all from the store)."""
+    return [float(w) for w in e.meta.get("ran_deck_wall_times") or () if w is not None]
+
+
+@dataclass(frozen=True)
+class StationaryRuns:
+    """What an experiment's runs give as soon as its stationary run is in
+    (``run_experiment_runs(on_stationary=)``): the experiment, its settings, the stationary
+    run, and the transition runs' start velocities (``transition``: v0 -> None, the keys of
+    :attr:`ExperimentRuns.transition`), which the theory curves read."""
+
+    exp: Experiment
+    settings: ReportSettings
+    stationary: Ensemble
+
+    @property
+    def transition(self) -> dict:
+        return dict.fromkeys(self.exp.v0)
+
+
 @indexing_runs  # the store's index by experiment (analogue store ls): every entry used
 def run_experiment_runs(exp: Experiment, opts: RunOptions,
-                        settings: ReportSettings | None = None) -> ExperimentRuns:
+                        settings: ReportSettings | None = None, *,
+                        on_stationary: Callable[[StationaryRuns], Any] | None = None
+                        ) -> ExperimentRuns:
+    """Every circuit run of one experiment's report (transition runs from each v0, the
+    stationary run, their integration checks, the noise-free run), stored and reused.
+    ``on_stationary``: called with a :class:`StationaryRuns` as soon as the stationary run is
+    in, while the other runs still run (the study starts the theory curves that need only
+    it: :func:`analogue.study.theory_curves.figure_curves`)."""
 
     t_start = time.perf_counter()
     settings = (settings or exp.report).for_options(opts)
@@ -420,6 +448,16 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
         return lambda job: simulate(model, sample_dt=exp.sample_dt, **args,
                                     runner=job.replace(replicas_per_deck=replicas_per_deck))
 
+    stationary_run = run(v0=v0_stat, t_end=settings.stationary_t_end, replicas=n_stat,
+                         seed=seeds["stationary"], circuit=stat_spec, replicas_per_deck=stat_deck)
+
+    def stationary_job(job: Runner) -> Ensemble:
+        ens = stationary_run(job)
+        ens.meta.update(stat_why)
+        if on_stationary is not None:
+            on_stationary(StationaryRuns(exp, settings, ens))
+        return ens
+
     # Longest first: the checks (5x the nominal cost per unit time), the stationary run, the
     # transition runs; the noise-free run (one short deck) last.
     jobs: list[tuple[str, Callable[[Runner], Any]]] = [
@@ -429,9 +467,7 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
         ("check_transition", run(v0=v00, t_end=exp.t_end, replicas=t_decks * t_size,
                                  seed=plan.transition(0), circuit=exp.check_spec(trans_spec),
                                  replicas_per_deck=t_size)),
-        ("stationary", run(v0=v0_stat, t_end=settings.stationary_t_end, replicas=n_stat,
-                           seed=seeds["stationary"], circuit=stat_spec,
-                           replicas_per_deck=stat_deck)),
+        ("stationary", stationary_job),
     ]
     jobs += [(f"transition {i}", run(v0=v0, t_end=exp.t_end, replicas=replicas,
                                      seed=plan.transition(i), circuit=trans_spec,
@@ -440,15 +476,13 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
     jobs.append(("noise_free", lambda job: _noise_free_run(exp, seeds["noise_free"], job)))
     t_jobs = time.perf_counter()
     done = _run_jobs(jobs, runner)
-    ran = [float(w) for e in done.values() for w in e.meta.get("ran_deck_wall_times") or ()
-           if w is not None]
+    ran = [w for e in done.values() for w in _ran(e)]
 
     transition = {}
     for i, v0 in enumerate(exp.v0):
         transition[v0] = done[f"transition {i}"]
         transition[v0].meta.update(trans_why)  # simulate saw them as given: say why
-    stationary = done["stationary"]
-    stationary.meta.update(stat_why)
+    stationary = done["stationary"]   # (its meta has stat_why: stationary_job)
     check_transition, check_stationary = done["check_transition"], done["check_stationary"]
     check_stationary.meta["check_window"] = {
         "t_end": s_window, "decks": s_decks, "replicas": n1,
@@ -463,5 +497,9 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
                           wall_time=time.perf_counter() - t_start, seeds=seeds,
                           timing={"before_decks_s": round(t_jobs - t_start, 3),
                                   "longest_deck_s": round(max(ran, default=0.0), 3),
-                                  "decks_run": len(ran)})
+                                  "decks_run": len(ran),
+                                  # the stationary run's own longest deck: what the theory
+                                  # curves wait for (on_stationary)
+                                  "stationary_longest_deck_s": round(max(
+                                      _ran(stationary), default=0.0), 3)})
 

@@ -72,7 +72,7 @@ def test_failing_experiments_keep_finished_work_and_are_recorded(tmp_path, monke
     import analogue.report.pipeline as P
     from analogue.report.plan import RunOptions
 
-    def boom(exp, opts, settings=None):
+    def boom(exp, opts, settings=None, on_stationary=None):
         raise RuntimeError(f"ngspice failed for {exp.name} <b>")
     import analogue.study.run as S
     monkeypatch.setattr(S, "run_experiment_runs", boom)

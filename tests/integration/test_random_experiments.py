@@ -93,7 +93,7 @@ def _sde(model, **kw) -> Ensemble:
     return e
 
 
-def fake_runs(exp, opts, settings=None) -> ExperimentRuns:
+def fake_runs(exp, opts, settings=None, on_stationary=None) -> ExperimentRuns:
     """The runs of a paper-model experiment, from the SDE of the circuit's effective model."""
     settings = exp.report.for_options(opts)
     m = exp.mapping().model_effective

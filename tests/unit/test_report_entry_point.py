@@ -41,7 +41,7 @@ def test_report_is_callable_and_a_package_in_one_process(first):
     subprocess.run([sys.executable, "-c", code], check=True)
 
 
-def _runs(exp, opts, settings=None):
+def _runs(exp, opts, settings=None, on_stationary=None):
     """The schedule test's SDE runs, with the noise-free run as the report has it: one
     replica per v0 (Fig. 1 draws each against Model.deterministic)."""
     import dataclasses
@@ -88,7 +88,7 @@ def test_report_returns_the_study(tmp_path, monkeypatch):
 
 
 def test_report_hands_back_failures_or_raises_them(tmp_path, monkeypatch):
-    def boom(exp, opts, settings=None):
+    def boom(exp, opts, settings=None, on_stationary=None):
         raise RuntimeError("ngspice failed")
     monkeypatch.setattr(S, "run_experiment_runs", boom)
     monkeypatch.setattr(S, "analyse", lambda *a, **k: pytest.fail("nothing to compare"))
@@ -127,7 +127,7 @@ def test_a_runner_says_how_the_report_runs(tmp_path, monkeypatch):
     labels, its own deck pool) is refused by name, before anything runs."""
     seen = []
 
-    def runs(exp, opts, settings=None):
+    def runs(exp, opts, settings=None, on_stationary=None):
         seen.append(opts)
         raise RuntimeError("stop")
     monkeypatch.setattr(S, "run_experiment_runs", runs)

@@ -94,7 +94,7 @@ def schedule(request, tmp_path, monkeypatch):
     small_compared = threading.Event()
     lock = threading.Lock()
 
-    def runs(exp, opts, settings=None):
+    def runs(exp, opts, settings=None, on_stationary=None):
         with lock:
             events.append(("runs start", exp.name))
         if exp.name == "big" and threads == 2:
@@ -216,7 +216,7 @@ def test_every_deck_of_a_study_goes_to_one_pool_paper_first(monkeypatch, cores):
     seen: dict = {}
     lock = threading.Lock()
 
-    def runs(exp, opts, settings=None):
+    def runs(exp, opts, settings=None, on_stationary=None):
         with lock:
             seen[exp.name] = opts.runner().executor
         return _fake_runs(exp, opts)
@@ -246,7 +246,7 @@ def test_no_pool_with_a_scheduler(monkeypatch):
     """On a Dask cluster the cluster is the pool: runs keep the runner as it is."""
     seen = {}
 
-    def runs(exp, opts, settings=None):
+    def runs(exp, opts, settings=None, on_stationary=None):
         seen["executor"] = opts.runner().executor
         raise RuntimeError("stub")
     monkeypatch.setattr(S, "run_experiment_runs", runs)
@@ -266,7 +266,7 @@ def test_members_start_at_once_on_many_cores(monkeypatch, cores, at_once):
     events: list = []
     lock = threading.Lock()
 
-    def runs(exp, opts, settings=None):
+    def runs(exp, opts, settings=None, on_stationary=None):
         # the paper's runs end only once every member has started or after 3 s (a member
         # that waits for the runs never starts before)
         release.wait(3.0)
@@ -307,7 +307,7 @@ def test_many_cores_run_the_papers_experiments_at_once_longest_first(monkeypatch
     seen: dict = {}
     lock = threading.Lock()
 
-    def runs(exp, opts, settings=None):
+    def runs(exp, opts, settings=None, on_stationary=None):
         with lock:
             seen[exp.name] = opts.runner().executor.priority
         raise RuntimeError("stub")
@@ -390,7 +390,7 @@ def test_the_pages_circuit_work_starts_after_the_paper_runs_not_its_chapters(tmp
     lock = threading.Lock()
     gate = threading.Event()
 
-    def runs(exp, opts, settings=None):
+    def runs(exp, opts, settings=None, on_stationary=None):
         r = _fake_runs(exp, opts)
         with lock:
             events.append("runs done")
