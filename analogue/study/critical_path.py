@@ -16,6 +16,9 @@ _schedule` waits on its futures):
 - ``figures`` (e) <- ``comparisons`` and ``theory curves`` (e);
 - ``figures: open question`` <- ``open question``;  ``figures: Fig. 1`` <- every
   ``circuit runs``;
+- each ``sweep point`` (the measurement chapter's sweeps) is a root, counted by the seconds
+  it records with unlimited cores (``unlimited_s``: its wall less its waits for a free
+  ngspice process); the chapter's ``... (sweep curves)`` <- every ``sweep point``;
 - ``figures and page`` <- everything else.
 
 The ``waiting for ...`` phases are not work and are left out.  With unlimited cores an
@@ -55,6 +58,8 @@ OPEN_QUESTION = "open question (exact rate functions)"
 OPEN_QUESTION_FIG = "figures: open question"
 FIG1 = "figures: Fig. 1"
 PAGE = "figures and page"
+SWEEP_POINT = "sweep point"
+SWEEP_CURVES_SUFFIX = "(sweep curves)"
 
 
 def longest_chain(nodes: Mapping) -> tuple[float, list]:
@@ -165,7 +170,9 @@ def report_graph(phases: Sequence[Mapping], circuit: Mapping | None = None,
         if p["phase"].startswith(WAITING_PREFIX):
             continue
         key = (p["phase"], p.get("experiment"))
-        secs[key] = secs.get(key, 0.0) + float(p["seconds"])
+        # a phase that knows its own seconds with unlimited cores records them (a sweep
+        # point: its wall less its waits for a free ngspice process, analogue.study.sweep)
+        secs[key] = secs.get(key, 0.0) + float(p.get("unlimited_s", p["seconds"]))
     for key in list(secs):
         if key[0] == CIRCUIT:
             secs[key] = circuit_unlimited_s(secs[key], circuit.get(key[1]))
@@ -198,6 +205,8 @@ def report_graph(phases: Sequence[Mapping], circuit: Mapping | None = None,
             deps = [(OPEN_QUESTION, None)]
         elif phase == FIG1:
             deps = runs
+        elif phase.endswith(SWEEP_CURVES_SUFFIX):
+            deps = [k for k in secs if k[0] == SWEEP_POINT]
         elif phase == PAGE:
             deps = [k for k in secs if k[0] != PAGE]
         else:

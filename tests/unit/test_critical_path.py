@@ -201,3 +201,22 @@ def test_theory_curves_wait_only_for_the_stationary_run():
     assert crit["critical_path_s"] == pytest.approx(16.5)     # 3 + 2 + 9 + 2 + 0.5
     assert crit["chain"][0] == {"phase": "circuit runs: stationary", "experiment": "e",
                                 "seconds": 5.0}
+
+
+def test_sweep_points_count_their_unlimited_seconds_and_the_curves_wait_for_all():
+    """A sweep point records its seconds with unlimited cores (its wall less its waits for a
+    free ngspice process, analogue.study.sweep): the path takes those, the longest point, and
+    the chapter's sweep-curves phase after every point; without the record, the wall."""
+    tl = [dict(_ph("sweep point", "stick a=0", 80.0, "sweep"), unlimited_s=6.0),
+          dict(_ph("sweep point", "stick a=0.4", 90.0, "sweep"), unlimited_s=7.5),
+          _ph("sweep point", "stick a=0.8", 5.0, "sweep"),           # no record: its wall
+          _ph("waiting for the sweep curves", None, 85.0),           # not work
+          _ph("What experiments measure (sweep curves)", None, 1.0),
+          _ph("figures and page", None, 2.0)]
+    crit = report_critical_path(tl)
+    assert crit["critical_path_s"] == pytest.approx(7.5 + 1.0 + 2.0)
+    assert [(c["phase"], c["experiment"]) for c in crit["chain"]] == [
+        ("sweep point", "stick a=0.4"), ("What experiments measure (sweep curves)", None),
+        ("figures and page", None)]
+    tl[2]["seconds"] = 20.0
+    assert report_critical_path(tl)["critical_path_s"] == pytest.approx(23.0)
