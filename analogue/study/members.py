@@ -25,7 +25,7 @@ quadrature), ``smoothing`` = exact(model at the circuit's epsilon) - exact(ideal
 ``bandwidth`` = held minus white noise Monte Carlo on common increments (Gaussian members),
 ``element`` = the family's circuit terms of :func:`analogue.circuit.mapping.map_model`
 (cubic network approximation, inductor series resistance, shot pulse width/edges), relative
-terms times the theory value, ``integration`` = the first deck (8 replicas) of the stationary
+terms times the theory value, ``integration`` = the first two decks (8 replicas) of the stationary
 run (spring: of its run) re-run with :meth:`~analogue.study.experiments.Experiment.check_spec`
 (100x tighter, the same noise), the paired difference (|d| + 2 SE); transition rows carry the
 stationary run's check only in their note (not re-run: it would double the chapter's ngspice).
@@ -115,9 +115,19 @@ def stick_window(exp: Experiment) -> float:
 # the chapter's title (and the name its members' failures are recorded under)
 CHAPTER_TITLE = "Beyond the paper"
 
-# replicas of the integration check (the first deck of the nominal run, re-run with 100x
+# replicas of the integration check (the first decks of the nominal run, re-run with 100x
 # tighter tolerances on the same noise: Experiment.check_spec)
 CHECK_REPLICAS = 8
+# Replicas per deck of a member's nominal stationary (spring: release) run and of its check,
+# which re-runs the first CHECK_REPLICAS // MEMBER_DECK decks: a deck's noise depends on its
+# size, so both must share it.  4, the tolerance calibration's own deck size (circuit.
+# tolerances.CAL_DECK) and the deck-size chooser's smallest: replicas in a deck share every
+# time step, so a smaller deck takes fewer points per noise hold (circuit.deck_size), and the
+# check's two decks run at once.  It was 8 (the check one deck): the spring's check, 8
+# replicas over 40 tau_m at 100x tighter tolerances, was the longest deck of the quick paper
+# (13.4 s idle, the job's critical path with unlimited cores: issue 22).  A deck-size choice:
+# it changes which noise drives which replica, so the members' numbers change like a seed.
+MEMBER_DECK = 4
 
 
 @dataclass(frozen=True)
@@ -308,7 +318,7 @@ def _null_se(o: C.Observable, law: C.LawMoments, n: int) -> float:
 @dataclass(frozen=True)
 class _Run:
     """One circuit run of a member (seeded, stored), as :func:`analogue.simulate` makes it.
-    ``per_deck`` fixes the deck size, so that a re-run of the first deck with ``spec`` (the
+    ``per_deck`` fixes the deck size, so that a re-run of the first decks with ``spec`` (the
     integration check) sees the same noise: a deck's noise depends on (seed, deck index,
     deck size); ``spec`` None: the experiment's circuit."""
 
@@ -410,8 +420,8 @@ class MemberRuns:
     returned them (``records`` kept).  1-D members: ``stationary`` (from p_s, seed
     ``member_circuit``), ``transition`` (from ``exp.v0[0]``; None without
     ``[experiment] histogram_times``: the member then has stationary rows only), ``check``
-    (the stationary run's first deck, 100x tighter); the spring: ``transition`` is the release from ``x0``
-    at rest (over the stationary length), ``check`` its first deck, no ``stationary``."""
+    (the stationary run's first two decks, 100x tighter); the spring: ``transition`` is the release from ``x0``
+    at rest (over the stationary length), ``check`` its first two decks, no ``stationary``."""
 
     exp: Experiment
     sizes: MemberSizes
@@ -458,16 +468,16 @@ def member_runs(exp: Experiment, opts=None, *, quick: bool | None = None,
 
 def _release_runs(exp: Experiment, runner: Runner, *, sizes: MemberSizes, quick: bool, plan: SeedPlan,
                   tick: Callable) -> MemberRuns:
-    """The spring's runs: the release from x0 at rest and its first deck 100x tighter."""
+    """The spring's runs: the release from x0 at rest and its first two decks 100x tighter."""
     t_start = time.perf_counter()
     seed, name, m = plan.member_circuit, exp.name, exp.model
     tick(f"{name}: circuit run from x0 = {m.x0:g} ({sizes.transition_replicas} replicas) and "
          f"its integration check (first {CHECK_REPLICAS} replicas, 100x tighter)")
-    # the check first: one deck of 5x a nominal deck's cost
+    # the check first: its decks cost 5x a nominal deck's
     runs = [_Run("check", 0.0, sizes.stationary_t_end, CHECK_REPLICAS, seed,
-                 exp.check_spec(), CHECK_REPLICAS),
+                 exp.check_spec(), MEMBER_DECK),
             _Run("release", 0.0, sizes.stationary_t_end, sizes.transition_replicas, seed,
-                 per_deck=CHECK_REPLICAS)]
+                 per_deck=MEMBER_DECK)]
     done, timing = _member_circuits(exp, sizes, runner, runs, t_start)
     return MemberRuns(exp, sizes, quick, transition=done["release"], check=done["check"],
                       seeds={"transition": seed, "check_transition": seed}, timing=timing)
@@ -476,7 +486,7 @@ def _release_runs(exp: Experiment, runner: Runner, *, sizes: MemberSizes, quick:
 def _one_d_runs(exp: Experiment, runner: Runner, *, sizes: MemberSizes, quick: bool, plan: SeedPlan,
                 tick: Callable) -> MemberRuns:
     """A 1-D member's runs: stationary (from the start model's law), transition (from
-    ``exp.v0[0]``, with ``histogram_times``) and the stationary run's first deck 100x
+    ``exp.v0[0]``, with ``histogram_times``) and the stationary run's first two decks 100x
     tighter; none needs another's result, so their decks share one pool."""
     t_start = time.perf_counter()
     seed, name = plan.member_circuit, exp.name
@@ -488,12 +498,12 @@ def _one_d_runs(exp: Experiment, runner: Runner, *, sizes: MemberSizes, quick: b
                                             f"({sizes.transition_replicas} replicas)"
                                             if times else "")
          + f", integration check (first {CHECK_REPLICAS} stationary replicas, 100x tighter)")
-    # longest first: the check (one deck of 5x a nominal deck's cost), the stationary run,
+    # longest first: the check (decks of 5x a nominal deck's cost), the stationary run,
     # the transition run (no histogram_times: none; max(times) crashed)
     runs = [_Run("check", v0_stat[:CHECK_REPLICAS], sizes.stationary_t_end, CHECK_REPLICAS,
-                 seed, exp.check_spec(), CHECK_REPLICAS),
+                 seed, exp.check_spec(), MEMBER_DECK),
             _Run("stationary", v0_stat, sizes.stationary_t_end, sizes.stationary_replicas,
-                 seed, per_deck=CHECK_REPLICAS)]
+                 seed, per_deck=MEMBER_DECK)]
     if times:
         runs.append(_Run("transition", v00, max(times), sizes.transition_replicas,
                          plan.member_transition))
@@ -888,7 +898,7 @@ def _analyse_monte_carlo(s: _Setting, runs: MemberRuns, res: MemberAnalysis,
     circuit's and the Monte Carlo's replica jackknives in quadrature; smoothing: the Monte
     Carlo at the circuit's epsilon minus the reference on the same noise (paired); bandwidth:
     the held-input minus white-input Monte Carlo on common increments (:func:`_band`);
-    integration: the stationary run's first deck re-run 100x tighter; element: the catalogue's
+    integration: the stationary run's first two decks re-run 100x tighter; element: the catalogue's
     terms."""
     exp, sizes, plan, thr = s.exp, s.sizes, s.plan, s.thr
     m, name = exp.model, exp.name
