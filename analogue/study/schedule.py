@@ -272,8 +272,21 @@ def monte_carlo_pool():
     pairs) stays in this process.  Measured on the shared 2-core machine (load ~10), the
     quick work experiment's terms: a spawned process pool pickled ~2.5 GB of noise through
     pipes (system CPU of the whole quick paper 17.6 -> 34.0 s); two threads took the same
-    CPU as one loop (9.8 against 9.1-11.3 s), bit for bit the same numbers."""
-    return ThreadPoolExecutor(max_workers=usable_cpus(), thread_name_prefix="analogue-mc")
+    CPU as one loop (9.8 against 9.1-11.3 s), bit for bit the same numbers.
+
+    At most :data:`MC_THREADS` threads: the loop's numpy calls on 1024-row chunks are a few
+    microseconds each, so the threads take turns on the GIL more than they run beside each
+    other.  Measured on an idle 16-core Xeon (quick paper, one thread per core): the work
+    experiment's chunks took 29.0 CPU-s against 3.3 on 2 cores (2.5x per core slower there),
+    its longest chunk 3.3 s against 0.75, and the threads starved the rest of the job (a
+    member's Monte Carlo reference: 41 s against 1.9).  The chunks are fixed in size, so the
+    numbers do not depend on the thread count."""
+    return ThreadPoolExecutor(max_workers=min(usable_cpus(), MC_THREADS),
+                              thread_name_prefix="analogue-mc")
+
+
+#: the most threads of :func:`monte_carlo_pool` (its docstring)
+MC_THREADS = 4
 
 
 # the threads of the paper's circuit runs and of the family members' analyses (see

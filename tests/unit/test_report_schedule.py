@@ -429,3 +429,44 @@ def test_the_pages_circuit_work_starts_after_the_paper_runs_not_its_chapters(tmp
     assert events.index(("handed", "sweep curves", False)) < events.index("main complete")
     (phase,) = [p for p in result.phases.items if p["phase"] == "sweep curves"]
     assert phase["thread"] == "page circuit"
+
+
+def test_blas_at_one_thread_for_the_whole_study(monkeypatch):
+    """The study's threads (circuit, members, theory, Monte Carlo, main) run beside ngspice:
+    BLAS/LAPACK at one thread in every one of them for the whole study (measured on 16 cores:
+    a BLAS call per thread started one thread per core), restored after it."""
+    from threadpoolctl import threadpool_info
+
+    def blas_threads():
+        return {i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"}
+    before = blas_threads()
+    seen = []
+
+    def runs(exp, opts, settings=None):
+        seen.append(("runs", blas_threads()))
+        raise RuntimeError("stub")
+
+    def member(exp, opts):
+        seen.append(("member", blas_threads()))
+        raise RuntimeError("stub")
+    monkeypatch.setattr(S, "run_experiment_runs", runs)
+    monkeypatch.setattr(S, "member_task", member)
+    S.run_study([_exp("small", 6.0, 22)], members=_members(["shot"]),
+                opts=RunOptions(quick=True, progress=False))
+    assert seen and all(t == {1} for _, t in seen), seen
+    assert blas_threads() == before
+
+
+def test_monte_carlo_threads_are_capped(monkeypatch):
+    monkeypatch.setattr(SCH, "usable_cpus", lambda: 16)
+    pool = SCH.monte_carlo_pool()
+    try:
+        assert pool._max_workers == SCH.MC_THREADS < 16
+    finally:
+        pool.shutdown()
+    monkeypatch.setattr(SCH, "usable_cpus", lambda: 2)
+    pool = SCH.monte_carlo_pool()
+    try:
+        assert pool._max_workers == 2
+    finally:
+        pool.shutdown()
