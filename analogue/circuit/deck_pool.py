@@ -27,7 +27,12 @@ import threading
 import time
 from typing import Any
 
-__all__ = ["DeckPool", "PoolView", "WaitClock"]
+__all__ = ["CALIBRATION_AHEAD", "DeckPool", "PoolView", "WaitClock"]
+
+
+#: how far ahead of its caller's decks :meth:`PoolView.ahead` queues (less than a step between
+#: the study's tiers, analogue.study.schedule.PAPER_DECKS ...)
+CALIBRATION_AHEAD = 0.5
 
 
 class DeckPool(cf.Executor):
@@ -110,6 +115,12 @@ class PoolView(cf.Executor):
 
     def submit(self, fn, /, *args: Any, **kwargs: Any) -> cf.Future:
         return self.pool.submit_at(self.priority, fn, *args, **kwargs)
+
+    def ahead(self) -> PoolView:
+        """A view of the same pool half a priority step ahead: work that everything else of
+        this caller waits for (its calibrations) before other callers' bulk decks of the
+        same or the next priority."""
+        return PoolView(self.pool, self.priority - CALIBRATION_AHEAD)
 
     def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
         pass  # the pool is its owner's

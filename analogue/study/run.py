@@ -40,9 +40,9 @@ from .members import (CHAPTER_TITLE, MemberAnalysis, MemberRuns, analyse_member,
                       is_member_experiment, member_runs)
 from .metrics import Comparison, validate_metrics
 from .runs import ExperimentRuns, run_experiment_runs
-from .schedule import (CIRCUIT_THREADS, MEMBER_DECKS, NOW, PAPER_DECKS, PAPER_RANK_STEP,
-                       SCHEDULER_CIRCUIT_THREADS, Failures, Phases, Workers, circuit_cost,
-                       member_cost, member_threads, members_at_once, monte_carlo_pool,
+from .schedule import (CIRCUIT_THREADS, MEMBER_DECKS, MEMBER_THREADS, NOW, PAPER_DECKS,
+                       PAPER_RANK_STEP, SCHEDULER_CIRCUIT_THREADS, Failures, Phases, Workers, circuit_cost,
+                       experiments_at_once, member_cost, monte_carlo_pool,
                        result_of, say)
 from .settings import RunOptions
 from .theory_curves import (CURVE_GROUPS, ExperimentTheory, FigureCurves, experiment_theory,
@@ -319,11 +319,11 @@ def run_study(experiments: Iterable, *, members: Iterable = (), opts: RunOptions
         pool = Workers(result.phases, "theory", 1, blas_limit=True)
         circuit = Workers(result.phases, "circuit",
                           SCHEDULER_CIRCUIT_THREADS if opts.scheduler else
-                          max(1, len(result.experiments)) if members_at_once(opts)
+                          max(1, len(result.experiments)) if experiments_at_once(opts)
                           and decks is not None
                           else CIRCUIT_THREADS)
         family = Workers(result.phases, "members",
-                         member_threads(len(result.members), members_at_once(opts)))
+                         MEMBER_THREADS)
         page = Workers(result.phases, "page circuit", PAGE_CIRCUIT_THREADS)
         mc = monte_carlo_pool()
         try:
@@ -453,11 +453,9 @@ class _Schedule:
         and on a larger machine all but one idle."""
         members = self.result.members
         opts = self.result.options_for(self.opts, MEMBER_DECKS)
-        # with many cores the members start at once: their decks queue behind the paper's in
-        # the one deck pool, and their theory and Monte Carlo references fill the cores the
-        # paper's few decks leave idle; on a few cores they wait for the paper's circuit runs
-        # (their Python work would slow the paper's chapters: see above)
-        after = [] if members_at_once(self.opts) else [*self.runs_f.values()]
+        # after the paper's circuit runs on every machine (schedule.EXPERIMENTS_AT_ONCE_CORES
+        # says why not at once on many cores: their Python work takes turns on the GIL)
+        after = [*self.runs_f.values()]
         for j in sorted(range(len(members)), key=lambda j: -member_cost(members[j])):
             self.members_f[j] = self.family.submit_after(
                 after, "family member (circuit and theory)",
@@ -469,9 +467,8 @@ class _Schedule:
         :data:`~analogue.study.schedule.SWEEP_DECKS`: the hook asks
         :meth:`StudyResult.options_for`); its futures join
         the background tasks handed to :meth:`StudyHooks.background_ready`."""
-        # (as the members: at once on many cores, their decks queue behind the others' in
-        # the study's deck pool; on a few cores once the paper's circuit runs are done)
-        after = [] if members_at_once(self.opts) else [*self.runs_f.values()]
+        # (as the members: once the paper's circuit runs are done)
+        after = [*self.runs_f.values()]
         for phase, fn in self.hooks.circuit_background(self.result).items():
             self.background[phase] = page.submit_after(after, phase, None, fn)
 

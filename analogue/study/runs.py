@@ -55,6 +55,7 @@ from ..circuit.simulate import simulate
 from ..circuit.tolerances import resolve_spec
 from ..circuit.runner import Runner
 from ..circuit import ngspice as _ng
+from ..circuit.deck_pool import PoolView
 from ..theory.exact import sample_stationary
 from .theory_curves import stationary_taus
 
@@ -422,14 +423,20 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
     # state, and transitions from far-off v0 err more (measured: judged on v(T), v(T)^2,
     # 1[v(T)<0] alone, the quick stick and work transitions took trap 1e-4 and 1e-3 with
     # trtol 20, and their P(v<0) rows' integration terms reached 0.14 and 0.12 SE)
-    trans_spec, trans_deck, trans_why = _choose(model, spec, replicas, exp.t_end, runner, check,
-                                                None)
+    # the calibrations' decks ahead of every experiment's bulk decks in the study's deck
+    # pool: each experiment waits for its own calibrations, so with the experiments run at
+    # once (many cores) its calibrations queued behind the longer experiments' hundreds of
+    # decks (full paper on 16 cores: stick's and slip's 51-54 s before their first deck)
+    cal_runner = (runner.replace(executor=runner.executor.ahead())
+                  if isinstance(runner.executor, PoolView) else runner)
+    trans_spec, trans_deck, trans_why = _choose(model, spec, replicas, exp.t_end, cal_runner,
+                                                check, None)
     # the stationary runs (and their check) hold the noise for a fraction of the circuit's
     # hold (plan.stationary_noise_dt): their indicator observables carry the largest
     # bandwidth bias; tolerances and deck size are chosen for that finer deck
     stat_base = spec.replace(noise_dt=stationary_noise_dt(exp.mapping().noise_dt, settings))
     stat_spec, stat_deck, stat_why = _choose(model, stat_base, n_stat, settings.stationary_t_end,
-                                             runner, check, STATIONARY_OBSERVABLES)
+                                             cal_runner, check, STATIONARY_OBSERVABLES)
     v0_stat = np.asarray(sample_stationary(model_eff, n_stat, seeds["stationary"]), dtype=float)
     for i, v0 in enumerate(exp.v0):
         seeds[f"transition v0={v0:g}"] = plan.transition(i)

@@ -279,14 +279,15 @@ def monte_carlo_pool():
     other.  Measured on an idle 16-core Xeon (quick paper, one thread per core): the work
     experiment's chunks took 29.0 CPU-s against 3.3 on 2 cores (2.5x per core slower there),
     its longest chunk 3.3 s against 0.75, and the threads starved the rest of the job (a
-    member's Monte Carlo reference: 41 s against 1.9).  The chunks are fixed in size, so the
-    numbers do not depend on the thread count."""
+    member's Monte Carlo reference: 41 s against 1.9); with 4 threads 24.2 CPU-s.  Two threads
+    took the same CPU as one loop on 2 cores (above), so two it is.  The chunks are fixed in
+    size, so the numbers do not depend on the thread count."""
     return ThreadPoolExecutor(max_workers=min(usable_cpus(), MC_THREADS),
                               thread_name_prefix="analogue-mc")
 
 
 #: the most threads of :func:`monte_carlo_pool` (its docstring)
-MC_THREADS = 4
+MC_THREADS = 2
 
 
 # the threads of the paper's circuit runs and of the family members' analyses (see
@@ -305,28 +306,26 @@ PAPER_DECKS, MEMBER_DECKS, SWEEP_DECKS = 0, 1, 2
 PAPER_RANK_STEP = 0.01
 
 # From this many usable cores on, the paper's experiments run their circuit work at once (a
-# circuit thread each) and the family members start with them rather than after them, one
-# thread each: the paper's experiments are a few dozen decks apiece with serial calibrations
-# before them, which leave most of a large machine idle, and the deck pool keeps the members'
-# decks behind the paper's, and the paper's longest experiment's before the others'.  Below it the
-# members' Python work (theory, Monte Carlo references: 14 CPU-s on the quick paper) would
-# take the cores the paper's chapters need (measured on 2 cores: the paper's chapters 8.5 s
-# later when the members started before its figures).
-MEMBERS_AT_ONCE_CORES = 8
+# circuit thread each): an experiment is a few dozen decks with serial calibrations before
+# them, which leave most of a large machine idle, and the deck pool keeps the longest
+# experiment's decks before the others'.  Those threads mostly wait for ngspice.
+#
+# The family members (and the sweeps) still start only once the paper's circuit runs are
+# done, on MEMBER_THREADS threads, on every machine: their work beside the decks is Python
+# (theory, Monte Carlo references and held/white pairs on arrays of a few thousand rows),
+# which takes turns on the GIL rather than running beside the rest.  Measured on an idle
+# 16-core Xeon (quick paper, the members started with the paper's runs, one thread each):
+# the members' Monte Carlo references took 23-36 s of wall against 2-5 s on 2 cores, and the
+# job's Python CPU was 152-178 s against 57 s (sys 37-44 s: the threads' GIL hand-offs).
+EXPERIMENTS_AT_ONCE_CORES = 8
 
 
-def members_at_once(opts) -> bool:
-    """Whether the members start at once (:data:`MEMBERS_AT_ONCE_CORES`): with a Dask
-    scheduler (the cluster, not this machine, runs the decks) or on that many local
-    workers."""
-    return bool(opts.scheduler) or (opts.workers or usable_cpus()) >= MEMBERS_AT_ONCE_CORES
+def experiments_at_once(opts) -> bool:
+    """Whether the paper's experiments run their circuit work at once
+    (:data:`EXPERIMENTS_AT_ONCE_CORES` local workers or more; never with a Dask scheduler,
+    which has its own :data:`SCHEDULER_CIRCUIT_THREADS`)."""
+    return not opts.scheduler and (opts.workers or usable_cpus()) >= EXPERIMENTS_AT_ONCE_CORES
 
-
-def member_threads(members: int, at_once: bool) -> int:
-    """Threads for the family members' analyses: one per member when they start at once
-    (:func:`members_at_once`: their decks share the study's one deck pool, so more threads
-    never mean more ngspice processes), else :data:`MEMBER_THREADS`."""
-    return max(MEMBER_THREADS, members) if at_once else MEMBER_THREADS
 
 def circuit_cost(exp: Experiment, opts: RunOptions) -> float:
     """A proxy for an experiment's ngspice time: its replica-time (replicas x model time of

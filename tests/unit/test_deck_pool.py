@@ -140,3 +140,45 @@ def test_wait_clock_counts_only_the_time_no_deck_of_its_caller_ran():
         assert pool.submit(lambda: 1).result(10) == 1
     finally:
         pool.shutdown()
+
+
+def test_ahead_queues_before_the_same_and_the_next_priority():
+    """A caller's calibrations (view.ahead()) run before every caller's bulk decks of its
+    priority and the next, after those of a lower priority's calibrations."""
+    pool = DeckPool(1)
+    gate = threading.Event()
+    order = []
+    pool.submit(gate.wait)
+    paper0, paper1, members = pool.view(0), pool.view(0.01), pool.view(1)
+    futs = [paper0.submit(order.append, "bulk 0"), paper1.submit(order.append, "bulk 0.01"),
+            members.submit(order.append, "member bulk"),
+            members.ahead().submit(order.append, "member calibration"),
+            paper1.ahead().submit(order.append, "calibration 0.01"),
+            paper0.ahead().submit(order.append, "calibration 0")]
+    gate.set()
+    for f in futs:
+        f.result(timeout=10)
+    pool.shutdown()
+    assert order == ["calibration 0", "calibration 0.01", "bulk 0", "bulk 0.01",
+                     "member calibration", "member bulk"]
+
+
+def test_the_papers_calibrations_run_ahead_of_the_bulk_decks(monkeypatch):
+    """run_experiment_runs chooses tolerances and deck sizes with the runner's view moved
+    ahead (its calibrations before any experiment's bulk decks), and runs its decks at the
+    view's own priority."""
+    from analogue.study import runs as R
+    from analogue.study.experiments import load_experiment, standard_circuit
+    from analogue.study.settings import RunOptions
+    pool = DeckPool(1)
+    seen = []
+
+    def choose(model, spec, replicas, t_end, runner, check, observables):
+        seen.append(runner.executor.priority)
+        raise RuntimeError("stop after the calibrations' runner")
+    monkeypatch.setattr(R, "_choose", choose)
+    opts = RunOptions(quick=True, progress=False, store=False, executor=pool.view(0.02))
+    with pytest.raises(RuntimeError, match="stop"):
+        R.run_experiment_runs(load_experiment(standard_circuit("slip")), opts)
+    pool.shutdown()
+    assert seen == [0.02 - 0.5]

@@ -255,21 +255,18 @@ def test_no_pool_with_a_scheduler(monkeypatch):
     assert result.deck_pool is None and seen == {"executor": None}
 
 
-@pytest.mark.parametrize("cores, at_once", [(2, False), (7, False), (8, True), (16, True)])
-def test_members_start_at_once_on_many_cores(monkeypatch, cores, at_once):
-    """From MEMBERS_AT_ONCE_CORES usable cores on, the members start with the paper's runs,
-    one thread each (their decks queue behind the paper's in the one pool); below it they
-    wait for the paper's circuit runs, on MEMBER_THREADS threads."""
+@pytest.mark.parametrize("cores", [2, 8, 16])
+def test_members_wait_for_the_papers_runs_on_any_machine(monkeypatch, cores):
+    """The members start once the paper's circuit runs are done, on MEMBER_THREADS threads,
+    whatever the core count: their work beside the decks is Python that takes turns on the GIL
+    (measured on 16 cores with the members started at once: their Monte Carlo references
+    23-36 s against 2-5 s on 2 cores)."""
     monkeypatch.setattr(SCH, "usable_cpus", lambda: cores)
     monkeypatch.setattr(S, "usable_cpus", lambda: cores)
-    release = threading.Event()
     events: list = []
     lock = threading.Lock()
 
     def runs(exp, opts, settings=None, on_stationary=None):
-        # the paper's runs end only once every member has started or after 3 s (a member
-        # that waits for the runs never starts before)
-        release.wait(3.0)
         with lock:
             events.append("runs done")
         raise RuntimeError("stub")
@@ -277,8 +274,6 @@ def test_members_start_at_once_on_many_cores(monkeypatch, cores, at_once):
     def member(exp, opts):
         with lock:
             events.append(f"member {exp.name}")
-            if sum(e.startswith("member") for e in events) == 3:
-                release.set()
         raise RuntimeError("member stub")
     monkeypatch.setattr(S, "run_experiment_runs", runs)
     monkeypatch.setattr(S, "member_task", member)
@@ -291,15 +286,14 @@ def test_members_start_at_once_on_many_cores(monkeypatch, cores, at_once):
     monkeypatch.setattr(S, "Workers", workers)
     S.run_study([_exp("small", 6.0, 22)], members=_members(["cubic", "shot", "stribeck"]),
                 opts=RunOptions(quick=True, progress=False))
-    first_members = events.index("runs done") == 3
-    assert first_members is at_once
-    assert threads["members"] == (3 if at_once else SCH.MEMBER_THREADS)
+    assert events[0] == "runs done" and len(events) == 4
+    assert threads["members"] == SCH.MEMBER_THREADS
     assert threads["circuit"] == 1
 
 
 @pytest.mark.parametrize("cores", [2, 16])
 def test_many_cores_run_the_papers_experiments_at_once_longest_first(monkeypatch, cores):
-    """From MEMBERS_AT_ONCE_CORES cores on, a circuit thread per experiment; each
+    """From EXPERIMENTS_AT_ONCE_CORES cores on, a circuit thread per experiment; each
     experiment's decks at its own priority in the pool, longest first, all before the
     members'."""
     monkeypatch.setattr(SCH, "usable_cpus", lambda: cores)
@@ -321,7 +315,7 @@ def test_many_cores_run_the_papers_experiments_at_once_longest_first(monkeypatch
     monkeypatch.setattr(S, "Workers", workers)
     S.run_study([_exp("small", 6.0, 22), _exp("big", 12.0, 21), _exp("mid", 9.0, 23)],
                 opts=RunOptions(quick=True, progress=False))
-    assert threads["circuit"] == (3 if cores >= SCH.MEMBERS_AT_ONCE_CORES else 1)
+    assert threads["circuit"] == (3 if cores >= SCH.EXPERIMENTS_AT_ONCE_CORES else 1)
     assert seen["big"] < seen["mid"] < seen["small"] < SCH.MEMBER_DECKS
     assert seen["big"] == SCH.PAPER_DECKS
 
@@ -442,7 +436,7 @@ def test_blas_at_one_thread_for_the_whole_study(monkeypatch):
     before = blas_threads()
     seen = []
 
-    def runs(exp, opts, settings=None):
+    def runs(exp, opts, settings=None, on_stationary=None):
         seen.append(("runs", blas_threads()))
         raise RuntimeError("stub")
 
@@ -467,6 +461,12 @@ def test_monte_carlo_threads_are_capped(monkeypatch):
     monkeypatch.setattr(SCH, "usable_cpus", lambda: 2)
     pool = SCH.monte_carlo_pool()
     try:
-        assert pool._max_workers == 2
+        assert pool._max_workers == min(2, SCH.MC_THREADS)
+    finally:
+        pool.shutdown()
+    monkeypatch.setattr(SCH, "usable_cpus", lambda: 1)
+    pool = SCH.monte_carlo_pool()
+    try:
+        assert pool._max_workers == 1
     finally:
         pool.shutdown()
