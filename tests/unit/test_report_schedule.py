@@ -205,6 +205,18 @@ def _members(names):
     return [load_experiment(standard_circuit(n)) for n in names]
 
 
+def _spy_workers(monkeypatch) -> dict:
+    """{pool name: threads} of every Workers the study makes."""
+    threads: dict = {}
+    real = S.Workers
+
+    def workers(phases, name, n=1, **kw):
+        threads[name] = n
+        return real(phases, name, n, **kw)
+    monkeypatch.setattr(S, "Workers", workers)
+    return threads
+
+
 @pytest.mark.parametrize("cores", [2, 16])
 def test_every_deck_of_a_study_goes_to_one_pool_paper_first(monkeypatch, cores):
     """Issue 22, never more ngspice processes than cores: the paper's runs and every member
@@ -277,13 +289,7 @@ def test_members_wait_for_the_papers_runs_on_any_machine(monkeypatch, cores):
         raise RuntimeError("member stub")
     monkeypatch.setattr(S, "run_experiment_runs", runs)
     monkeypatch.setattr(S, "member_task", member)
-    threads = {}
-    real = S.Workers
-
-    def workers(phases, name, n=1, **kw):
-        threads[name] = n
-        return real(phases, name, n, **kw)
-    monkeypatch.setattr(S, "Workers", workers)
+    threads = _spy_workers(monkeypatch)
     S.run_study([_exp("small", 6.0, 22)], members=_members(["cubic", "shot", "stribeck"]),
                 opts=RunOptions(quick=True, progress=False))
     assert events[0] == "runs done" and len(events) == 4
@@ -306,13 +312,7 @@ def test_many_cores_run_the_papers_experiments_at_once_longest_first(monkeypatch
             seen[exp.name] = opts.runner().executor.priority
         raise RuntimeError("stub")
     monkeypatch.setattr(S, "run_experiment_runs", runs)
-    threads = {}
-    real = S.Workers
-
-    def workers(phases, name, n=1, **kw):
-        threads[name] = n
-        return real(phases, name, n, **kw)
-    monkeypatch.setattr(S, "Workers", workers)
+    threads = _spy_workers(monkeypatch)
     S.run_study([_exp("small", 6.0, 22), _exp("big", 12.0, 21), _exp("mid", 9.0, 23)],
                 opts=RunOptions(quick=True, progress=False))
     assert threads["circuit"] == (3 if cores >= SCH.EXPERIMENTS_AT_ONCE_CORES else 1)
@@ -326,6 +326,7 @@ def test_members_are_queued_longest_first(monkeypatch):
     result keeps the given order."""
     started: list = []
     monkeypatch.setattr(SCH, "MEMBER_THREADS", 1)
+    monkeypatch.setattr(S, "MEMBER_THREADS", 1)
     monkeypatch.setattr(SCH, "usable_cpus", lambda: 2)
 
     def member(exp, opts):
