@@ -115,9 +115,13 @@ def test_quick_paper_writes_valid_report(paper_report):
     assert prov["critical_path"] and prov["critical_path"][-1]["phase"] == "figures and page"
     assert sum(c["seconds"] for c in prov["critical_path"]) == pytest.approx(
         prov["critical_path_s"], abs=1e-2)
-    assert set(prov["circuit_timing"]) == set(PAPER_EXPERIMENTS)
+    # the family members' too (by their parts: each run's calibrations and longest deck,
+    # the Monte Carlo reference and the estimates)
+    assert set(prov["circuit_timing"]) == set(PAPER_EXPERIMENTS) | set(MEMBERS)
     assert all(t["longest_deck_s"] > 0 and t["decks_run"] > 0
                for t in prov["circuit_timing"].values())
+    assert all({"runs", "reference_s", "analysis_s"} <= set(prov["circuit_timing"][m])
+               for m in MEMBERS)
     assert "critical path (unlimited cores)" in (out / "index.html").read_text()
     assert re.fullmatch(r"\d+(\.\d+)*", str(prov["ngspice_version"]))
     # every run lists the sha256 of each of its decks
