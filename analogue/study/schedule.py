@@ -266,7 +266,8 @@ def member_cost(exp) -> float:
 
 def monte_carlo_pool():
     """The threads that run the bandwidth terms' Monte Carlo chunks
-    (:func:`analogue.study.comparisons.bandwidth_terms`, issue 22): one per usable core.
+    (:func:`analogue.study.comparisons.bandwidth_terms`, issue 22): one per usable core, at most
+    :data:`MC_THREADS`.
     Threads, not processes: a chunk's loop is numpy arithmetic on 2048-row arrays, which runs
     outside the GIL, and its noise (160 MB per chunk of the quick work experiment's transition
     pairs) stays in this process.  Measured on the shared 2-core machine (load ~10), the
