@@ -392,7 +392,7 @@ def _sweeps_option(f):
         "--sweeps", is_flag=True,
         help="Add the two sweep curves of the chapter 'What experiments measure' (the stick "
              "experiment's drift against a and D_x against the noise strength: 8 more "
-             "circuit points at quick size, about 5 minutes on 2 cores).")(f)
+             "circuit points at quick size, run at once: about 70 s more on 2 idle cores).")(f)
 
 
 @main.command()
