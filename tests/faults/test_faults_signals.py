@@ -106,6 +106,18 @@ def _interrupt_when_busy(proc, store: Path, tmp: Path, marker: str, sig) -> set[
     raise AssertionError("the run never got busy")
 
 
+def _interrupted(cmd: list, env: dict, store: Path, tmp: Path, marker: str, sig,
+                 cwd: Path | None = None) -> tuple:
+    """Start ``cmd``, send ``sig`` once its ngspice is busy, wait for it: ``(proc, stderr,
+    ngspice pids seen, seconds from the signal to its exit)``."""
+    proc = subprocess.Popen(cmd, env=env, cwd=cwd, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    seen = _interrupt_when_busy(proc, store, tmp, marker, sig)
+    t0 = time.monotonic()
+    _, err = proc.communicate(timeout=60)
+    return proc, err, seen, time.monotonic() - t0
+
+
 def _assert_clean(marker, pid, tmp, store, seen):
     deadline = time.monotonic() + 10
     while _marked(marker, pid) and time.monotonic() < deadline:
@@ -119,13 +131,10 @@ def _assert_clean(marker, pid, tmp, store, seen):
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
 def test_simulate_interrupted_cleans_up_and_resumes(tmp_path, sig):
     tmp, store, script, marker, env = _workspace(tmp_path, "run.py", SCRIPT)
-    proc = subprocess.Popen([sys.executable, str(script), str(store), str(tmp_path / "v.npy"),
-                             "catch"], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True)
-    seen = _interrupt_when_busy(proc, store, tmp, marker, sig)
-    t0 = time.monotonic()
-    _, err = proc.communicate(timeout=60)
-    assert time.monotonic() - t0 < 15
+    proc, err, seen, waited = _interrupted([sys.executable, str(script), str(store),
+                                            str(tmp_path / "v.npy"), "catch"], env, store, tmp,
+                                           marker, sig)
+    assert waited < 15
     assert proc.returncode == 128 + sig, (proc.returncode, err)
     lines = [ln for ln in err.splitlines() if ln.strip()]
     assert len(lines) == 1, err
@@ -157,11 +166,9 @@ def test_uncaught_sigterm_in_a_script_still_cleans_up(tmp_path):
     """A user script that does not catch anything: the exit is abnormal (the exception is
     KeyboardInterrupt), but no ngspice and no temporary directory outlive it."""
     tmp, store, script, marker, env = _workspace(tmp_path, "run.py", SCRIPT)
-    proc = subprocess.Popen([sys.executable, str(script), str(store), str(tmp_path / "v.npy"),
-                             "plain"], env=env, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
-    seen = _interrupt_when_busy(proc, store, tmp, marker, signal.SIGTERM)
-    _, err = proc.communicate(timeout=60)
+    proc, err, seen, _ = _interrupted([sys.executable, str(script), str(store),
+                                       str(tmp_path / "v.npy"), "plain"], env, store, tmp,
+                                      marker, signal.SIGTERM)
     assert proc.returncode != 0
     assert "RunInterrupted" in err
     _assert_clean(marker, proc.pid, tmp, store, seen)
@@ -206,12 +213,8 @@ def test_cli_run_interrupted_cleans_up_and_resumes(tmp_path, sig):
     exe = Path(sys.executable).with_name("analogue")
     cmd = [str(exe), "run", str(toml), "--store", str(store), "--workers", "1",
            "--no-progress"]
-    proc = subprocess.Popen(cmd, env=env, cwd=tmp_path, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
-    seen = _interrupt_when_busy(proc, store, tmp, marker, sig)
-    t0 = time.monotonic()
-    _, err = proc.communicate(timeout=60)
-    assert time.monotonic() - t0 < 15
+    proc, err, seen, waited = _interrupted(cmd, env, store, tmp, marker, sig, cwd=tmp_path)
+    assert waited < 15
     _assert_clean(marker, proc.pid, tmp, store, seen)
     assert "Traceback" not in err
     done = {k: RunStore(store).path(k).read_bytes() for k in RunStore(store).keys()}  # noqa: SIM118
@@ -403,12 +406,8 @@ def test_cli_sweep_with_points_at_once_interrupted_cleans_up(tmp_path, sig):
     out = tmp_path / "out"
     cmd = [str(exe), "sweep", str(toml), "--vary", "a=0:0.4:3", "--out", str(out),
            "--store", str(store), "--workers", "2", "--no-progress"]
-    proc = subprocess.Popen(cmd, env=env, cwd=tmp_path, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
-    seen = _interrupt_when_busy(proc, store, tmp, marker, sig)
-    t0 = time.monotonic()
-    _, err = proc.communicate(timeout=60)
-    assert time.monotonic() - t0 < 15
+    proc, err, seen, waited = _interrupted(cmd, env, store, tmp, marker, sig, cwd=tmp_path)
+    assert waited < 15
     _assert_clean(marker, proc.pid, tmp, store, seen)
     assert "Traceback" not in err
     assert proc.returncode == 128 + sig, (proc.returncode, err)
@@ -435,10 +434,8 @@ def test_uncaught_sigterm_in_a_sweep_script_still_cleans_up(tmp_path):
     toml = tmp_path / "sigsweep.toml"
     toml.write_text(SWEEP_TOML)
     out = tmp_path / "out"
-    proc = subprocess.Popen([sys.executable, str(script), str(toml), str(store), str(out)],
-                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    seen = _interrupt_when_busy(proc, store, tmp, marker, signal.SIGTERM)
-    _, err = proc.communicate(timeout=60)
+    proc, err, seen, _ = _interrupted([sys.executable, str(script), str(toml), str(store),
+                                       str(out)], env, store, tmp, marker, signal.SIGTERM)
     assert proc.returncode != 0
     assert "RunInterrupted" in err
     _assert_clean(marker, proc.pid, tmp, store, seen)
