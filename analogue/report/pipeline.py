@@ -36,7 +36,7 @@ from ..plots.open_question import CASES, draw_open_question, open_question_data
 from ..study import members as beyond_analysis
 from ..study.budget import terms_above_se_text
 from ..study.comparisons import ExperimentAnalysis
-from ..study.critical_path import critical_path_text
+from ..study.critical_path import FIGURES_COMPARED, critical_path_text
 from ..study.members import CHAPTER_TITLE, MEMBERS, MemberRuns
 # run_experiment (``analogue run``) runs circuits only: the study's; importable from here as before
 from ..study.run import (MemberRunSummary, RunSummary, StudyHooks, StudyResult, load as _load,  # noqa: F401
@@ -167,19 +167,19 @@ def _explain(comps) -> list[str]:
                          f"{3 * c.circuit_stderr + c.budget.total():.3g}.")
     return lines
 
-def _figures_for(runs: ExperimentRuns, analysis: ExperimentAnalysis, out: Path,
-                 fails: Failures, section: str) -> tuple[list, list]:
-    """The experiment's figures; one that fails is recorded and the others are kept.
-    They only draw: every theory curve is in ``analysis`` (computed once).
-    Returns (figures, errors)."""
-    items, errors = [], []
-    a = analysis
+#: the experiment figures that draw theory curves (``analysis.curves``: the work-rate bins,
+#: the histogram's range); the others need the comparisons alone and are drawn as soon as
+#: they are in, while the curves are computed (issue 22: figures drawn as their data arrive)
+CURVE_FIGURES = frozenset({"prehistory", "stationary law", "work paths", "rate function"})
+
+
+def _figure_calls(runs: ExperimentRuns, a: ExperimentAnalysis, out: Path) -> list:
+    """``(what, function)`` for each of the experiment's figures, in the page's order."""
     # the paper's figure number only for the paper's own experiment (a user's file named
     # "stick" is not paper Fig. 2)
     tag = (PAPER_FIGURE_TAGS.get(runs.exp.name, "paths") if prose.is_paper_experiment(runs.exp)
            else "paths")
-    for what, fn in (
-            ("prehistory", lambda: figures.fig_prehistory(a, out, tag)),
+    return [("prehistory", lambda: figures.fig_prehistory(a, out, tag)),
             ("boundaries", lambda: figures.fig_boundaries(runs, out)),
             ("propagator", lambda: figures.fig_propagator(a, out)),
             ("propagator", lambda: figures.fig_propagator(a, out, runs.exp.v0[-1])
@@ -187,14 +187,38 @@ def _figures_for(runs: ExperimentRuns, analysis: ExperimentAnalysis, out: Path,
             ("stationary law", lambda: figures.fig_stationary(a, out)),
             ("work paths", lambda: figures.fig_work_paths(a, out)),
             ("rate function", lambda: figures.fig_rate_function(a, out)),
-            ("error budget", lambda: figures.fig_budget(a, out))):
+            ("error budget", lambda: figures.fig_budget(a, out))]
+
+
+def _draw_figures(runs: ExperimentRuns, analysis: ExperimentAnalysis, out: Path,
+                  fails: Failures, section: str, curves: bool | None = None) -> dict:
+    """Draw the experiment's figures: those of :data:`CURVE_FIGURES` (``curves`` True), the
+    others (False) or all (None).  Returns ``{position: (Figure or None, error or None)}``,
+    the position in the page's order; one that fails is recorded and the others are kept."""
+    drawn: dict = {}
+    for k, (what, fn) in enumerate(_figure_calls(runs, analysis, out)):
+        if curves is not None and (what in CURVE_FIGURES) != curves:
+            continue
         _log(f"{runs.exp.name}: figure: {what}")
         r, err = fails.attempt(section, f"figure: {what}", fn, runs.exp.name)
-        if err is not None:
-            errors.append(f"figure '{what}': {err}")
-        elif r is not None:
-            items.append(Figure(*r))
+        drawn[k] = (None if err is not None or r is None else Figure(*r),
+                    None if err is None else f"figure '{what}': {err}")
+    return drawn
+
+
+def _in_order(drawn: dict) -> tuple[list, list]:
+    """(figures, errors) of :func:`_draw_figures`'s parts, in the page's order."""
+    items = [drawn[k][0] for k in sorted(drawn) if drawn[k][0] is not None]
+    errors = [drawn[k][1] for k in sorted(drawn) if drawn[k][1] is not None]
     return items, errors
+
+
+def _figures_for(runs: ExperimentRuns, analysis: ExperimentAnalysis, out: Path,
+                 fails: Failures, section: str) -> tuple[list, list]:
+    """The experiment's figures; one that fails is recorded and the others are kept.
+    They only draw: every theory curve is in ``analysis`` (computed once).
+    Returns (figures, errors)."""
+    return _in_order(_draw_figures(runs, analysis, out, fails, section))
 
 
 def _open_question_gammas(opts: RunOptions) -> tuple:
@@ -259,6 +283,7 @@ class _Drawer(StudyHooks):
     def __init__(self, out: Path, opts: RunOptions, experiments: list):
         self.out, self.opts, self.experiments = out, opts, experiments
         self.figs: dict = {}            # experiment -> (figures, errors)
+        self.drawn: dict = {}           # experiment -> its figures drawn before its curves
         self.oq_section: list = []      # the open question's section, once drawn
         self.fig1_section: Section | None = None
         self.measure_f: dict = {}        # experiment -> future of its measure theory
@@ -284,10 +309,20 @@ class _Drawer(StudyHooks):
             tasks["open question (exact rate functions)"] = lambda: _open_question_data(self.opts)
         return tasks
 
+    def experiment_compared(self, result: StudyResult, runs, analysis) -> None:
+        # the figures that need no theory curve, while the curves are computed
+        with result.phases(FIGURES_COMPARED, runs.exp.name):
+            self.drawn[runs.exp.name] = _draw_figures(
+                runs, analysis, self.out, result.failures, _experiment_title(runs.exp),
+                curves=False)
+
     def experiment_ready(self, result: StudyResult, runs, analysis) -> None:
+        drawn = self.drawn.pop(runs.exp.name, None)
         with result.phases("figures", runs.exp.name):
-            self.figs[runs.exp.name] = _figures_for(runs, analysis, self.out, result.failures,
-                                                    _experiment_title(runs.exp))
+            rest = _draw_figures(runs, analysis, self.out, result.failures,
+                                 _experiment_title(runs.exp),
+                                 curves=None if drawn is None else True)
+        self.figs[runs.exp.name] = _in_order({**(drawn or {}), **rest})
         result.figures[runs.exp.name] = [f.path for f in self.figs[runs.exp.name][0]]
 
     def background_ready(self, result: StudyResult, phase: str, future: Future) -> None:

@@ -13,7 +13,9 @@ _schedule` waits on its futures):
   stationary run's longest deck (the curves need that run alone, and start when it is in:
   ``run_experiment_runs(on_stationary=)``); without that record, <- ``circuit runs`` (e);
 - ``comparisons`` (e) <- ``circuit runs``, ``exact theory`` and ``bandwidth term`` (e);
-- ``figures`` (e) <- ``comparisons`` and ``theory curves`` (e);
+- ``figures`` (e) <- ``comparisons`` and ``theory curves`` (e): the figures that draw
+  theory curves; ``figures: comparisons`` (e) <- ``comparisons`` (e): the others, drawn
+  while the curves compute (a report before that split records ``figures`` alone);
 - ``figures: open question`` <- ``open question``;  ``figures: Fig. 1`` <- every
   ``circuit runs``;
 - each ``sweep point`` (the measurement chapter's sweeps) is a root, counted by the seconds
@@ -53,6 +55,8 @@ CURVES = "theory curves"
 STATIONARY_RUN = "circuit runs: stationary"
 COMPARISONS = "comparisons"
 FIGURES = "figures"
+#: an experiment's figures that need its comparisons alone (drawn while its curves compute)
+FIGURES_COMPARED = "figures: comparisons"
 MEMBER = "family member (circuit and theory)"
 OPEN_QUESTION = "open question (exact rate functions)"
 OPEN_QUESTION_FIG = "figures: open question"
@@ -201,6 +205,8 @@ def report_graph(phases: Sequence[Mapping], circuit: Mapping | None = None,
             deps = [(CIRCUIT, exp), (THEORY, exp), (BANDWIDTH, exp)]
         elif phase == FIGURES:
             deps = [(COMPARISONS, exp), (CURVES, exp)]
+        elif phase == FIGURES_COMPARED:
+            deps = [(COMPARISONS, exp)]
         elif phase == OPEN_QUESTION_FIG:
             deps = [(OPEN_QUESTION, None)]
         elif phase == FIG1:

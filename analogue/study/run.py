@@ -84,6 +84,12 @@ class StudyHooks:
                          analysis: ExperimentAnalysis) -> None:
         """An experiment is compared and its theory curves are in (``analysis.curves``)."""
 
+    def experiment_compared(self, result: StudyResult, runs: ExperimentRuns,
+                            analysis: ExperimentAnalysis) -> None:
+        """An experiment is compared; its theory curves may still be computing
+        (``analysis.curves`` None until :meth:`experiment_ready`): what needs the comparisons
+        alone can be drawn now (issue 22: figures drawn as their data arrive)."""
+
     def background_ready(self, result: StudyResult, phase: str, future: Future) -> None:
         """A task of :meth:`background` is done (or, at the end, waited for)."""
 
@@ -554,6 +560,7 @@ class _Schedule:
             result.failed[exp.name] = err
             return None
         self.undrawn.append((runs, analysis, cf))
+        self.hooks.experiment_compared(result, runs, analysis)
         return runs, analysis
 
     def complete_paper(self) -> None:

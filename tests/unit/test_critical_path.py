@@ -220,3 +220,22 @@ def test_sweep_points_count_their_unlimited_seconds_and_the_curves_wait_for_all(
         ("figures and page", None)]
     tl[2]["seconds"] = 20.0
     assert report_critical_path(tl)["critical_path_s"] == pytest.approx(23.0)
+
+
+def test_figures_that_need_no_curves_wait_for_the_comparisons_alone():
+    # the figures drawn before the curves (figures: comparisons) hang off the comparisons:
+    # runs 2 -> comparisons 1 -> figures: comparisons 4 -> page 1 = 8; the curve figures
+    # (runs 2 -> curves 3 -> figures 1 -> page 1 = 7) are not on that chain
+    tl = [_ph("circuit runs", "e", 2.0, "circuit"), _ph("theory curves", "e", 3.0, "theory"),
+          _ph("comparisons", "e", 1.0), _ph("figures: comparisons", "e", 4.0),
+          _ph("figures", "e", 1.0), _ph("figures and page", None, 1.0)]
+    crit = report_critical_path(tl)
+    assert crit["critical_path_s"] == pytest.approx(8.0)
+    assert [c["phase"] for c in crit["chain"]] == ["circuit runs", "comparisons",
+                                                   "figures: comparisons", "figures and page"]
+    # slower curves: the curve figures' chain 2 + 6 + 1 + 1 = 10 > 8
+    tl[1] = _ph("theory curves", "e", 6.0, "theory")
+    crit = report_critical_path(tl)
+    assert crit["critical_path_s"] == pytest.approx(10.0)
+    assert [c["phase"] for c in crit["chain"]] == ["circuit runs", "theory curves", "figures",
+                                                   "figures and page"]

@@ -172,6 +172,30 @@ def test_schedule_longest_first_completion_order_members_last(schedule):
     assert "the paper&#39;s chapters" not in html
 
 
+def test_figures_without_curves_are_drawn_once_compared_and_kept_in_order(schedule):
+    """The figures that need no theory curve are drawn as soon as the experiment is compared
+    (phase "figures: comparisons", before its "figures"); the page keeps one order."""
+    metrics = json.loads((schedule["out"] / "metrics.json").read_text())
+    phases = {(p["phase"], p["experiment"]): p for p in metrics["provenance"]["phases"]}
+    for name in ("small", "big"):
+        early, late = phases[("figures: comparisons", name)], phases[("figures", name)]
+        assert early["start_s"] + early["seconds"] <= late["start_s"] + 1e-3
+    ev = [e[1] for e in schedule["events"] if e[0] == "figure"]
+    # per experiment: boundaries, propagator (x2: two v0), budget first, then the curves'
+    early_names = ["fig_boundaries", "fig_propagator", "fig_propagator", "fig_budget"]
+    late_names = ["fig_prehistory", "fig_stationary", "fig_work_paths", "fig_rate_function"]
+    exp_figs = [n for n in ev if n != "fig_deterministic"]
+    assert sorted(exp_figs) == sorted(2 * (early_names + late_names))
+    html = (schedule["out"] / "index.html").read_text()
+    page_order = ["fig_prehistory", "fig_boundaries", "fig_propagator", "fig_propagator",
+                  "fig_stationary", "fig_work_paths", "fig_rate_function", "fig_budget"]
+    for name in ("small", "big"):
+        start = html.index(f"Experiment &#39;{name}&#39;", html.index("</nav>"))
+        section = html[start:html.index("<h2", start)]
+        caps = [c.split("<")[0] for c in section.split("<figcaption>")[1:]]
+        assert caps == page_order
+
+
 def test_schedule_changes_no_number(schedule):
     """Every comparison of the report is the one analyse() gives on the same runs, computed
     here in this thread from scratch (theory and bandwidth terms included)."""
