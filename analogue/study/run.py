@@ -42,13 +42,14 @@ from .metrics import Comparison, validate_metrics
 from .runs import ExperimentRuns, run_experiment_runs
 from .schedule import (CIRCUIT_THREADS, MEMBER_DECKS, MEMBER_THREADS, NOW, PAPER_DECKS,
                        PAPER_RANK_STEP, SCHEDULER_CIRCUIT_THREADS, Failures, Phases, Workers, circuit_cost,
-                       experiments_at_once, member_cost, monte_carlo_pool,
+                       experiments_at_once, member_cost, monte_carlo_pool, theory_processes,
                        result_of, say)
 from .settings import RunOptions
 from .theory_curves import (CURVE_GROUPS, ExperimentTheory, FigureCurves, experiment_theory,
                             figure_curves)
 from .. import __version__
 from ..cores import usable_cpus
+from .processes import TheoryProcesses
 
 __all__ = ["StudyResult", "StudyHooks", "run_study", "load", "experiment_section_title",
            "run_experiment", "RunSummary", "MemberRunSummary", "PAGE_CIRCUIT_THREADS"]
@@ -332,12 +333,16 @@ def run_study(experiments: Iterable, *, members: Iterable = (), opts: RunOptions
                          MEMBER_THREADS)
         page = Workers(result.phases, "page circuit", PAGE_CIRCUIT_THREADS)
         mc = monte_carlo_pool()
+        procs = theory_processes(result.experiments)
         try:
-            _schedule(result, opts, hooks or StudyHooks(), pool, circuit, family, mc, page=page)
+            _schedule(result, opts, hooks or StudyHooks(), pool, circuit, family, mc, page=page,
+                      processes=procs)
             return result
         except BaseException:
             # an interrupt (failures are caught in _schedule): nothing new starts in either
             # pool, then every ngspice process is killed until their threads end
+            if procs is not None:
+                procs.close()
             family.close()
             page.close()
             mc.shutdown(wait=False, cancel_futures=True)
@@ -353,12 +358,15 @@ def run_study(experiments: Iterable, *, members: Iterable = (), opts: RunOptions
             page.close()
             pool.close()
             mc.shutdown(wait=False, cancel_futures=True)
+            if procs is not None:
+                procs.close()
             if decks is not None:
                 decks.shutdown(wait=False, cancel_futures=True)
 
 
 def _schedule(result: StudyResult, opts: RunOptions, hooks: StudyHooks, pool: Workers,
-              circuit: Workers, family: Workers, mc=None, page: Workers | None = None) -> None:
+              circuit: Workers, family: Workers, mc=None, page: Workers | None = None,
+              processes: TheoryProcesses | None = None) -> None:
     """The schedule (issue 10: the paper's chapters first, every core busy):
 
     - circuit runs longest first: the longest experiment's runs finish early, and its long
@@ -376,7 +384,7 @@ def _schedule(result: StudyResult, opts: RunOptions, hooks: StudyHooks, pool: Wo
       the quick paper).
 
     Its phases, in the order they start, are the methods of :class:`_Schedule`."""
-    plan = _Schedule(result, opts, hooks, pool, circuit, family)
+    plan = _Schedule(result, opts, hooks, pool, circuit, family, processes)
     plan.submit_theory(mc)
     plan.submit_runs()
     plan.submit_members()
@@ -392,9 +400,12 @@ class _Schedule:
     phases that submit and collect it."""
 
     def __init__(self, result: StudyResult, opts: RunOptions, hooks: StudyHooks,
-                 pool: Workers, circuit: Workers, family: Workers):
+                 pool: Workers, circuit: Workers, family: Workers,
+                 processes: TheoryProcesses | None = None):
         self.result, self.opts, self.hooks = result, opts, hooks
         self.pool, self.circuit, self.family = pool, circuit, family
+        # worker processes for the theory curves' work densities (None: in the theory thread)
+        self.processes = processes
         self.experiments = result.experiments
         self.order = sorted(range(len(self.experiments)),
                             key=lambda i: -circuit_cost(self.experiments[i], opts))
@@ -447,7 +458,8 @@ class _Schedule:
         def start(partial) -> None:
             self.curves_f[i] = self.pool.submit(
                 "theory curves", partial.exp.name,
-                lambda: figure_curves(partial, progress=say), priority=NOW)
+                lambda: figure_curves(partial, progress=say, processes=self.processes),
+                priority=NOW)
         return start
 
     def submit_members(self) -> None:
@@ -543,7 +555,8 @@ class _Schedule:
             return None
         # its curves, unless they started with its stationary run (curves_early)
         cf = early if early is not None else self.pool.submit(
-            "theory curves", exp.name, lambda runs=runs: figure_curves(runs, progress=say),
+            "theory curves", exp.name, lambda runs=runs: figure_curves(runs, progress=say,
+                                                     processes=self.processes),
             priority=NOW)
         say(f"{exp.name}: comparing with theory")
 

@@ -30,6 +30,7 @@ from .experiments import Experiment
 from ..circuit import ngspice
 from ..circuit.simulate import POLL_S
 from ..cores import usable_cpus
+from .processes import THEORY_PROCESSES, TheoryProcesses
 from .settings import RunOptions
 
 __all__ = ["Failures", "Phases", "Workers", "NOW", "LATER", "result_of", "say", "error_text",
@@ -289,6 +290,38 @@ def monte_carlo_pool():
 
 #: the most threads of :func:`monte_carlo_pool` (its docstring)
 MC_THREADS = 2
+
+#: environment variable: how many theory processes a study starts (0: none, the theory
+#: curves in the theory thread as before; default: :func:`theory_processes`)
+THEORY_PROCESSES_ENV = "ANALOGUE_THEORY_PROCESSES"
+
+
+def theory_processes(experiments) -> TheoryProcesses | None:
+    """The study's worker processes for its theory curves' work densities
+    (:mod:`analogue.study.processes`): one per work window of the experiment with the most,
+    at most :data:`~analogue.study.processes.THEORY_PROCESSES` and the usable cores; None
+    when no experiment has a work window to compute (a = 0, or none fits), on one core, or
+    when :data:`THEORY_PROCESSES_ENV` says 0.  A pool that cannot start is None too (the
+    curves then run in the theory thread, as before)."""
+    windows = max((len(e.work_taus) for e in experiments if e.model.a != 0), default=0)
+    n = min(windows, THEORY_PROCESSES, usable_cpus())
+    env = os.environ.get(THEORY_PROCESSES_ENV, "").strip()
+    if env:
+        try:
+            n = min(windows, int(env))
+        except ValueError:
+            raise ValueError(f"{THEORY_PROCESSES_ENV} must be a whole number of processes "
+                             f"(0: none), got {env!r}") from None
+        if n < 0:
+            raise ValueError(f"{THEORY_PROCESSES_ENV} must be >= 0, got {env!r}")
+    elif n < 2:
+        return None
+    if n < 1:
+        return None
+    try:
+        return TheoryProcesses(n)
+    except OSError:
+        return None
 
 
 # the threads of the paper's circuit runs and of the family members' analyses (see

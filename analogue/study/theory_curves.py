@@ -29,7 +29,8 @@ import numpy as np
 
 from .experiments import Experiment
 from ..model import Model
-from ..theory.cache import cached_call
+from ..theory.cache import cached_call, cached_later
+from .processes import quiet_call
 from .observables import exact_stationary, exact_transition, weak_noise_transition
 from .settings import ReportSettings
 from ..theory import weak_noise
@@ -220,18 +221,27 @@ def work_distributions(runs) -> dict:
     return out
 
 
-def _finite_tau_pdfs(model, dists, min_replicas=10, cache=None):
+def _finite_tau_pdfs(model, dists, min_replicas=10, cache=None, processes=None):
     """Exact finite-tau work densities on the bin centres the circuit estimates use, one call
     per tau: {tau: {w: density}}.  The fluctuation ratio pairs bins that both have data, so
-    its -w are among these centres too (the bins are symmetric about 0)."""
-    out = {}
+    its -w are among these centres too (the bins are symmetric about 0).  ``processes``: a
+    :class:`~analogue.study.processes.TheoryProcesses` that computes the windows side by side
+    (each call holds the interpreter lock most of its time; same numbers)."""
+    submit = None if processes is None else (
+        lambda fn, *a, **k: processes.start(quiet_call, fn, *a, **k))
+    pending = {}
     for tau, d in dists.items():
         w = d.centres[d.contributing >= min_replicas]
+        # every window started before the first is waited for
+        pending[tau] = (w, cached_later(exact.work_pdf, model, w, tau, cache=cache,
+                                        submit=submit))
+    out = {}
+    for tau, (w, density) in pending.items():
         with warnings.catch_warnings():
             # work_pdf warns where it falls back to the large-deviation form (far tails, ln p
             # right to O(1)); only bins the circuit reaches are evaluated here
             warnings.simplefilter("ignore", RuntimeWarning)
-            p = np.asarray(cached_call(exact.work_pdf, model, w, tau, cache=cache))
+            p = np.asarray(density())
         out[tau] = dict(zip(np.round(w, 12), p))
     return out
 
@@ -265,12 +275,12 @@ def exact_rate_curve(model: Model, w: np.ndarray, cache=None):
     return w, rate, rate[::-1] - rate
 
 
-def _rate_function_curves(runs, cache=None):
+def _rate_function_curves(runs, cache=None, processes=None):
     m = runs.exp.model
     dists = work_distributions(runs)
     if not dists or m.a == 0:
         return None
-    finite = _finite_tau_pdfs(m, dists, cache=cache)
+    finite = _finite_tau_pdfs(m, dists, cache=cache, processes=processes)
     w_all = np.concatenate([d.centres for d in dists.values()])
     wmax = float(np.max(np.abs(w_all)))
     # one symmetric grid: I(-w) is I reversed, so Fig. 9 needs no second computation
@@ -283,8 +293,10 @@ def _rate_function_curves(runs, cache=None):
         dists=dists, finite=finite)
 
 
-def figure_curves(runs, *, cache=None, progress=None) -> FigureCurves:
-    """The data-dependent curves of every figure of one experiment (failures kept per group)."""
+def figure_curves(runs, *, cache=None, progress=None, processes=None) -> FigureCurves:
+    """The data-dependent curves of every figure of one experiment (failures kept per group).
+    ``processes``: a study's :class:`~analogue.study.processes.TheoryProcesses` for the work
+    densities of the rate-function figures (None: all in this thread)."""
     import time
     t0 = time.perf_counter()
     tick = progress or (lambda *_: None)
@@ -292,7 +304,8 @@ def figure_curves(runs, *, cache=None, progress=None) -> FigureCurves:
     for group, fn in (("prehistory", lambda: _prehistory_curves(runs)),
                       ("stationary law", lambda: _stationary_curves(runs)),
                       ("work paths", lambda: _work_path_curves(runs)),
-                      ("rate function", lambda: _rate_function_curves(runs, cache=cache))):
+                      ("rate function", lambda: _rate_function_curves(runs, cache=cache,
+                                                                       processes=processes))):
         tick(f"{runs.exp.name}: theory curves: {group}")
         try:
             curves.set(group, fn())

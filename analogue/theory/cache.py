@@ -41,8 +41,8 @@ import numpy as np
 
 from ..model import Model
 
-__all__ = ["TheoryCache", "cached", "cached_call", "code_version", "default_cache_path",
-           "open_cache", "theory_key"]
+__all__ = ["TheoryCache", "cached", "cached_call", "cached_later", "code_version",
+           "default_cache_path", "open_cache", "theory_key"]
 
 _DISABLED = {"0", "off", "false", "no", "none"}
 
@@ -244,36 +244,34 @@ def _scalar(a: np.ndarray) -> Any:
     return a.item() if a.ndim == 0 else a
 
 
-def cached_call(fn: Callable[..., Any], *args: Any, cache: Any = None, **kwargs: Any) -> Any:
-    """``fn(*args, **kwargs)`` through the cache.  ``fn`` must be pure and return an ndarray
-    (or a float, a tuple of ndarrays, or a NamedTuple or dataclass of floats/arrays such as
-    ``StationaryMoments``); the result comes back with the same type and values.
-    ``cache``: see :func:`open_cache` (False: call ``fn`` directly)."""
-    store = open_cache(cache)
-    if store is None:
-        return fn(*args, **kwargs)
-    name = f"{fn.__module__}.{fn.__qualname__}"
-    args = tuple(_normalise(a) for a in args)
-    kwargs = {k: _normalise(v) for k, v in kwargs.items()}
-    key = theory_key(name, args, kwargs)
+_MISS = object()
+
+
+def _lookup(store: TheoryCache, key: str) -> Any:
+    """The cached value of ``key`` with its type restored, or ``_MISS``."""
     hit = store.get(key)
-    if hit is not None:
-        arrays, meta = hit
-        store.hits += 1
-        kind = meta.get("kind")
-        if kind == "tuple":
-            return tuple(arrays[f"r{i}"] for i in range(int(meta["n"])))
-        if kind == "namedtuple":
-            cls = _import(meta["type"])
-            return cls(*(_scalar(arrays[f"r{i}"]) for i in range(int(meta["n"]))))
-        if kind == "dataclass":
-            cls = _import(meta["type"])
-            return cls(**{name: _scalar(arrays[f"r{i}"]) for i, name in enumerate(meta["fields"])})
-        if kind == "float":
-            return float(arrays["r0"])
-        return arrays["r0"]
-    store.misses += 1
-    out = fn(*args, **kwargs)
+    if hit is None:
+        store.misses += 1
+        return _MISS
+    arrays, meta = hit
+    store.hits += 1
+    kind = meta.get("kind")
+    if kind == "tuple":
+        return tuple(arrays[f"r{i}"] for i in range(int(meta["n"])))
+    if kind == "namedtuple":
+        cls = _import(meta["type"])
+        return cls(*(_scalar(arrays[f"r{i}"]) for i in range(int(meta["n"]))))
+    if kind == "dataclass":
+        cls = _import(meta["type"])
+        return cls(**{name: _scalar(arrays[f"r{i}"]) for i, name in enumerate(meta["fields"])})
+    if kind == "float":
+        return float(arrays["r0"])
+    return arrays["r0"]
+
+
+def _put(store: TheoryCache, key: str, name: str, args: tuple[Any, ...],
+         kwargs: dict[str, Any], out: Any) -> None:
+    """Store ``out`` (the result of ``name(*args, **kwargs)``) under ``key``."""
     extra = {}
     if dataclasses.is_dataclass(out) and not isinstance(out, type):
         names = [f.name for f in dataclasses.fields(out)]
@@ -298,7 +296,44 @@ def cached_call(fn: Callable[..., Any], *args: Any, cache: Any = None, **kwargs:
             store.put(key, arrays, meta)
         except OSError:          # a read-only or full disk must not fail the computation
             pass
-    return out
+
+
+def cached_call(fn: Callable[..., Any], *args: Any, cache: Any = None, **kwargs: Any) -> Any:
+    """``fn(*args, **kwargs)`` through the cache.  ``fn`` must be pure and return an ndarray
+    (or a float, a tuple of ndarrays, or a NamedTuple or dataclass of floats/arrays such as
+    ``StationaryMoments``); the result comes back with the same type and values.
+    ``cache``: see :func:`open_cache` (False: call ``fn`` directly)."""
+    return cached_later(fn, *args, cache=cache, **kwargs)()
+
+
+def cached_later(fn: Callable[..., Any], *args: Any, cache: Any = None,
+                 submit: Callable[..., Any] | None = None, **kwargs: Any) -> Callable[[], Any]:
+    """:func:`cached_call` in two steps: the cache is read now and, on a miss, the
+    computation started with ``submit(fn, *args, **kwargs)`` (an executor's ``submit``, e.g.
+    a worker process: :class:`analogue.study.processes.TheoryProcesses`; it returns a
+    future: anything with ``result()``); the function returned waits for it, stores it in the
+    cache (here, in this process) and returns it.  ``submit`` None: computed when the
+    function returned is called, in the calling thread."""
+    store = open_cache(cache)
+    if store is None:
+        if submit is None:
+            return lambda: fn(*args, **kwargs)
+        started = submit(fn, *args, **kwargs)
+        return lambda: started.result()
+    name = f"{fn.__module__}.{fn.__qualname__}"
+    args = tuple(_normalise(a) for a in args)
+    kwargs = {k: _normalise(v) for k, v in kwargs.items()}
+    key = theory_key(name, args, kwargs)
+    hit = _lookup(store, key)
+    if hit is not _MISS:
+        return lambda: hit
+    started = None if submit is None else submit(fn, *args, **kwargs)
+
+    def finish() -> Any:
+        out = fn(*args, **kwargs) if started is None else started.result()
+        _put(store, key, name, args, kwargs, out)
+        return out
+    return finish
 
 
 def cached(fn: Callable[..., Any]) -> Callable[..., Any]:

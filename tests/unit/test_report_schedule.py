@@ -217,7 +217,8 @@ def test_one_local_circuit_thread_two_with_a_scheduler(tmp_path, monkeypatch, sc
     take an experiment's runs one after another) two experiments run at once."""
     seen = {}
 
-    def schedule_(result, opts, hooks, pool, circuit, family, mc=None, page=None):
+    def schedule_(result, opts, hooks, pool, circuit, family, mc=None, page=None,
+                  processes=None):
         seen.update(circuit=len(circuit.threads), family=len(family.threads))
     monkeypatch.setattr(S, "_schedule", schedule_)
     monkeypatch.setattr(SCH, "usable_cpus", lambda: 2)

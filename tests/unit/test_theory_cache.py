@@ -123,3 +123,36 @@ def test_named_tuple_results_come_back_as_the_same_type(store):
     assert store.hits == 1
     assert type(second) is type(first) and second == first
     assert isinstance(second.variance, float)
+
+
+def test_cached_later_reads_now_computes_elsewhere_and_stores_here(store):
+    """cached_later: the cache is read when called; a miss is started with ``submit`` (a
+    worker process in a study) and stored by the caller when its result is taken; a hit
+    starts nothing."""
+    from concurrent.futures import ThreadPoolExecutor
+    w = np.linspace(-1, 1, 5)
+    submitted = []
+    with ThreadPoolExecutor(1) as ex:
+        def submit(fn, *a, **k):
+            submitted.append(fn)
+            return ex.submit(fn, *a, **k)
+        get = tc.cached_later(_fn, M, w, cache=store, submit=submit, scale=3.0)
+        assert submitted == [_fn] and store.misses == 1
+        first = get()
+        assert len(CALLS) == 1
+        again = tc.cached_later(_fn, M, w, cache=store, submit=submit, scale=3.0)
+        assert submitted == [_fn] and store.hits == 1          # a hit starts nothing
+        np.testing.assert_array_equal(again(), first)
+        # the value stored is the one cached_call would have computed and stored
+        np.testing.assert_array_equal(first, 3.0 * M.gamma * w ** 2)
+        np.testing.assert_array_equal(tc.cached_call(_fn, M, w, cache=store, scale=3.0), first)
+        assert len(CALLS) == 1
+        # no cache: submitted each time, nothing stored
+        off = tc.cached_later(_fn, M, w, cache=False, submit=submit, scale=3.0)
+        np.testing.assert_array_equal(off(), first)
+        assert submitted == [_fn, _fn] and len(CALLS) == 2
+    # without submit: computed when the function returned is called
+    lazy = tc.cached_later(_fn, M, w + 1, cache=store)
+    assert len(CALLS) == 2
+    lazy()
+    assert len(CALLS) == 3
