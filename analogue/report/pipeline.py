@@ -36,7 +36,7 @@ from ..plots.open_question import CASES, draw_open_question, open_question_data
 from ..study import members as beyond_analysis
 from ..study.budget import terms_above_se_text
 from ..study.comparisons import ExperimentAnalysis
-from ..study.critical_path import FIGURES_COMPARED, critical_path_text
+from ..study.critical_path import FIGURES_COMPARED, MEMBER_FIGURES, critical_path_text
 from ..study.members import CHAPTER_TITLE, MEMBERS, MemberRuns
 # run_experiment (``analogue run``) runs circuits only: the study's; importable from here as before
 from ..study.run import (MemberRunSummary, RunSummary, StudyHooks, StudyResult, load as _load,  # noqa: F401
@@ -284,6 +284,7 @@ class _Drawer(StudyHooks):
         self.out, self.opts, self.experiments = out, opts, experiments
         self.figs: dict = {}            # experiment -> (figures, errors)
         self.drawn: dict = {}           # experiment -> its figures drawn before its curves
+        self.member_sections: dict = {}  # family member -> its section, drawn when it completed
         self.oq_section: list = []      # the open question's section, once drawn
         self.fig1_section: Section | None = None
         self.measure_f: dict = {}        # experiment -> future of its measure theory
@@ -324,6 +325,12 @@ class _Drawer(StudyHooks):
                                  curves=None if drawn is None else True)
         self.figs[runs.exp.name] = _in_order({**(drawn or {}), **rest})
         result.figures[runs.exp.name] = [f.path for f in self.figs[runs.exp.name][0]]
+
+    def member_ready(self, result: StudyResult, exp, analysis) -> None:
+        # a member's section, drawn as soon as it is analysed (the others still run); before,
+        # every member's figures were drawn with the page, at the very end
+        with result.phases(MEMBER_FIGURES, exp.name):
+            self.member_sections[exp.name] = _member_section(result, exp, analysis, self.out)
 
     def background_ready(self, result: StudyResult, phase: str, future: Future) -> None:
         if phase.startswith(measure_chapter.SWEEP_PHASE):
@@ -426,7 +433,7 @@ def write_report(result: StudyResult, drawer: _Drawer, out: Path, title: str,
     sections.extend(drawer.oq_section)
     sections.extend(drawer.measured.sections)
     if members:
-        sections.extend(_chapter_sections(result, out, opts))
+        sections.extend(_chapter_sections(result, out, opts, drawer.member_sections))
     sections.append(Section("All comparisons and their error budgets", [
         prose.budget_text([*experiments, *members])],
         tables=[_comparison_table(result.comparisons, "Comparisons")]))
@@ -488,23 +495,33 @@ def _circuit_section(result: StudyResult) -> Section:
     return Section("The circuit and its component values", circuit_par, tables=tables)
 
 
-def _chapter_sections(result: StudyResult, out: Path, opts: RunOptions) -> list[Section]:
+def _member_section(result: StudyResult, exp, analysis, out: Path) -> Section:
+    """One member's section of the chapter "Beyond the paper" (its figures drawn here)."""
+    title_ = f"{CHAPTER_TITLE}: {exp.name}"
+    return beyond.member_section(
+        analysis, out, lambda what, fn, t=title_, n=exp.name: result.failures.attempt(t, what,
+                                                                                      fn, n))
+
+
+def _chapter_sections(result: StudyResult, out: Path, opts: RunOptions,
+                      drawn: dict | None = None) -> list[Section]:
     """The chapter "Beyond the paper": its opening, then one section per member (their
-    figures drawn here, their time added to the chapter's)."""
+    figures drawn as each completed, ``drawn``: member -> section, or here; their time added
+    to the chapter's)."""
+    drawn = drawn or {}
     t_fig = time.perf_counter()
     chapter_sections = []
     for exp in result.members:
         if exp.name in result.failed:
             chapter_sections.append(_failed_section(exp, result.failed[exp.name]))
             continue
-        ma = result.member_analyses[exp.name]
-        title_ = f"{CHAPTER_TITLE}: {exp.name}"
-        sec = beyond.member_section(
-            ma, out, lambda what, fn, t=title_, n=exp.name: result.failures.attempt(t, what,
-                                                                                    fn, n))
+        sec = drawn.get(exp.name)
+        if sec is None:
+            sec = _member_section(result, exp, result.member_analyses[exp.name], out)
         chapter_sections.append(sec)
         result.figures[exp.name] = [f.path for f in sec.figures]
-    result.member_wall += time.perf_counter() - t_fig
+    result.member_wall += time.perf_counter() - t_fig + sum(
+        p["seconds"] for p in result.phases.items if p["phase"] == MEMBER_FIGURES)
     intro = beyond.chapter_intro(list(result.member_analyses.values()), result.member_wall,
                                  opts.quick)
     return [Section(CHAPTER_TITLE, intro), *chapter_sections]

@@ -16,6 +16,7 @@ _schedule` waits on its futures):
 - ``figures`` (e) <- ``comparisons`` and ``theory curves`` (e): the figures that draw
   theory curves; ``figures: comparisons`` (e) <- ``comparisons`` (e): the others, drawn
   while the curves compute (a report before that split records ``figures`` alone);
+- ``figures: family member`` (m) <- ``family member`` (m): drawn as each member completes;
 - ``figures: open question`` <- ``open question``;  ``figures: Fig. 1`` <- every
   ``circuit runs``;
 - each ``sweep point`` (the measurement chapter's sweeps) is a root, counted by the seconds
@@ -58,6 +59,8 @@ FIGURES = "figures"
 #: an experiment's figures that need its comparisons alone (drawn while its curves compute)
 FIGURES_COMPARED = "figures: comparisons"
 MEMBER = "family member (circuit and theory)"
+#: a family member's figures, drawn as soon as it is analysed
+MEMBER_FIGURES = "figures: family member"
 OPEN_QUESTION = "open question (exact rate functions)"
 OPEN_QUESTION_FIG = "figures: open question"
 FIG1 = "figures: Fig. 1"
@@ -207,6 +210,8 @@ def report_graph(phases: Sequence[Mapping], circuit: Mapping | None = None,
             deps = [(COMPARISONS, exp), (CURVES, exp)]
         elif phase == FIGURES_COMPARED:
             deps = [(COMPARISONS, exp)]
+        elif phase == MEMBER_FIGURES:
+            deps = [(MEMBER, exp)]
         elif phase == OPEN_QUESTION_FIG:
             deps = [(OPEN_QUESTION, None)]
         elif phase == FIG1:

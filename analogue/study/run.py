@@ -98,6 +98,11 @@ class StudyHooks:
         """Every experiment on the paper's model is compared and drawn (the family members'
         circuit work started when the paper's circuit runs were done)."""
 
+    def member_ready(self, result: StudyResult, exp: Experiment,
+                     analysis: MemberAnalysis) -> None:
+        """A family member is analysed (called as each completes, after
+        :meth:`main_complete`); a failed member is not handed here."""
+
     def circuit_background(self, result: StudyResult) -> dict[str, Callable[[], Any]]:
         """Circuit work of the page's own (phase name -> function; the measurement chapter's
         sweep curves), queued like the family members (on a few cores once the paper's
@@ -585,12 +590,23 @@ class _Schedule:
     def collect_members(self) -> None:
         """The members' analyses, in the given order (a failure recorded), and their own
         time: their analyses (in a circuit thread, beside the paper's comparisons); the page
-        adds its figures."""
+        adds its figures.  Each member is handed to :meth:`StudyHooks.member_ready` as it
+        completes (its figures drawn while the others run, not all at the end)."""
         result, phases, fails = self.result, self.result.phases, self.result.failures
+        pending = {j: f for j, f in enumerate(self.members_f) if f is not None}
+        while pending:
+            first = min(pending)
+            with phases("waiting for family members", result.members[first].name):
+                while not wait(list(pending.values()), timeout=POLL_S,
+                               return_when=FIRST_COMPLETED).done:
+                    pass  # (polled: see result_of)
+            for j in sorted(j for j, f in pending.items() if f.done()):
+                f = pending.pop(j)
+                if not f.cancelled() and f.exception() is None:
+                    self.hooks.member_ready(result, result.members[j], f.result())
         for exp, ma_f in zip(result.members, self.members_f):
-            with phases("waiting for family members", exp.name):
-                ma, err = fails.attempt(experiment_section_title(exp), "member analysis",
-                                        ma_f.result, exp.name)
+            ma, err = fails.attempt(experiment_section_title(exp), "member analysis",
+                                    ma_f.result, exp.name)
             if ma is None:
                 result.failed[exp.name] = err
             else:

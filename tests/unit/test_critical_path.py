@@ -239,3 +239,15 @@ def test_figures_that_need_no_curves_wait_for_the_comparisons_alone():
     assert crit["critical_path_s"] == pytest.approx(10.0)
     assert [c["phase"] for c in crit["chain"]] == ["circuit runs", "theory curves", "figures",
                                                    "figures and page"]
+
+
+def test_a_members_figures_follow_that_member():
+    tl = [_ph("family member (circuit and theory)", "m1", 10.0, "members"),
+          _ph("family member (circuit and theory)", "m2", 4.0, "members"),
+          _ph("figures: family member", "m1", 1.0), _ph("figures: family member", "m2", 3.0),
+          _ph("figures and page", None, 0.5)]
+    crit = report_critical_path(tl)
+    assert crit["critical_path_s"] == pytest.approx(11.5)    # m1 10 + 1 + 0.5 (m2: 7.5)
+    assert [(c["phase"], c["experiment"]) for c in crit["chain"]] == [
+        ("family member (circuit and theory)", "m1"), ("figures: family member", "m1"),
+        ("figures and page", None)]

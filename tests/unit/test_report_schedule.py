@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import threading
 import tomllib
+import types
 from pathlib import Path
 
 import pytest
@@ -496,3 +497,42 @@ def test_monte_carlo_threads_are_capped(monkeypatch):
         assert pool._max_workers == 1
     finally:
         pool.shutdown()
+
+
+def test_members_are_handed_to_the_page_as_they_complete(monkeypatch):
+    """Each member goes to StudyHooks.member_ready as soon as it is analysed (its figures
+    drawn while the others run), in the order they complete; the result keeps the given
+    order, and a failed member is recorded, not handed over."""
+    monkeypatch.setattr(SCH, "usable_cpus", lambda: 2)
+    gate = {"cubic": threading.Event(), "stribeck": threading.Event()}
+    events: list = []
+    lock = threading.Lock()
+
+    def runs(exp, opts, settings=None, on_stationary=None):
+        raise RuntimeError("stub")
+
+    def member(exp, opts):
+        if exp.name == "shot":
+            raise RuntimeError("member stub")
+        if exp.name == "cubic":                      # cubic ends after stribeck is drawn
+            assert gate["stribeck"].wait(60)         # (a hang detector: set within seconds)
+        with lock:
+            events.append(f"done {exp.name}")
+        return types.SimpleNamespace(name=exp.name)
+
+    class Hooks(S.StudyHooks):
+        def member_ready(self, result, exp, analysis):
+            with lock:
+                events.append(f"ready {exp.name}")
+            assert analysis.name == exp.name
+            if exp.name in gate:
+                gate[exp.name].set()
+    monkeypatch.setattr(S, "run_experiment_runs", runs)
+    monkeypatch.setattr(S, "member_task", member)
+    result = S.run_study([_exp("small", 6.0, 22)],
+                         members=_members(["cubic", "shot", "stribeck"]),
+                         opts=RunOptions(quick=True, progress=False), hooks=Hooks())
+    assert events.index("ready stribeck") < events.index("done cubic")
+    assert [e for e in events if e.startswith("ready")] == ["ready stribeck", "ready cubic"]
+    assert list(result.member_analyses) == ["cubic", "stribeck"]
+    assert "shot" in result.failed
