@@ -31,7 +31,10 @@ calibrations) plus their longest single deck (``circuit`` timing recorded by
 the phase, the phase's own duration.  An experiment's bandwidth term likewise takes the seconds its thread spent
 drawing the noise and computing the jackknives plus the CPU seconds of its longest Monte
 Carlo chunk (:func:`analogue.study.comparisons.bandwidth_terms`; the chunks are independent,
-one core each with unlimited cores).  A family member counts its parts (the timing record of
+one core each with unlimited cores).  An experiment's theory curves likewise take their
+phase less the seconds their thread waited for the work densities' worker processes, plus
+the longest of those computations' CPU seconds (:mod:`analogue.study.processes`: a process
+has no interpreter lock to share, so with a core of its own it takes its CPU seconds).  A family member counts its parts (the timing record of
 :func:`analogue.study.members.analyse_member`): its runs, each its own calibrations then its
 longest deck (a run with nothing to calibrate starts its decks at once), or, if longer, its
 circuit-free part beside them (theory, Monte Carlo references), then its estimates; without
@@ -163,15 +166,30 @@ def bandwidth_unlimited_s(phase_seconds: float, timing: Mapping | None) -> float
     return min(phase_seconds, total)
 
 
+def curves_unlimited_s(phase_seconds: float, timing: Mapping | None) -> float:
+    """An experiment's theory curves with unlimited cores: the phase less the seconds its
+    thread waited for its worker processes, plus the longest worker computation's CPU
+    seconds (a core of its own, no interpreter lock shared), at most the phase; the phase
+    without a record (curves computed in the thread)."""
+    if not timing:
+        return phase_seconds
+    wait, longest = timing.get("process_wait_s"), timing.get("longest_process_s")
+    if wait is None or longest is None:
+        return phase_seconds
+    return min(phase_seconds, max(0.0, phase_seconds - float(wait)) + float(longest))
+
+
 def report_graph(phases: Sequence[Mapping], circuit: Mapping | None = None,
-                 bandwidth: Mapping | None = None) -> dict:
+                 bandwidth: Mapping | None = None, curves: Mapping | None = None) -> dict:
     """The report's dependency graph (module docstring) from its phase timeline: key
     ``(phase, experiment)`` -> ``(seconds, deps)``.  A phase recorded twice under one key
     (none today) counts its total.  ``circuit``: experiment (or family member) -> its
     circuit timing record (a member's with its ``analysis_s``);
-    ``bandwidth``: experiment -> its bandwidth terms' timing record."""
+    ``bandwidth``: experiment -> its bandwidth terms' timing record; ``curves``:
+    experiment -> its theory curves' record of worker processes."""
     circuit = circuit or {}
     bandwidth = bandwidth or {}
+    curves = curves or {}
     secs: dict = {}
     for p in phases:
         if p["phase"].startswith(WAITING_PREFIX):
@@ -187,6 +205,8 @@ def report_graph(phases: Sequence[Mapping], circuit: Mapping | None = None,
             secs[key] = bandwidth_unlimited_s(secs[key], bandwidth.get(key[1]))
         elif key[0] == MEMBER:
             secs[key] = member_unlimited_s(secs[key], circuit.get(key[1]))
+        elif key[0] == CURVES:
+            secs[key] = curves_unlimited_s(secs[key], curves.get(key[1]))
     runs = [k for k in secs if k[0] == CIRCUIT]
     nodes: dict = {}
     # an experiment whose theory curves start with its stationary run (its runs' timing
@@ -227,11 +247,12 @@ def report_graph(phases: Sequence[Mapping], circuit: Mapping | None = None,
 
 
 def report_critical_path(phases: Sequence[Mapping], circuit: Mapping | None = None,
-                         bandwidth: Mapping | None = None) -> dict:
+                         bandwidth: Mapping | None = None,
+                         curves: Mapping | None = None) -> dict:
     """``{"critical_path_s": seconds, "chain": [{"phase", "experiment", "seconds"}, ...]}``:
     the report job's wall time with unlimited cores (module docstring), from its recorded
-    phases, circuit and bandwidth timings."""
-    nodes = report_graph(phases, circuit, bandwidth)
+    phases, circuit, bandwidth and theory-curve timings."""
+    nodes = report_graph(phases, circuit, bandwidth, curves)
     length, chain = longest_chain(nodes)
     return {"critical_path_s": round(length, 3),
             "chain": [{"phase": k[0], "experiment": k[1], "seconds": round(nodes[k][0], 3)}

@@ -23,6 +23,7 @@ from __future__ import annotations
 import multiprocessing
 import os
 import threading
+import time
 import warnings
 from concurrent.futures import Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
@@ -62,6 +63,13 @@ def quiet_call(fn: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
 
 def _noop() -> int:
     return os.getpid()
+
+
+def _timed(fn: Callable[..., Any], *args: Any, **kwargs: Any) -> tuple[Any, float]:
+    """``(fn(*args, **kwargs), CPU seconds of this worker process for it)``."""
+    c0 = time.process_time()
+    out = fn(*args, **kwargs)
+    return out, time.process_time() - c0
 
 
 class TheoryProcesses:
@@ -106,7 +114,7 @@ class TheoryProcesses:
         """``fn(*args, **kwargs)`` started in a worker; its :meth:`Started.result` computes
         it in the calling thread instead when the pool is (or breaks) broken or closed."""
         try:
-            fut: Future | None = self.submit(fn, *args, **kwargs)
+            fut: Future | None = self.submit(_timed, fn, *args, **kwargs)
         except BrokenProcessPool:
             fut = None
         return Started(self, fut, fn, args, kwargs)
@@ -139,18 +147,29 @@ class TheoryProcesses:
 
 class Started:
     """A computation :meth:`TheoryProcesses.start` started (the future of a worker), with
-    the fallback of computing it here."""
+    the fallback of computing it here.  After :meth:`result`: ``cpu_s``, the CPU seconds of
+    the computation (in its worker, or here), and ``waited_s``, the seconds the caller was
+    blocked waiting for the worker (the report's critical path counts the first instead of
+    the second: with unlimited cores a worker has a core of its own)."""
 
     def __init__(self, pool: TheoryProcesses, future: Future | None, fn: Callable[..., Any],
                  args: tuple, kwargs: dict):
         self._pool, self._future = pool, future
         self._call = (fn, args, kwargs)
+        self.cpu_s = 0.0
+        self.waited_s = 0.0
 
     def result(self) -> Any:
         fn, args, kwargs = self._call
         if self._future is not None:
+            t0 = time.perf_counter()
             try:
-                return self._future.result()
+                out, self.cpu_s = self._future.result()
+                self.waited_s = time.perf_counter() - t0
+                return out
             except BrokenProcessPool:       # a worker died: not trusted again
                 self._pool.broken = True
-        return fn(*args, **kwargs)
+        c0 = time.thread_time()
+        out = fn(*args, **kwargs)
+        self.cpu_s = time.thread_time() - c0
+        return out

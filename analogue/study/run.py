@@ -134,6 +134,8 @@ class StudyResult:
     measured: dict = field(default_factory=dict)
     # experiment -> how its bandwidth terms' Monte Carlo chunks ran (BandwidthTerms.timing)
     bandwidth_timing: dict = field(default_factory=dict)
+    # experiment -> how its theory curves' worker processes ran (FigureCurves.timing)
+    curves_timing: dict = field(default_factory=dict)
     paper_wall: float = 0.0       # seconds from the start until main_complete
     member_wall: float = 0.0      # the members' threads' time (the page adds its drawing)
     # filled by the page: experiment (or figure group) -> PNG paths; the page itself
@@ -204,7 +206,8 @@ class StudyResult:
         provs.update({name: a.provenance for name, a in self.member_analyses.items()})
         software = _software()
         circuit_timing = {k: p.get("timing") for k, p in provs.items() if p.get("timing")}
-        crit = report_critical_path(self.phases.items, circuit_timing, self.bandwidth_timing)
+        crit = report_critical_path(self.phases.items, circuit_timing, self.bandwidth_timing,
+                                    self.curves_timing)
         return {
             "parameters": {k: p["parameters"] for k, p in provs.items()},
             "model_effective": {k: p["model_effective"] for k, p in provs.items()},
@@ -227,6 +230,9 @@ class StudyResult:
             # the bandwidth terms' Monte Carlo chunks: noise draw and jackknives in the theory
             # thread, chunk count, total and longest CPU seconds (comparisons.bandwidth_terms)
             "bandwidth_timing": self.bandwidth_timing,
+            # the theory curves' work densities in worker processes: seconds waited for them,
+            # CPU seconds of the longest (theory_curves.FigureCurves.timing)
+            "curves_timing": self.curves_timing,
             # when the paper's chapters (its experiments, Fig. 1, the open question) were
             # complete, from the start; the chapter "Beyond the paper" runs after their circuit
             # runs, beside their comparisons and figures
@@ -503,6 +509,8 @@ class _Schedule:
             runs, a, f = undrawn.pop(0)
             with phases("waiting for theory curves", runs.exp.name):
                 a.curves = _curves_of(f)
+            if getattr(a.curves, "timing", None):
+                self.result.curves_timing[runs.exp.name] = a.curves.timing
             self.hooks.experiment_ready(self.result, runs, a)
         for phase, f in list(background.items()):
             if block or f.done():

@@ -143,6 +143,9 @@ class FigureCurves:
         self._values: dict = {}
         self._errors: dict = {}
         self.wall_time_s = 0.0
+        # with worker processes: the seconds waited for them and their longest computation's
+        # CPU seconds (analogue.study.critical_path.curves_unlimited_s)
+        self.timing: dict = {}
 
     def set(self, group: str, value) -> None:
         self._values[group] = value
@@ -221,20 +224,26 @@ def work_distributions(runs) -> dict:
     return out
 
 
-def _finite_tau_pdfs(model, dists, min_replicas=10, cache=None, processes=None):
+def _finite_tau_pdfs(model, dists, min_replicas=10, cache=None, processes=None,
+                     timing=None):
     """Exact finite-tau work densities on the bin centres the circuit estimates use, one call
     per tau: {tau: {w: density}}.  The fluctuation ratio pairs bins that both have data, so
     its -w are among these centres too (the bins are symmetric about 0).  ``processes``: a
     :class:`~analogue.study.processes.TheoryProcesses` that computes the windows side by side
-    (each call holds the interpreter lock most of its time; same numbers)."""
-    submit = None if processes is None else (
-        lambda fn, *a, **k: processes.start(quiet_call, fn, *a, **k))
+    (each call holds the interpreter lock most of its time; same numbers); ``timing``: a
+    dict that gets the workers' record (:class:`FigureCurves` ``timing``)."""
+    started: list = []
+
+    def submit(fn, *a, **k):
+        s = processes.start(quiet_call, fn, *a, **k)
+        started.append(s)
+        return s
     pending = {}
     for tau, d in dists.items():
         w = d.centres[d.contributing >= min_replicas]
         # every window started before the first is waited for
         pending[tau] = (w, cached_later(exact.work_pdf, model, w, tau, cache=cache,
-                                        submit=submit))
+                                        submit=None if processes is None else submit))
     out = {}
     for tau, (w, density) in pending.items():
         with warnings.catch_warnings():
@@ -243,6 +252,11 @@ def _finite_tau_pdfs(model, dists, min_replicas=10, cache=None, processes=None):
             warnings.simplefilter("ignore", RuntimeWarning)
             p = np.asarray(density())
         out[tau] = dict(zip(np.round(w, 12), p))
+    if timing is not None and started:
+        # the critical path's record: the seconds this thread waited for the workers, and
+        # the longest computation's CPU seconds (what it takes with a core of its own)
+        timing["process_wait_s"] = round(sum(s.waited_s for s in started), 3)
+        timing["longest_process_s"] = round(max(s.cpu_s for s in started), 3)
     return out
 
 
@@ -275,12 +289,12 @@ def exact_rate_curve(model: Model, w: np.ndarray, cache=None):
     return w, rate, rate[::-1] - rate
 
 
-def _rate_function_curves(runs, cache=None, processes=None):
+def _rate_function_curves(runs, cache=None, processes=None, timing=None):
     m = runs.exp.model
     dists = work_distributions(runs)
     if not dists or m.a == 0:
         return None
-    finite = _finite_tau_pdfs(m, dists, cache=cache, processes=processes)
+    finite = _finite_tau_pdfs(m, dists, cache=cache, processes=processes, timing=timing)
     w_all = np.concatenate([d.centres for d in dists.values()])
     wmax = float(np.max(np.abs(w_all)))
     # one symmetric grid: I(-w) is I reversed, so Fig. 9 needs no second computation
@@ -304,8 +318,8 @@ def figure_curves(runs, *, cache=None, progress=None, processes=None) -> FigureC
     for group, fn in (("prehistory", lambda: _prehistory_curves(runs)),
                       ("stationary law", lambda: _stationary_curves(runs)),
                       ("work paths", lambda: _work_path_curves(runs)),
-                      ("rate function", lambda: _rate_function_curves(runs, cache=cache,
-                                                                       processes=processes))):
+                      ("rate function", lambda: _rate_function_curves(
+                          runs, cache=cache, processes=processes, timing=curves.timing))):
         tick(f"{runs.exp.name}: theory curves: {group}")
         try:
             curves.set(group, fn())

@@ -251,3 +251,21 @@ def test_a_members_figures_follow_that_member():
     assert [(c["phase"], c["experiment"]) for c in crit["chain"]] == [
         ("family member (circuit and theory)", "m1"), ("figures: family member", "m1"),
         ("figures and page", None)]
+
+
+def test_theory_curves_count_their_worker_processes_by_cpu_not_by_waiting():
+    # curves phase 7 s, of which 6 s waiting for workers whose longest took 3.5 CPU-s: with
+    # unlimited cores 1 + 3.5 = 4.5 s; runs 2 -> curves 4.5 -> figures 1 -> page 0.5 = 8.0
+    tl = [_ph("circuit runs", "e", 2.0, "circuit"), _ph("theory curves", "e", 7.0, "theory"),
+          _ph("comparisons", "e", 0.5), _ph("figures", "e", 1.0),
+          _ph("figures and page", None, 0.5)]
+    assert report_critical_path(tl)["critical_path_s"] == pytest.approx(10.5)   # no record
+    rec = {"e": {"process_wait_s": 6.0, "longest_process_s": 3.5}}
+    crit = report_critical_path(tl, curves=rec)
+    assert crit["critical_path_s"] == pytest.approx(8.0)
+    assert crit["chain"][1] == {"phase": "theory curves", "experiment": "e", "seconds": 4.5}
+    # never more than the phase itself (a worker slower than the whole phase: its CPU
+    # includes a start-up the phase did not wait for)
+    rec = {"e": {"process_wait_s": 0.5, "longest_process_s": 9.0}}
+    assert report_critical_path(tl, curves=rec)["critical_path_s"] == pytest.approx(10.5)
+    assert report_critical_path(tl, curves={"e": {}})["critical_path_s"] == pytest.approx(10.5)

@@ -20,10 +20,15 @@ def test_work_densities_in_processes_are_bit_for_bit_the_in_process_ones():
     dists = {tau: types.SimpleNamespace(centres=centres, contributing=np.full(7, 50))
              for tau in (2.0, 5.0)}
     dists[5.0].contributing[0] = 3          # below min_replicas: not evaluated
-    here = _finite_tau_pdfs(m, dists, cache=False)
+    timing_here: dict = {}
+    here = _finite_tau_pdfs(m, dists, cache=False, timing=timing_here)
+    assert timing_here == {}                      # no workers, nothing to record
+    timing: dict = {}
     with TheoryProcesses(2) as procs:
-        there = _finite_tau_pdfs(m, dists, cache=False, processes=procs)
+        there = _finite_tau_pdfs(m, dists, cache=False, processes=procs, timing=timing)
         assert not procs.broken
+    # the critical path's record: the waits for the workers and their longest CPU seconds
+    assert timing["longest_process_s"] > 0 and timing["process_wait_s"] >= 0
     assert list(there) == list(here) == [2.0, 5.0]
     assert len(there[5.0]) == 6
     for tau in here:
@@ -37,6 +42,9 @@ def test_a_killed_worker_breaks_the_pool_and_the_work_is_done_here():
     procs = TheoryProcesses(1)
     try:
         assert procs.run(math.sqrt, 16.0) == 4.0
+        spin = procs.start(sum, range(3_000_000))
+        assert spin.result() == sum(range(3_000_000))
+        assert spin.cpu_s > 0 and spin.waited_s >= 0   # measured in the worker
         started = procs.start(time.sleep, 1.0)
         deadline = time.time() + 30
         while not started._future.running() and time.time() < deadline:
@@ -44,7 +52,7 @@ def test_a_killed_worker_breaks_the_pool_and_the_work_is_done_here():
         for pid in list(procs._pool._processes):
             os.kill(pid, 9)
         assert started.result() is None        # time.sleep(1.0), run here instead
-        assert procs.broken
+        assert procs.broken and started.waited_s == 0.0
         assert procs.run(math.sqrt, 9.0) == 3.0   # here, not in a broken pool
     finally:
         procs.close()
