@@ -140,6 +140,9 @@ class WaitClock(cf.Executor):
     def __init__(self, executor: cf.Executor, clock=time.perf_counter):
         self.executor, self.clock = executor, clock
         self.blocked_s = 0.0
+        # seconds each deck ran (from its start in a pool thread to its end), since the last
+        # stage_longest(): the decks of one stage of a calibration run at once
+        self._ran: list[float] = []
         self._queued = self._running = 0
         self._since: float | None = None     # start of the current blocked interval
         self._lock = threading.Lock()
@@ -156,12 +159,23 @@ class WaitClock(cf.Executor):
                 self.blocked_s += now - self._since
                 self._since = None
 
+    def stage_longest(self) -> float:
+        """The longest run of a deck submitted through this executor since the previous call
+        (0 if none ran: every run came from the store), and a new stage begins: with
+        unlimited cores the decks of a stage run at once, so the stage takes its longest."""
+        with self._lock:
+            ran, self._ran = self._ran, []
+        return max(ran, default=0.0)
+
     def submit(self, fn, /, *args: Any, **kwargs: Any) -> cf.Future:
         def timed():
             self._update(-1, +1)
+            t0 = self.clock()
             try:
                 return fn(*args, **kwargs)
             finally:
+                with self._lock:
+                    self._ran.append(self.clock() - t0)
                 self._update(0, -1)
         self._update(+1, 0)
         try:

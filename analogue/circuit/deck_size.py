@@ -34,6 +34,7 @@ numbers like a different seed would; it is recorded in ``meta["deck_size"]``.
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -44,7 +45,7 @@ from ..model import Model
 from .decks import _default_sample_dt, run_ensemble
 from .mapping import map_model
 from .runner import Runner
-from .tolerances import RunDecks, calibration_runner, require_run
+from .tolerances import RunDecks, at_once, calibration_runner, require_run
 
 __all__ = [
     "DEFAULT_BOUNDS",
@@ -134,8 +135,8 @@ def _calibrate(model: Model, spec, *, runner: Runner, run: RunDecks | None = Non
     :func:`analogue.circuit.decks.run_ensemble` (or the legacy ``run``)."""
     mapping = map_model(model, spec)
     t_cal = CAL_HOLDS * mapping.noise_dt
-    out = {}
-    for r in CAL_SIZES:
+
+    def points(r: int) -> float:
         # (shot noise, springs, gamma = inf: no exp(-gamma U) sampler; start at rest on the
         # attractor, as the tolerance calibration does)
         v0 = "stationary" if model.is_gradient else float(model.attractor)
@@ -155,8 +156,10 @@ def _calibrate(model: Model, spec, *, runner: Runner, run: RunDecks | None = Non
         pts = ens.meta.get("deck_raw_points") or [None]
         if pts[0] is None:
             raise RuntimeError("deck-size calibration: the run did not record its time points")
-        out[r] = float(pts[0]) / CAL_HOLDS
-    return out
+        return float(pts[0]) / CAL_HOLDS
+    # the sizes at once where the pool is shared (tolerances.at_once)
+    counts = at_once([functools.partial(points, r) for r in CAL_SIZES], runner)
+    return dict(zip(CAL_SIZES, counts))
 
 
 _MEMO: dict = {}

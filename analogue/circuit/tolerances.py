@@ -52,6 +52,7 @@ overridden: only the unset ones are chosen, among candidates that agree with the
 """
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 from collections.abc import Callable
@@ -100,6 +101,28 @@ __all__ = [
 # before the Runner (kept for callers that pass one; without it they run through
 # decks.run_ensemble; deprecated, :func:`require_run`).
 RunDecks = Callable[..., Ensemble]
+
+
+def shared_pool(runner: Runner) -> bool:
+    """Whether ``runner``'s decks go to a pool it does not own (a caller's executor, such as
+    the study's deck pool, or a Dask cluster): several runs may then queue their decks at
+    once without starting more ngspice processes than the pool has."""
+    return runner.executor is not None or runner.scheduler is not None
+
+
+def at_once(calls: list[Callable[[], Any]], runner: Runner) -> list:
+    """The results of ``calls`` (no arguments each), in order: run at once on threads when
+    ``runner``'s decks go to a shared pool (:func:`shared_pool`), so that their decks queue
+    together and more cores finish them sooner; else one after another (a run that owns its
+    processes starts ``workers`` of them: two at once would start twice as many).  The
+    calibrations' choices are pure functions of the stored runs, so the order their decks
+    run in changes no number."""
+    if len(calls) < 2 or not shared_pool(runner):
+        return [c() for c in calls]
+    from concurrent.futures import ThreadPoolExecutor
+    with ThreadPoolExecutor(len(calls), thread_name_prefix="analogue-calibration") as ex:
+        futures = [ex.submit(c) for c in calls]
+        return [f.result() for f in futures]
 
 
 def require_run(run: RunDecks | None, who: str) -> RunDecks | None:
@@ -417,13 +440,15 @@ def _calibrate(model: Model, spec: CircuitSpec, candidates, *, runner: Runner,
                             seed=CAL_SEED, sample_dt=_default_sample_dt(model, t_cal),
                             runner=cal)
 
-    ref = ensemble(reference_spec(spec, mapping, tightest))
+    # the reference and every candidate at once where the pool is shared (at_once)
+    specs = [reference_spec(spec, mapping, tightest)] + [spec.replace(**tol.as_dict())
+                                                          for tol in candidates]
+    ref, *runs = at_once([functools.partial(ensemble, s) for s in specs], cal)
     threshold = 0.1 * model.velocity_scale if math.isfinite(model.gamma) else 0.0
     # the indicators as the report's integration check measures them (smoothed)
     h = kernel_width(threshold, mapping.model_effective.epsilon)
     results = []
-    for tol in candidates:
-        ens = ensemble(spec.replace(**tol.as_dict()))
+    for tol, ens in zip(candidates, runs):
         pts = ens.meta.get("deck_raw_points")
         per = (float(np.sum(pts)) / (CAL_REPLICAS * CAL_HOLDS)
                if pts and all(p is not None for p in pts) else math.nan)

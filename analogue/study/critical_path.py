@@ -26,7 +26,9 @@ _schedule` waits on its futures):
 
 The ``waiting for ...`` phases are not work and are left out.  With unlimited cores an
 experiment's circuit runs take their work before the decks (tolerance and deck-size
-calibrations) plus their longest single deck (``circuit`` timing recorded by
+calibrations: where recorded, ``calibration_unlimited_s``, the transition and stationary
+runs' calibrations at once, each its tolerance stage's longest deck then its deck-size
+stage's, since each stage's decks run at once) plus their longest single deck (``circuit`` timing recorded by
 :func:`analogue.study.runs.run_experiment_runs`); without that record, or where it exceeds
 the phase, the phase's own duration.  An experiment's bandwidth term likewise takes the seconds its thread spent
 drawing the noise and computing the jackknives plus the CPU seconds of its longest Monte
@@ -116,17 +118,29 @@ def longest_chain(nodes: Mapping) -> tuple[float, list]:
     return finish[end], chain[::-1]
 
 
+def before_decks_s(timing: Mapping) -> float | None:
+    """The work before an experiment's decks with unlimited cores: its calibrations'
+    ``calibration_unlimited_s`` (each stage's decks at once: its longest) where recorded,
+    at most the measured ``before_decks_s``; None without a record."""
+    before = timing.get("before_decks_s")
+    if before is None:
+        return None
+    unlimited = timing.get("calibration_unlimited_s")
+    return float(before) if unlimited is None else min(float(before), float(unlimited))
+
+
 def circuit_unlimited_s(phase_seconds: float, timing: Mapping | None) -> float:
-    """An experiment's circuit runs with unlimited cores: the work before its decks plus its
-    longest deck run in this job (0 when every deck came from the store), at most the
-    phase's measured duration; the phase's duration without a timing record."""
+    """An experiment's circuit runs with unlimited cores: the work before its decks
+    (:func:`before_decks_s`) plus its longest deck run in this job (0 when every deck came
+    from the store), at most the phase's measured duration; the phase's duration without a
+    timing record."""
     if not timing:
         return phase_seconds
-    before = timing.get("before_decks_s")
+    before = before_decks_s(timing)
     longest = timing.get("longest_deck_s")
     if before is None or longest is None:
         return phase_seconds
-    return min(phase_seconds, float(before) + float(longest))
+    return min(phase_seconds, before + float(longest))
 
 
 def member_unlimited_s(phase_seconds: float, timing: Mapping | None) -> float:
@@ -216,8 +230,10 @@ def report_graph(phases: Sequence[Mapping], circuit: Mapping | None = None,
         t = circuit.get(key[1]) or {}
         if t.get("stationary_longest_deck_s") is not None and \
                 t.get("before_decks_s") is not None:
-            stationary[key[1]] = min(secs[key], float(t["before_decks_s"])
-                                     + float(t["stationary_longest_deck_s"]))
+            before = before_decks_s(t)
+            if before is not None:
+                stationary[key[1]] = min(secs[key],
+                                         before + float(t["stationary_longest_deck_s"]))
     for exp, s in stationary.items():
         nodes[(STATIONARY_RUN, exp)] = (s, [])
     for key, s in secs.items():

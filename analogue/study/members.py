@@ -356,11 +356,15 @@ def _member_circuits(exp: Experiment, sizes: MemberSizes, runner: Runner, runs: 
         def run(pool: Runner) -> Ensemble:
             t = time.perf_counter()
             clock = WaitClock(pool.executor) if pool.executor is not None else None
+            stages: list = []
             spec, per_deck, why = _calibrated(exp, r, pool if clock is None
-                                              else pool.replace(executor=clock))
+                                              else pool.replace(executor=clock),
+                                              clock=clock, stages=stages)
             # its calibrations' own seconds: not those it only waited for a free ngspice
-            # process (behind the other runs' decks), which unlimited cores would not
-            timing[r.name] = time.perf_counter() - t - (clock.blocked_s if clock else 0.0)
+            # process (behind the other runs' decks), which unlimited cores would not, and
+            # at most its stages' longest decks (each stage's decks run at once)
+            own = time.perf_counter() - t - (clock.blocked_s if clock else 0.0)
+            timing[r.name] = min(own, sum(stages)) if clock is not None else own
             return run_ensemble(exp.model, spec, v0=r.v0, t_end=r.t_end, replicas=r.replicas,
                                 seed=r.seed, sample_dt=sizes.sample_dt,
                                 runner=pool.replace(replicas_per_deck=per_deck), **why)
@@ -379,11 +383,13 @@ def _member_circuits(exp: Experiment, sizes: MemberSizes, runner: Runner, runs: 
                            for name, e in done.items()}}
 
 
-def _calibrated(exp: Experiment, r: _Run, runner: Runner) -> tuple[Any, int, dict]:
+def _calibrated(exp: Experiment, r: _Run, runner: Runner, *, clock: WaitClock | None = None,
+                stages: list | None = None) -> tuple[Any, int, dict]:
     """(spec with its tolerances set, replicas per deck, ``meta`` records of how they were
     chosen) of one run, chosen as :func:`analogue.simulate` chooses them when given this run
     (its tolerance and deck-size calibrations, with their minimum sizes), to be run by
-    :func:`analogue.circuit.decks.run_ensemble`."""
+    :func:`analogue.circuit.decks.run_ensemble`.  ``clock`` (the runner's executor) and
+    ``stages``: the longest deck of each calibration stage is appended to ``stages``."""
     spec = exp.spec if r.spec is None else r.spec
     run = runner if r.per_deck is None else runner.replace(replicas_per_deck=r.per_deck)
     tol = deck = None
@@ -391,12 +397,16 @@ def _calibrated(exp: Experiment, r: _Run, runner: Runner) -> tuple[Any, int, dic
         spec, tol = resolve_spec(exp.model, spec, replicas=r.replicas, t_end=r.t_end,
                                  runner=run.for_calibration(),
                                  min_replica_holds=MIN_TOLERANCE_HOLDS)
+    if clock is not None and stages is not None:
+        stages.append(clock.stage_longest())
     per_deck = run.replicas_per_deck
     if per_deck is None:
         deck = choose_deck_size(exp.model, spec, replicas=r.replicas, t_end=r.t_end,
                                 workers=run.workers or usable_cpus(),
                                 runner=run.for_calibration(), min_replica_holds=MIN_DECK_HOLDS)
         per_deck = deck.replicas_per_deck
+    if clock is not None and stages is not None:
+        stages.append(clock.stage_longest())
     return spec, per_deck, {"tolerances": tol.as_dict() if tol is not None else None,
                             "deck_size": deck.as_dict() if deck is not None else None}
 

@@ -52,10 +52,10 @@ from .settings import ReportSettings, RunOptions, stationary_noise_dt
 from ..circuit.simulate import run_decks, time_grid, value_limits
 from ..circuit.deck_size import choose_deck_size
 from ..circuit.simulate import simulate
-from ..circuit.tolerances import resolve_spec
+from ..circuit.tolerances import at_once, resolve_spec
 from ..circuit.runner import Runner
 from ..circuit import ngspice as _ng
-from ..circuit.deck_pool import PoolView
+from ..circuit.deck_pool import PoolView, WaitClock
 from ..theory.exact import sample_stationary
 from .theory_curves import stationary_taus
 
@@ -238,7 +238,7 @@ REPORT_FRACTION = 0.06
 
 
 def _choose(model, spec, replicas: int, t_end: float, runner: Runner, check: int,
-            observables):
+            observables, stages: list | None = None):
     """(spec with its tolerances set, replicas per deck, why) for one run of the report whose
     integration error is measured on about ``check`` of its paths, compared on
     ``observables`` (circuit.tolerances.STATIONARY_OBSERVABLES, or None: all).  The
@@ -246,14 +246,24 @@ def _choose(model, spec, replicas: int, t_end: float, runner: Runner, check: int
     --timeout holds for the calibrations too, issue 19, where a hung ngspice kept a --timeout
     3 run going for the calibrations' default hour per deck), on its workers or the usable
     CPUs, through :func:`analogue.circuit.decks.run_ensemble` (the same decks and store keys
-    as through :func:`analogue.simulate`, which they called back before)."""
+    as through :func:`analogue.simulate`, which they called back before).  ``stages``: a
+    list that gets the longest deck of each of its two stages (tolerances, then deck size;
+    each stage's decks run at once: :func:`analogue.circuit.tolerances.at_once`), the
+    calibrations' seconds with unlimited cores (0 for a stage whose runs were stored)."""
     workers = default_workers(runner)
     cal = runner.replace(workers=workers)
+    clock = None
+    if stages is not None and runner.executor is not None:
+        clock = WaitClock(runner.executor)
+        cal = cal.replace(executor=clock)
     spec, tol = resolve_spec(model, spec, replicas=replicas, t_end=t_end,
                              check_replicas=min(check, replicas), observables=observables,
                              fraction=REPORT_FRACTION, runner=cal)
+    tol_stage = clock.stage_longest() if clock is not None else None
     deck = choose_deck_size(model, spec, replicas=replicas, t_end=t_end, workers=workers,
                             runner=cal)
+    if clock is not None and stages is not None and tol_stage is not None:
+        stages.append(tol_stage + clock.stage_longest())
     return spec, deck.replicas_per_deck, {"tolerances": tol.as_dict(),
                                           "deck_size": deck.as_dict()}
 
@@ -429,14 +439,21 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
     # decks (full paper on 16 cores: stick's and slip's 51-54 s before their first deck)
     cal_runner = (runner.replace(executor=runner.executor.ahead())
                   if isinstance(runner.executor, PoolView) else runner)
-    trans_spec, trans_deck, trans_why = _choose(model, spec, replicas, exp.t_end, cal_runner,
-                                                check, None)
     # the stationary runs (and their check) hold the noise for a fraction of the circuit's
     # hold (plan.stationary_noise_dt): their indicator observables carry the largest
     # bandwidth bias; tolerances and deck size are chosen for that finer deck
     stat_base = spec.replace(noise_dt=stationary_noise_dt(exp.mapping().noise_dt, settings))
-    stat_spec, stat_deck, stat_why = _choose(model, stat_base, n_stat, settings.stationary_t_end,
-                                             cal_runner, check, STATIONARY_OBSERVABLES)
+    # both runs' calibrations at once where the deck pool is shared (at_once: same choices,
+    # their decks queue together); each records its two stages' longest decks
+    trans_stages: list = []
+    stat_stages: list = []
+    (trans_spec, trans_deck, trans_why), (stat_spec, stat_deck, stat_why) = at_once([
+        lambda: _choose(model, spec, replicas, exp.t_end, cal_runner, check, None,
+                        trans_stages),
+        lambda: _choose(model, stat_base, n_stat, settings.stationary_t_end, cal_runner, check,
+                        STATIONARY_OBSERVABLES, stat_stages)], cal_runner)
+    calibration_unlimited = (max(trans_stages + stat_stages)
+                             if trans_stages and stat_stages else None)
     v0_stat = np.asarray(sample_stationary(model_eff, n_stat, seeds["stationary"]), dtype=float)
     for i, v0 in enumerate(exp.v0):
         seeds[f"transition v0={v0:g}"] = plan.transition(i)
@@ -503,6 +520,13 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
                           check_transition=check_transition, check_stationary=check_stationary,
                           wall_time=time.perf_counter() - t_start, seeds=seeds,
                           timing={"before_decks_s": round(t_jobs - t_start, 3),
+                                  # the calibrations with unlimited cores: the two runs'
+                                  # at once, each its tolerance stage's longest deck then
+                                  # its deck-size stage's (the work before the decks, less
+                                  # the queueing a busy machine adds)
+                                  **({"calibration_unlimited_s": round(
+                                      calibration_unlimited, 3)}
+                                     if calibration_unlimited is not None else {}),
                                   "longest_deck_s": round(max(ran, default=0.0), 3),
                                   "decks_run": len(ran),
                                   # the stationary run's own longest deck: what the theory

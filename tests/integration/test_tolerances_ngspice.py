@@ -46,3 +46,36 @@ def test_choices_recorded_in_meta(tmp_path):
     assert small.meta["tolerances"]["source"] == "fixed"
     assert small.meta["tolerances"]["reltol"] == 1e-4
     assert small.meta["deck_size"]["source"] in ("default", "measured")
+
+
+def test_calibration_in_a_shared_pool_chooses_what_one_after_another_does(monkeypatch,
+                                                                         tmp_path):
+    """With the study's deck pool (a shared executor) the reference and the candidates run
+    at once (tolerances.at_once), and the deck sizes too: every measured number and the
+    choice are those of the runs one after another, each on its own store."""
+    from analogue.circuit import deck_size as ds
+    from analogue.circuit.deck_pool import DeckPool
+    monkeypatch.setattr(tl, "CAL_HOLDS", 200)
+    monkeypatch.setattr(ds, "CAL_HOLDS", 100)
+    cands = (tl.Tolerances(1e-3, 20.0, "trap"), tl.Tolerances(1e-4, 7.0, "gear"))
+    got = {}
+    for name in ("one after another", "at once"):
+        tl._MEMO.clear()
+        ds._MEMO.clear()
+        pool = DeckPool(2) if name == "at once" else None
+        runner = analogue.Runner(store=tmp_path / name, workers=2,
+                                 **({"executor": pool.view(0)} if pool else {}))
+        assert tl.shared_pool(runner) == (pool is not None)
+        try:
+            choice = tl.choose_tolerances(STICK, CircuitSpec(), replicas=64, t_end=20.0,
+                                          candidates=cands, runner=runner)
+            spec = CircuitSpec().replace(**choice.tolerances.as_dict())
+            deck = ds.choose_deck_size(STICK, spec, replicas=64, t_end=20.0, workers=2,
+                                       runner=runner)
+        finally:
+            if pool is not None:
+                pool.shutdown()
+        got[name] = (choice.as_dict(), deck.as_dict())
+    # (the choices' records hold measured counts and ratios, no times: equal, not close)
+    assert got["at once"] == got["one after another"]
+    assert got["at once"][1]["source"] == "measured"

@@ -3,7 +3,7 @@ answers are worked out by hand, and the report's dependencies."""
 import pytest
 
 from analogue.study.critical_path import (critical_path_text, longest_chain,
-                                           report_critical_path)
+                                           report_critical_path, report_graph)
 
 
 def test_a_chain_sums_its_durations():
@@ -269,3 +269,20 @@ def test_theory_curves_count_their_worker_processes_by_cpu_not_by_waiting():
     rec = {"e": {"process_wait_s": 0.5, "longest_process_s": 9.0}}
     assert report_critical_path(tl, curves=rec)["critical_path_s"] == pytest.approx(10.5)
     assert report_critical_path(tl, curves={"e": {}})["critical_path_s"] == pytest.approx(10.5)
+
+
+def test_calibrations_count_their_stages_longest_decks_when_recorded():
+    # runs: calibrations 6 s of wall on a busy machine, 1.5 s with unlimited cores (each
+    # stage's decks at once) + longest deck 4 = 5.5; the stationary node 1.5 + 2 = 3.5
+    timing = {"e": {"before_decks_s": 6.0, "calibration_unlimited_s": 1.5,
+                    "longest_deck_s": 4.0, "stationary_longest_deck_s": 2.0}}
+    tl = [_ph("circuit runs", "e", 20.0, "circuit"), _ph("theory curves", "e", 1.0, "theory"),
+          _ph("comparisons", "e", 0.5), _ph("figures", "e", 1.0),
+          _ph("figures and page", None, 0.5)]
+    crit = report_critical_path(tl, timing)
+    assert crit["critical_path_s"] == pytest.approx(5.5 + 0.5 + 1.0 + 0.5)
+    nodes = report_graph(tl, timing)
+    assert nodes[("circuit runs: stationary", "e")][0] == pytest.approx(3.5)
+    # never more than the measured work before the decks
+    timing["e"]["calibration_unlimited_s"] = 9.0
+    assert report_critical_path(tl, timing)["critical_path_s"] == pytest.approx(12.0)

@@ -136,6 +136,8 @@ def test_wait_clock_counts_only_the_time_no_deck_of_its_caller_ran():
         g = clock.submit(deck)       # a free process: never blocked
         assert g.result(10) == 7
         assert clock.blocked_s == 5.0
+        # each deck ran 3 s (the fake clock): a stage's longest, then a new stage
+        assert clock.stage_longest() == 3.0 and clock.stage_longest() == 0.0
         clock.shutdown()             # the pool is its owner's: still running
         assert pool.submit(lambda: 1).result(10) == 1
     finally:
@@ -173,7 +175,7 @@ def test_the_papers_calibrations_run_ahead_of_the_bulk_decks(monkeypatch):
     pool = DeckPool(1)
     seen = []
 
-    def choose(model, spec, replicas, t_end, runner, check, observables):
+    def choose(model, spec, replicas, t_end, runner, check, observables, stages=None):
         seen.append(runner.executor.priority)
         raise RuntimeError("stop after the calibrations' runner")
     monkeypatch.setattr(R, "_choose", choose)
@@ -181,4 +183,31 @@ def test_the_papers_calibrations_run_ahead_of_the_bulk_decks(monkeypatch):
     with pytest.raises(RuntimeError, match="stop"):
         R.run_experiment_runs(load_experiment(standard_circuit("slip")), opts)
     pool.shutdown()
-    assert seen == [0.02 - 0.5]
+    assert seen == [0.02 - 0.5] * 2        # the transition and the stationary runs', at once
+
+
+def test_at_once_runs_calibrations_together_only_in_a_shared_pool():
+    """tolerances.at_once: with a shared pool (the runner's executor) the calls run at once
+    (each waits for the other here), their results in order; a runner that owns its
+    processes runs them one after another (two at once would start twice its workers)."""
+    from concurrent.futures import ThreadPoolExecutor
+    from analogue.circuit.tolerances import at_once, shared_pool
+    both = threading.Barrier(2, timeout=30)
+
+    def call(x):
+        both.wait()                       # raises BrokenBarrierError unless the other runs
+        return x * 10
+    with ThreadPoolExecutor(2) as ex:
+        shared = Runner(executor=ex)
+        assert shared_pool(shared)
+        assert at_once([lambda: call(1), lambda: call(2)], shared) == [10, 20]
+    order = []
+    own = Runner(workers=2)
+    assert not shared_pool(own)
+    assert at_once([lambda: order.append(1) or 1, lambda: order.append(2) or 2], own) == [1, 2]
+    assert order == [1, 2]
+    with ThreadPoolExecutor(2) as ex:
+        def bad():
+            raise ValueError("calibration deck failed")
+        with pytest.raises(ValueError, match="calibration deck failed"):
+            at_once([lambda: 1, bad], Runner(executor=ex))
