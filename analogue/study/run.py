@@ -343,11 +343,16 @@ def run_study(experiments: Iterable, *, members: Iterable = (), opts: RunOptions
         family = Workers(result.phases, "members",
                          MEMBER_THREADS)
         page = Workers(result.phases, "page circuit", PAGE_CIRCUIT_THREADS)
+        # the theory curves on a thread of their own: an experiment's curves start when its
+        # stationary run is in, not when the theory thread is done with what it was doing
+        # (the quick paper: work's curves waited 18 s behind two bandwidth terms); their
+        # heavy part waits on the theory processes
+        curves = Workers(result.phases, "curves", 1)
         mc = monte_carlo_pool()
         procs = theory_processes(result.experiments)
         try:
             _schedule(result, opts, hooks or StudyHooks(), pool, circuit, family, mc, page=page,
-                      processes=procs)
+                      processes=procs, curves=curves)
             return result
         except BaseException:
             # an interrupt (failures are caught in _schedule): nothing new starts in either
@@ -356,6 +361,7 @@ def run_study(experiments: Iterable, *, members: Iterable = (), opts: RunOptions
                 procs.close()
             family.close()
             page.close()
+            curves.close()
             mc.shutdown(wait=False, cancel_futures=True)
             if decks is not None:
                 decks.shutdown(wait=False, cancel_futures=True)
@@ -368,6 +374,7 @@ def run_study(experiments: Iterable, *, members: Iterable = (), opts: RunOptions
             family.close()
             page.close()
             pool.close()
+            curves.close()
             mc.shutdown(wait=False, cancel_futures=True)
             if procs is not None:
                 procs.close()
@@ -377,7 +384,8 @@ def run_study(experiments: Iterable, *, members: Iterable = (), opts: RunOptions
 
 def _schedule(result: StudyResult, opts: RunOptions, hooks: StudyHooks, pool: Workers,
               circuit: Workers, family: Workers, mc=None, page: Workers | None = None,
-              processes: TheoryProcesses | None = None) -> None:
+              processes: TheoryProcesses | None = None,
+              curves: Workers | None = None) -> None:
     """The schedule (issue 10: the paper's chapters first, every core busy):
 
     - circuit runs longest first: the longest experiment's runs finish early, and its long
@@ -395,7 +403,7 @@ def _schedule(result: StudyResult, opts: RunOptions, hooks: StudyHooks, pool: Wo
       the quick paper).
 
     Its phases, in the order they start, are the methods of :class:`_Schedule`."""
-    plan = _Schedule(result, opts, hooks, pool, circuit, family, processes)
+    plan = _Schedule(result, opts, hooks, pool, circuit, family, processes, curves)
     plan.submit_theory(mc)
     plan.submit_runs()
     plan.submit_members()
@@ -412,9 +420,11 @@ class _Schedule:
 
     def __init__(self, result: StudyResult, opts: RunOptions, hooks: StudyHooks,
                  pool: Workers, circuit: Workers, family: Workers,
-                 processes: TheoryProcesses | None = None):
+                 processes: TheoryProcesses | None = None, curves: Workers | None = None):
         self.result, self.opts, self.hooks = result, opts, hooks
         self.pool, self.circuit, self.family = pool, circuit, family
+        # where the theory curves run (their own thread; without one, the theory thread)
+        self.curves = curves if curves is not None else pool
         # worker processes for the theory curves' work densities (None: in the theory thread)
         self.processes = processes
         self.experiments = result.experiments
@@ -462,12 +472,12 @@ class _Schedule:
 
     def curves_early(self, i: int):
         """Experiment ``i``'s callback for its stationary run (``run_experiment_runs(
-        on_stationary=)``): its theory curves need only that run, so they start in the theory
+        on_stationary=)``): its theory curves need only that run, so they start in the curves
         thread while its other runs (the integration checks, whose decks are the longest: the
         quick work experiment's stationary check 6.4 s, its stationary decks at most 2.7 s)
         still run."""
         def start(partial) -> None:
-            self.curves_f[i] = self.pool.submit(
+            self.curves_f[i] = self.curves.submit(
                 "theory curves", partial.exp.name,
                 lambda: figure_curves(partial, progress=say, processes=self.processes),
                 priority=NOW)
@@ -567,7 +577,7 @@ class _Schedule:
             result.failed[exp.name] = err
             return None
         # its curves, unless they started with its stationary run (curves_early)
-        cf = early if early is not None else self.pool.submit(
+        cf = early if early is not None else self.curves.submit(
             "theory curves", exp.name, lambda runs=runs: figure_curves(runs, progress=say,
                                                      processes=self.processes),
             priority=NOW)

@@ -181,6 +181,8 @@ def test_figures_without_curves_are_drawn_once_compared_and_kept_in_order(schedu
     for name in ("small", "big"):
         early, late = phases[("figures: comparisons", name)], phases[("figures", name)]
         assert early["start_s"] + early["seconds"] <= late["start_s"] + 1e-3
+        # the curves on a thread of their own, not behind the theory thread's queue
+        assert phases[("theory curves", name)]["thread"] == "curves"
     ev = [e[1] for e in schedule["events"] if e[0] == "figure"]
     # per experiment: boundaries, propagator (x2: two v0), budget first, then the curves'
     early_names = ["fig_boundaries", "fig_propagator", "fig_propagator", "fig_budget"]
@@ -218,8 +220,7 @@ def test_one_local_circuit_thread_two_with_a_scheduler(tmp_path, monkeypatch, sc
     take an experiment's runs one after another) two experiments run at once."""
     seen = {}
 
-    def schedule_(result, opts, hooks, pool, circuit, family, mc=None, page=None,
-                  processes=None):
+    def schedule_(result, opts, hooks, pool, circuit, family, mc=None, page=None, **pools):
         seen.update(circuit=len(circuit.threads), family=len(family.threads))
     monkeypatch.setattr(S, "_schedule", schedule_)
     monkeypatch.setattr(SCH, "usable_cpus", lambda: 2)
