@@ -45,7 +45,7 @@ from ..model import Model
 from .decks import _default_sample_dt, run_ensemble
 from .mapping import map_model
 from .runner import Runner
-from .tolerances import RunDecks, at_once, calibration_runner, require_run
+from .tolerances import RunDecks, at_once, calibration_runner, one_at_a_time, require_run
 
 __all__ = [
     "DEFAULT_BOUNDS",
@@ -195,12 +195,14 @@ def choose_deck_size(model: Model, spec, *, replicas: int, t_end: float, workers
         return DeckSizeChoice(min(max(DEFAULT_REPLICAS_PER_DECK, lo), hi), "default")
     if measured is None:
         key = (repr(model.as_dict()), repr(spec))
-        if key not in _MEMO:
-            cal = calibration_runner("choose_deck_size", runner, store=store,
-                                     scheduler=scheduler, executor=executor, timeout=timeout)
-            if cal.workers is None:
-                cal = cal.replace(workers=workers)
-            _MEMO[key] = _calibrate(model, spec, runner=cal, run=run)
+        with one_at_a_time(("deck size", key)):   # (two runs at once: calibrated once)
+            if key not in _MEMO:
+                cal = calibration_runner("choose_deck_size", runner, store=store,
+                                         scheduler=scheduler, executor=executor,
+                                         timeout=timeout)
+                if cal.workers is None:
+                    cal = cal.replace(workers=workers)
+                _MEMO[key] = _calibrate(model, spec, runner=cal, run=run)
         measured = _MEMO[key]
     pred = {r: job_time(r, replicas, holds, NOTIONAL_WORKERS, measured) for r in allowed}
     best = min(allowed, key=lambda r: (round(pred[r], 6), -r))

@@ -54,8 +54,10 @@ from __future__ import annotations
 
 import functools
 import math
+import threading
 import warnings
 from collections.abc import Callable
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -123,6 +125,22 @@ def at_once(calls: list[Callable[[], Any]], runner: Runner) -> list:
     with ThreadPoolExecutor(len(calls), thread_name_prefix="analogue-calibration") as ex:
         futures = [ex.submit(c) for c in calls]
         return [f.result() for f in futures]
+
+
+_KEY_LOCKS: dict = {}
+_KEY_LOCKS_LOCK = threading.Lock()
+
+
+@contextmanager
+def one_at_a_time(key: Any):
+    """Held while a calibration of ``key`` runs: two runs that need the same calibration at
+    once (an experiment whose stationary runs hold the noise as its transition runs do, a
+    member's runs with one spec) must not run its decks twice side by side; the second
+    waits, then finds them in the store (or the in-process memo)."""
+    with _KEY_LOCKS_LOCK:
+        lock = _KEY_LOCKS.setdefault(key, threading.Lock())
+    with lock:
+        yield
 
 
 def require_run(run: RunDecks | None, who: str) -> RunDecks | None:
@@ -416,8 +434,16 @@ def _calibrate(model: Model, spec: CircuitSpec, candidates, *, runner: Runner,
     t_cal = CAL_HOLDS * mapping.noise_dt
     tightest = min(candidates, key=lambda c: c.reltol)
     memo_key = (repr(model.as_dict()), repr(spec), tuple(candidates), CAL_HOLDS, CAL_REPLICAS)
-    if runner.store is False and memo_key in _MEMO:
-        return _MEMO[memo_key]
+    with one_at_a_time(("tolerances", memo_key)):
+        if runner.store is False and memo_key in _MEMO:
+            return _MEMO[memo_key]
+        return _calibrate_runs(model, spec, candidates, mapping=mapping, t_cal=t_cal,
+                               tightest=tightest, memo_key=memo_key, runner=runner, run=run)
+
+
+def _calibrate_runs(model: Model, spec: CircuitSpec, candidates, *, mapping, t_cal: float,
+                    tightest: Tolerances, memo_key, runner: Runner, run: RunDecks | None):
+    """:func:`_calibrate`'s runs and results (its key held)."""
     # Start from the stationary law where it is exp(-gamma U) (1-D Gaussian members); shot
     # noise, springs and gamma = inf have no such sampler (it returned NaN for shot noise):
     # start those at rest on the deterministic attractor.

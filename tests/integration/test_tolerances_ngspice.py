@@ -79,3 +79,56 @@ def test_calibration_in_a_shared_pool_chooses_what_one_after_another_does(monkey
     # (the choices' records hold measured counts and ratios, no times: equal, not close)
     assert got["at once"] == got["one after another"]
     assert got["at once"][1]["source"] == "measured"
+
+
+def test_two_runs_needing_one_calibration_at_once_run_its_decks_once(monkeypatch, tmp_path):
+    """An experiment whose stationary runs hold the noise as its transition runs do asks for
+    the same calibration twice at once (tolerances.at_once): its decks run once, and the
+    second call reads them from the store (tolerances.one_at_a_time)."""
+    import concurrent.futures as cf
+    import threading
+    from analogue.circuit import deck_size as ds
+
+    class Counting(cf.ThreadPoolExecutor):
+        def __init__(self):
+            super().__init__(2)
+            self.decks = 0
+            self.lock = threading.Lock()
+
+        def submit(self, fn, /, *a, **k):
+            with self.lock:
+                self.decks += 1
+            return super().submit(fn, *a, **k)
+    monkeypatch.setattr(tl, "CAL_HOLDS", 100)
+    monkeypatch.setattr(ds, "CAL_HOLDS", 50)
+    cands = (tl.Tolerances(1e-3, 20.0, "trap"), tl.Tolerances(1e-4, 7.0, "gear"))
+
+    def calibrate(runner):
+        choice = tl.choose_tolerances(STICK, CircuitSpec(), replicas=64, t_end=20.0,
+                                      candidates=cands, runner=runner)
+        spec = CircuitSpec().replace(**choice.tolerances.as_dict())
+        ds.choose_deck_size(STICK, spec, replicas=64, t_end=20.0, workers=2, runner=runner)
+        return choice.as_dict()
+    counts = {}
+    for name, calls in (("once", 1), ("twice at once", 2)):
+        tl._MEMO.clear()
+        ds._MEMO.clear()
+        ex = Counting()
+        runner = analogue.Runner(store=tmp_path / name, workers=2, executor=ex)
+        try:
+            got = tl.at_once([lambda: calibrate(runner)] * calls, runner)
+        finally:
+            ex.shutdown()
+        # the same choice; the second call's ratios come from the decks read back from the
+        # store, which agree with the fresh ones to round-off (1e-14 relative)
+        ratios = ("worst_ratio",)
+        for g in got[1:]:
+            assert {k: v for k, v in g.items() if k not in ("candidates", *ratios)} == \
+                {k: v for k, v in got[0].items() if k not in ("candidates", *ratios)}
+            assert g["worst_ratio"] == pytest.approx(got[0]["worst_ratio"], rel=1e-9)
+            assert [c["points_per_replica_hold"] for c in g["candidates"]] == \
+                [c["points_per_replica_hold"] for c in got[0]["candidates"]]
+        counts[name] = ex.decks
+    # reference and two candidates of 16 replicas in decks of 4, then three deck sizes
+    assert counts["once"] == 3 * 4 + 3
+    assert counts["twice at once"] == counts["once"]
