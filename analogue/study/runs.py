@@ -444,16 +444,23 @@ def run_experiment_runs(exp: Experiment, opts: RunOptions,
     # bandwidth bias; tolerances and deck size are chosen for that finer deck
     stat_base = spec.replace(noise_dt=stationary_noise_dt(exp.mapping().noise_dt, settings))
     # both runs' calibrations at once where the deck pool is shared (at_once: same choices,
-    # their decks queue together); each records its two stages' longest decks
+    # their decks queue together); each records its two stages' longest decks.  Where the
+    # stationary runs hold the noise as the transition runs do (stationary_hold_divisor 1:
+    # the work experiment), the two calibrations run the same decks: one after the other,
+    # the second reads them from the store (at once, both ran them: 116 decks against 82
+    # for the quick work experiment)
     trans_stages: list = []
     stat_stages: list = []
-    (trans_spec, trans_deck, trans_why), (stat_spec, stat_deck, stat_why) = at_once([
-        lambda: _choose(model, spec, replicas, exp.t_end, cal_runner, check, None,
-                        trans_stages),
-        lambda: _choose(model, stat_base, n_stat, settings.stationary_t_end, cal_runner, check,
-                        STATIONARY_OBSERVABLES, stat_stages)], cal_runner)
-    calibration_unlimited = (max(trans_stages + stat_stages)
-                             if trans_stages and stat_stages else None)
+    same_decks = settings.stationary_hold_divisor == 1
+    calls = [lambda: _choose(model, spec, replicas, exp.t_end, cal_runner, check, None,
+                             trans_stages),
+             lambda: _choose(model, stat_base, n_stat, settings.stationary_t_end, cal_runner,
+                             check, STATIONARY_OBSERVABLES, stat_stages)]
+    (trans_spec, trans_deck, trans_why), (stat_spec, stat_deck, stat_why) = (
+        [c() for c in calls] if same_decks else at_once(calls, cal_runner))
+    calibration_unlimited = (
+        (sum if same_decks else max)(trans_stages + stat_stages)
+        if trans_stages and stat_stages else None)
     v0_stat = np.asarray(sample_stationary(model_eff, n_stat, seeds["stationary"]), dtype=float)
     for i, v0 in enumerate(exp.v0):
         seeds[f"transition v0={v0:g}"] = plan.transition(i)

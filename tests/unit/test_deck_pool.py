@@ -211,3 +211,32 @@ def test_at_once_runs_calibrations_together_only_in_a_shared_pool():
             raise ValueError("calibration deck failed")
         with pytest.raises(ValueError, match="calibration deck failed"):
             at_once([lambda: 1, bad], Runner(executor=ex))
+
+
+@pytest.mark.parametrize("name, at_once", [("slip", True), ("work", False)])
+def test_an_experiments_two_calibrations_run_at_once_unless_they_share_decks(monkeypatch,
+                                                                            name, at_once):
+    """The transition and stationary runs' calibrations run at once in a shared pool, except
+    where the stationary runs hold the noise as the transition runs do (work:
+    stationary_hold_divisor 1): their calibrations are the same decks, which at once would
+    both run (116 decks against 82), one after the other the second reads from the store."""
+    from analogue.study import runs as R
+    from analogue.study.experiments import load_experiment, standard_circuit
+    from analogue.study.settings import RunOptions
+    pool = DeckPool(1)
+    threads = []
+
+    def choose(model, spec, replicas, t_end, runner, check, observables, stages=None):
+        threads.append(threading.get_ident())
+        raise RuntimeError("stop after the calibrations' threads")
+    monkeypatch.setattr(R, "_choose", choose)
+    opts = RunOptions(quick=True, progress=False, store=False, executor=pool.view(0))
+    exp = load_experiment(standard_circuit(name))
+    assert (exp.report.stationary_hold_divisor == 1) is not at_once
+    with pytest.raises(RuntimeError, match="stop"):
+        R.run_experiment_runs(exp, opts)
+    pool.shutdown()
+    if at_once:       # both started, each in a calibration thread
+        assert len(threads) == 2 and threading.get_ident() not in threads
+    else:             # the first, in the caller's thread, stopped the run
+        assert threads == [threading.get_ident()]
