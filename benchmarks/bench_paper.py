@@ -221,8 +221,8 @@ def _print(r: dict) -> None:
     for what, smp in r["sampled"].items():
         if smp is not None:
             print(f"sampled ({what}, to {smp['until_s']:.1f} s): CPU {smp['cpu_s']:.1f} s "
-                  f"(Python process {smp['python_cpu_s']:.1f}, ngspice "
-                  f"{smp['cpu_s'] - smp['python_cpu_s']:.1f}), "
+                  f"(Python process {smp['python_cpu_s']:.1f}, children: ngspice and "
+                  f"theory processes {smp['cpu_s'] - smp['python_cpu_s']:.1f}), "
                   f"mean runnable threads (clipped at {smp['cores']}) "
                   f"{smp['mean_runnable']:.2f}, idle {smp['cores']}-core wall estimate "
                   f"{smp['idle_estimate_s']:.1f} s")
