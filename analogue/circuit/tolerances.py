@@ -121,9 +121,12 @@ def at_once(calls: list[Callable[[], Any]], runner: Runner) -> list:
     run in changes no number."""
     if len(calls) < 2 or not shared_pool(runner):
         return [c() for c in calls]
+    import contextvars
     from concurrent.futures import ThreadPoolExecutor
     with ThreadPoolExecutor(len(calls), thread_name_prefix="analogue-calibration") as ex:
-        futures = [ex.submit(c) for c in calls]
+        # each call in a copy of the caller's context: whoever times the caller's decks by
+        # a context variable (a sweep point: analogue.study.sweep) sees these as its own
+        futures = [ex.submit(contextvars.copy_context().run, c) for c in calls]
         return [f.result() for f in futures]
 
 

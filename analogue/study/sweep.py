@@ -709,6 +709,13 @@ def _unlimited_s(runs: list, timing: Mapping[str, float]) -> float:
 
 
 # ------------------------------------------------------------------------- points at once
+#: the sweep point a thread works for (its thread's ident), so that decks its helper threads
+#: submit (a calibration's runs at once: circuit.tolerances.at_once copies the context)
+#: count in the point's batches
+_POINT: contextvars.ContextVar[int | None] = contextvars.ContextVar("analogue_sweep_point",
+                                                                    default=None)
+
+
 class _DeckView(cf.Executor):
     """The sweep's view of the deck executor its points share: submits go to ``pool`` and
     are remembered, so that a failed or interrupted sweep cancels the decks it queued (each
@@ -729,7 +736,9 @@ class _DeckView(cf.Executor):
 
     def submit(self, fn, /, *args, **kwargs):
         fut = self.pool.submit(fn, *args, **kwargs)
-        me = threading.get_ident()
+        # the point's thread, also for decks its helper threads submit (one batch: decks
+        # submitted at once count as their longest)
+        me = _POINT.get() or threading.get_ident()
         with self._lock:
             self._futures = {f for f in self._futures if not f.done()}
             self._futures.add(fut)
@@ -816,7 +825,11 @@ def _run_points(plan: SweepPlan, runner: Runner, threads: int, phases=None) -> l
         if phases is None:
             return _point(plan, i, run, stop)
         t0, c0 = time.perf_counter(), time.thread_time()
-        res = _point(plan, i, run, stop)
+        token = _POINT.set(threading.get_ident())
+        try:
+            res = _point(plan, i, run, stop)
+        finally:
+            _POINT.reset(token)
         dt = time.perf_counter() - t0
         unlimited = res["_info"]["unlimited_s"]
         if isinstance(run.executor, _DeckView):

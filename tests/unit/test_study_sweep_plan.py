@@ -212,3 +212,38 @@ def test_the_deck_view_times_each_threads_batches_and_cancels_its_decks():
         view.shutdown(wait=True)
         assert queued.cancelled() and blocker.result(timeout=30) is True
         assert pool.submit(lambda: 3).result(timeout=30) == 3    # still the owner's, open
+
+
+def test_deck_view_counts_a_points_helper_threads_as_the_point():
+    """Decks a point's helper threads submit (its calibration's runs at once,
+    circuit.tolerances.at_once, which copies the context) join the point's batch: one batch
+    counted as its longest deck, taken by the point's thread (before, they were batches of
+    threads nobody took, and the point's critical-path seconds held their waits: 79.7 s for
+    one sweep point of make paper)."""
+    import concurrent.futures as cf
+    import threading
+
+    from analogue import Runner
+    from analogue.circuit.tolerances import at_once
+    from analogue.study.sweep import _POINT, _DeckView
+    go = threading.Event()
+
+    def deck(w):
+        assert go.wait(30)
+        return {"info": {"wall_time": w}}
+    with cf.ThreadPoolExecutor(max_workers=2) as pool:
+        view = _DeckView(pool)
+        token = _POINT.set(threading.get_ident())
+        try:
+            def run(w):
+                f = view.submit(deck, w)
+                if w == 3.0:
+                    go.set()
+                return f.result(timeout=30)
+            got = at_once([lambda: run(1.0), lambda: run(3.0)], Runner(executor=view))
+        finally:
+            _POINT.reset(token)
+        assert [g["info"]["wall_time"] for g in got] == [1.0, 3.0]
+        batches = view.take(threading.get_ident())
+        assert [b[1] for b in batches] in ([3.0], [1.0, 3.0], [3.0, 1.0])
+        assert max(b[1] for b in batches) == 3.0
