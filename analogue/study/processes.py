@@ -106,9 +106,11 @@ class TheoryProcesses:
             raise BrokenProcessPool("the study's theory processes are closed or broken")
         try:
             return self._pool.submit(fn, *args, **kwargs)
-        except (BrokenProcessPool, RuntimeError) as exc:   # RuntimeError: shut down
+        except (BrokenProcessPool, RuntimeError, OSError) as exc:
+            # RuntimeError: shut down; OSError: a worker could not be started (a process
+            # limit, no fork in a sandbox): the computations run in the calling thread
             self.broken = True
-            raise BrokenProcessPool(str(exc)) from exc
+            raise BrokenProcessPool(f"{type(exc).__name__}: {exc}") from exc
 
     def start(self, fn: Callable[..., Any], *args: Any, **kwargs: Any) -> Started:
         """``fn(*args, **kwargs)`` started in a worker; its :meth:`Started.result` computes

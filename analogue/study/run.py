@@ -42,7 +42,8 @@ from .metrics import Comparison, validate_metrics
 from .runs import ExperimentRuns, run_experiment_runs
 from .schedule import (CIRCUIT_THREADS, MEMBER_DECKS, MEMBER_THREADS, NOW, PAPER_DECKS,
                        PAPER_RANK_STEP, SCHEDULER_CIRCUIT_THREADS, Failures, Phases, Workers, circuit_cost,
-                       experiments_at_once, member_cost, monte_carlo_pool, theory_processes,
+                       experiments_at_once, member_cost, monte_carlo_pool, theory_process_count,
+                       theory_processes,
                        result_of, say)
 from .settings import RunOptions
 from .theory_curves import (CURVE_GROUPS, ExperimentTheory, FigureCurves, experiment_theory,
@@ -313,6 +314,8 @@ def run_study(experiments: Iterable, *, members: Iterable = (), opts: RunOptions
     load0 = os.getloadavg()
     # every experiment is validated before anything runs (bad input: nothing started yet)
     given = [load(n) for n in experiments]
+    # (and the environment's process count, before anything starts)
+    n_procs = theory_process_count([e for e in given if not is_member_experiment(e)])
     result = StudyResult(experiments=[e for e in given if not is_member_experiment(e)],
                          members=[e for e in given if is_member_experiment(e)]
                          + [load(n) for n in members],
@@ -349,7 +352,7 @@ def run_study(experiments: Iterable, *, members: Iterable = (), opts: RunOptions
         # heavy part waits on the theory processes
         curves = Workers(result.phases, "curves", 1)
         mc = monte_carlo_pool()
-        procs = theory_processes(result.experiments)
+        procs = theory_processes(result.experiments, n_procs)
         try:
             _schedule(result, opts, hooks or StudyHooks(), pool, circuit, family, mc, page=page,
                       processes=procs, curves=curves)

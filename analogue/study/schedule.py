@@ -296,26 +296,35 @@ MC_THREADS = 2
 THEORY_PROCESSES_ENV = "ANALOGUE_THEORY_PROCESSES"
 
 
-def theory_processes(experiments) -> TheoryProcesses | None:
-    """The study's worker processes for its theory curves' work densities
-    (:mod:`analogue.study.processes`): one per work window of the experiment with the most,
-    at most :data:`~analogue.study.processes.THEORY_PROCESSES` and the usable cores; None
-    when no experiment has a work window to compute (a = 0, or none fits), on one core, or
-    when :data:`THEORY_PROCESSES_ENV` says 0.  A pool that cannot start is None too (the
-    curves then run in the theory thread, as before)."""
+def theory_process_count(experiments) -> int:
+    """How many theory processes a study of ``experiments`` starts
+    (:func:`theory_processes`): one per work window of the experiment with the most, at
+    most :data:`~analogue.study.processes.THEORY_PROCESSES` and the usable cores; 0 when no
+    experiment has a work window to compute (a = 0, or none fits) or on one core;
+    :data:`THEORY_PROCESSES_ENV` overrides it (0: none).  Raises ValueError, naming the
+    variable, for a value that is not a whole number >= 0 (checked before the study starts
+    anything)."""
     windows = max((len(e.work_taus) for e in experiments if e.model.a != 0), default=0)
-    n = min(windows, THEORY_PROCESSES, usable_cpus())
     env = os.environ.get(THEORY_PROCESSES_ENV, "").strip()
     if env:
         try:
-            n = min(windows, int(env))
+            n = int(env)
         except ValueError:
             raise ValueError(f"{THEORY_PROCESSES_ENV} must be a whole number of processes "
                              f"(0: none), got {env!r}") from None
         if n < 0:
             raise ValueError(f"{THEORY_PROCESSES_ENV} must be >= 0, got {env!r}")
-    elif n < 2:
-        return None
+        return min(windows, n)
+    n = min(windows, THEORY_PROCESSES, usable_cpus())
+    return n if n >= 2 else 0
+
+
+def theory_processes(experiments, n: int | None = None) -> TheoryProcesses | None:
+    """The study's worker processes for its theory curves' work densities
+    (:mod:`analogue.study.processes`), ``n`` of them (default
+    :func:`theory_process_count`); None for 0, and when the pool cannot start (the curves
+    then run in their thread, as before)."""
+    n = theory_process_count(experiments) if n is None else n
     if n < 1:
         return None
     try:

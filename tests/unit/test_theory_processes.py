@@ -114,3 +114,36 @@ def test_the_policy_one_process_per_work_window_within_the_cores(monkeypatch):
         with pytest.raises(ValueError, match=SCH.THEORY_PROCESSES_ENV):
             SCH.theory_processes([work])
     assert made == [2, 4, 2, 3]
+
+
+def test_workers_that_cannot_start_leave_the_work_to_the_calling_thread(monkeypatch):
+    """A process limit or a sandbox without fork: submitting raises OSError; the pool is
+    marked broken and every computation runs in the calling thread instead of failing the
+    figure that needs it."""
+    procs = TheoryProcesses(1)
+    try:
+        def no_fork(*a, **k):
+            raise OSError(11, "Resource temporarily unavailable")
+        monkeypatch.setattr(procs._pool, "submit", no_fork)
+        started = procs.start(math.sqrt, 49.0)
+        assert procs.broken and started.result() == 7.0
+        assert procs.run(math.sqrt, 4.0) == 2.0
+    finally:
+        monkeypatch.undo()
+        procs.close()
+
+
+def test_a_bad_process_count_is_refused_before_the_study_starts(monkeypatch):
+    """ANALOGUE_THEORY_PROCESSES is checked with the experiments, before any pool, thread
+    or process is started: the error names the variable, and no thread is left behind."""
+    import threading
+
+    from analogue.study import run as S
+    from analogue.study.experiments import load_experiment, standard_circuit
+    from analogue.study.settings import RunOptions
+    monkeypatch.setenv(SCH.THEORY_PROCESSES_ENV, "lots")
+    before = set(threading.enumerate())
+    with pytest.raises(ValueError, match="ANALOGUE_THEORY_PROCESSES must be a whole number"):
+        S.run_study([load_experiment(standard_circuit("work"))],
+                    opts=RunOptions(quick=True, progress=False))
+    assert set(threading.enumerate()) <= before
