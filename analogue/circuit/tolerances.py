@@ -52,11 +52,13 @@ overridden: only the unset ones are chosen, among candidates that agree with the
 """
 from __future__ import annotations
 
+import contextvars
 import functools
 import math
 import threading
 import warnings
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Any
@@ -121,8 +123,6 @@ def at_once(calls: list[Callable[[], Any]], runner: Runner) -> list:
     run in changes no number."""
     if len(calls) < 2 or not shared_pool(runner):
         return [c() for c in calls]
-    import contextvars
-    from concurrent.futures import ThreadPoolExecutor
     with ThreadPoolExecutor(len(calls), thread_name_prefix="analogue-calibration") as ex:
         # each call in a copy of the caller's context: whoever times the caller's decks by
         # a context variable (a sweep point: analogue.study.sweep) sees these as its own

@@ -228,12 +228,9 @@ def report_graph(phases: Sequence[Mapping], circuit: Mapping | None = None,
     stationary = {}
     for key in runs:
         t = circuit.get(key[1]) or {}
-        if t.get("stationary_longest_deck_s") is not None and \
-                t.get("before_decks_s") is not None:
-            before = before_decks_s(t)
-            if before is not None:
-                stationary[key[1]] = min(secs[key],
-                                         before + float(t["stationary_longest_deck_s"]))
+        before = before_decks_s(t)
+        if t.get("stationary_longest_deck_s") is not None and before is not None:
+            stationary[key[1]] = min(secs[key], before + float(t["stationary_longest_deck_s"]))
     for exp, s in stationary.items():
         nodes[(STATIONARY_RUN, exp)] = (s, [])
     for key, s in secs.items():

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import signal
 import threading
 import time
 import warnings
@@ -44,7 +45,6 @@ def _worker_init() -> None:
     """A worker runs one computation at a time beside ngspice and the study's threads: BLAS
     at one thread (as the study sets in its own process), and no Ctrl-C of its own (the
     terminal sends SIGINT to the whole process group; the study ends its workers itself)."""
-    import signal
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
         from threadpoolctl import threadpool_limits
@@ -114,7 +114,8 @@ class TheoryProcesses:
 
     def start(self, fn: Callable[..., Any], *args: Any, **kwargs: Any) -> Started:
         """``fn(*args, **kwargs)`` started in a worker; its :meth:`Started.result` computes
-        it in the calling thread instead when the pool is (or breaks) broken or closed."""
+        it in the calling thread instead when the pool is closed, broken, or breaks before
+        the result is in."""
         try:
             fut: Future | None = self.submit(_timed, fn, *args, **kwargs)
         except BrokenProcessPool:
@@ -136,7 +137,7 @@ class TheoryProcesses:
         pool.shutdown(wait=False, cancel_futures=True)
         for pid in procs:
             try:
-                os.kill(pid, 15)
+                os.kill(pid, signal.SIGTERM)
             except (ProcessLookupError, PermissionError):
                 pass
 

@@ -522,7 +522,7 @@ class _Schedule:
             runs, a, f = undrawn.pop(0)
             with phases("waiting for theory curves", runs.exp.name):
                 a.curves = _curves_of(f)
-            if getattr(a.curves, "timing", None):
+            if a.curves.timing:
                 self.result.curves_timing[runs.exp.name] = a.curves.timing
             self.hooks.experiment_ready(self.result, runs, a)
         for phase, f in list(background.items()):

@@ -259,10 +259,10 @@ def _choose(model, spec, replicas: int, t_end: float, runner: Runner, check: int
     spec, tol = resolve_spec(model, spec, replicas=replicas, t_end=t_end,
                              check_replicas=min(check, replicas), observables=observables,
                              fraction=REPORT_FRACTION, runner=cal)
-    tol_stage = clock.stage_longest() if clock is not None else None
+    tol_stage = clock.stage_longest() if clock is not None else 0.0
     deck = choose_deck_size(model, spec, replicas=replicas, t_end=t_end, workers=workers,
                             runner=cal)
-    if clock is not None and stages is not None and tol_stage is not None:
+    if clock is not None and stages is not None:
         stages.append(tol_stage + clock.stage_longest())
     return spec, deck.replicas_per_deck, {"tolerances": tol.as_dict(),
                                           "deck_size": deck.as_dict()}
